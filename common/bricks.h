@@ -1,0 +1,29 @@
+// Splitting a volume into bricks (k-d tree) and ordering them front to back.
+// Splits balance non-empty voxels (opacity > 0 under the transfer function), not volume.
+#pragma once
+#include <vector>
+
+#include "camera.h"
+#include "transfer_function.h"
+#include "volume.h"
+
+namespace tessera {
+
+struct BrickBox {
+  std::array<int, 3> lo{0, 0, 0}, hi{0, 0, 0};  // voxel index box [lo, hi)
+  bool operator==(const BrickBox&) const = default;
+};
+
+struct BrickTree {
+  std::vector<BrickBox> bricks;  // leaves, in split order
+  struct Node { int axis = -1; int split = 0; int left = -1, right = -1; int leaf = -1; };
+  std::vector<Node> nodes;      // nodes[0] is the root
+  // Leaf indices front to back as seen from the camera (BSP order: exact for convex boxes).
+  std::vector<int> visibilityOrder(const Volume& v, const Camera& cam) const;
+};
+
+// n bricks (n >= 1, capped so every brick has at least one voxel per axis).
+// With a transfer function, splits balance voxels whose alpha > 0; otherwise voxel counts.
+BrickTree splitBricks(const Volume& v, int n, const TransferFunction* tf = nullptr);
+
+}  // namespace tessera

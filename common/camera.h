@@ -1,0 +1,41 @@
+// Camera per DESIGN.md: perspective (vertical fov, degrees) or orthographic (view height).
+// The ray of pixel (px,py) passes through the pixel centre. Units are the unit-box scene units.
+#pragma once
+#include "vec.h"
+
+namespace tessera {
+
+struct Camera {
+  Vec3 eye{0, 0, 2.5}, target{0, 0, 0}, up{0, 1, 0};
+  double fov = 30;             // degrees, perspective
+  bool orthographic = false;
+  double height = 1;           // orthographic view height
+  bool operator==(const Camera&) const = default;
+
+  // Throws std::invalid_argument if eye == target, up is parallel to the view, fov not in (0,180).
+  void validate() const;
+  // Eye rotated about `axis` through target by `degrees`.
+  Camera orbited(const Vec3& axis, double degrees) const;
+};
+
+struct Ray {
+  Vec3 origin, dir;  // dir normalized
+};
+
+// Precomputed basis so per-pixel rays are cheap.
+class RayGenerator {
+ public:
+  RayGenerator(const Camera& cam, int width, int height);
+  Ray ray(double px_centre_x, double px_centre_y) const;  // pass px+0.5, py+0.5
+  Ray pixelRay(int px, int py) const { return ray(px + 0.5, py + 0.5); }
+  // Screen-space projection of a world point to continuous pixel coords; false if behind eye.
+  bool project(const Vec3& p, double& sx, double& sy) const;
+
+ private:
+  Camera cam_;
+  int w_, h_;
+  Vec3 fwd_, right_, upv_;
+  double tan_half_, aspect_;
+};
+
+}  // namespace tessera

@@ -1,0 +1,57 @@
+// Images on the farm: premultiplied RGBA, rows top to bottom, (0,0) top left.
+// ImageF (float, [0,1]) is what renderers and compositors compute in; Image8 is rgba8.
+// Plain values; not thread-safe for concurrent writes to the same pixels.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace tessera {
+
+struct Rect {
+  int x = 0, y = 0, w = 0, h = 0;
+  bool empty() const { return w <= 0 || h <= 0; }
+  long long area() const { return empty() ? 0 : (long long)w * h; }
+  bool operator==(const Rect&) const = default;
+};
+Rect intersect(const Rect& a, const Rect& b);
+Rect unite(const Rect& a, const Rect& b);  // bounding rectangle; empty operands ignored
+
+struct ImageF {
+  int width = 0, height = 0;
+  std::vector<float> px;  // 4 floats per pixel, premultiplied RGBA
+  ImageF() = default;
+  ImageF(int w, int h);   // transparent black
+  float* at(int x, int y) { return &px[4 * ((size_t)y * width + x)]; }
+  const float* at(int x, int y) const { return &px[4 * ((size_t)y * width + x)]; }
+  bool operator==(const ImageF&) const = default;
+};
+
+struct Image8 {
+  int width = 0, height = 0;
+  std::vector<uint8_t> px;  // 4 bytes per pixel, premultiplied RGBA
+  Image8() = default;
+  Image8(int w, int h);
+  uint8_t* at(int x, int y) { return &px[4 * ((size_t)y * width + x)]; }
+  const uint8_t* at(int x, int y) const { return &px[4 * ((size_t)y * width + x)]; }
+  bool operator==(const Image8&) const = default;
+};
+
+// Bounding rectangle of pixels with alpha > 0 (empty Rect if none).
+Rect activeRegion(const ImageF& img);
+Rect activeRegion(const Image8& img);
+
+// Round-to-nearest quantization of [0,1] floats (clamped) to bytes.
+Image8 toRGBA8(const ImageF& img);
+ImageF toFloat(const Image8& img);
+
+// Front-to-back "over": dst = dst + (1 - dst.a) * src, per pixel, within rect r.
+void compositeOver(ImageF& dst, const ImageF& src, const Rect& r);
+
+struct ImageError {
+  double max_abs = 0, rmse = 0, psnr = 0;  // over RGBA in [0,1]; psnr is +inf when equal
+};
+ImageError compare(const ImageF& a, const ImageF& b);
+ImageError compare(const Image8& a, const Image8& b);
+
+}  // namespace tessera

@@ -1,0 +1,56 @@
+// The scene file (DESIGN.md "Scene file"): one YAML file every process and tool takes.
+// Unknown keys, missing keys and bad values are errors naming the key's path.
+#pragma once
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <variant>
+
+#include "camera.h"
+#include "transfer_function.h"
+#include "volume.h"
+
+namespace tessera {
+
+struct Quality {
+  std::string name = "default";    // reference | default | fast | custom
+  double step = 1.0 / 256;         // world units along the ray
+  double early_termination = 0.99; // stop when accumulated alpha >= this; > 1 disables
+  bool skip_empty = true;
+  bool reference = false;          // double precision, no skipping, no early termination
+  bool operator==(const Quality&) const = default;
+};
+// reference: step L0/16, no ET, no skipping; default: step L0, ET 0.99; fast: step 2*L0, ET 0.95.
+Quality namedQuality(const std::string& name);  // throws std::invalid_argument
+
+struct Orbit {
+  int frames = 1;
+  Vec3 axis{0, 1, 0};
+  Camera at(const Camera& base, int frame) const;  // frame k rotated by k*360/frames degrees
+};
+
+struct Scene {
+  std::string path;  // file it was loaded from ("" for built-in)
+  std::variant<RawVolumeSpec, GeneratorSpec> volume;
+  TransferFunction tf;
+  Camera camera;
+  int width = 512, height = 512;
+  Quality quality;
+  Orbit orbit;
+};
+
+struct SceneError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Parses YAML text; relative paths resolve against base_dir. Throws SceneError whose
+// message names the file and key path, e.g. "scene.yaml: camera.fov: expected a number".
+Scene parseScene(const std::string& yaml_text, const std::string& base_dir,
+                 const std::string& name_for_errors = "<scene>");
+Scene loadScene(const std::string& path);
+// The built-in default scene (a hollow shell) that runs with no file.
+Scene defaultScene();
+// Loads or generates the scene's volume.
+Volume loadVolume(const Scene& scene);
+
+}  // namespace tessera
