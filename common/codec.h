@@ -1,0 +1,25 @@
+// Payload codecs for pixel messages. Compression never fails; decompression validates
+// and requires the exact raw size (LZO uses the safe decompressor). Thread-safe.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "result.h"
+
+namespace tessera {
+
+enum class Codec : uint8_t { None = 0, Lzo = 1, Lz4 = 2, Zstd = 3 };
+inline constexpr uint8_t kCodecCount = 4;
+
+const char* codecName(Codec c);
+// Throws std::invalid_argument naming the accepted names ("none", "lzo", "lz4", "zstd").
+Codec parseCodec(const std::string& name);
+
+std::vector<std::byte> compress(Codec c, std::span<const std::byte> raw);
+// Fails (never throws) on corrupt data or when the output is not exactly raw_size bytes.
+Result<std::vector<std::byte>> decompress(Codec c, std::span<const std::byte> encoded, size_t raw_size);
+
+}  // namespace tessera

@@ -1,0 +1,132 @@
+// The wire protocol: the one place that knows the byte layout of every message.
+// Every message = 32-byte little-endian header + payload. Header fields:
+//   magic u32 "TSER" | version u16 | type u16 | frame u64 | sender u32 |
+//   codec u8 | flags u8 | reserved u16 | raw_size u32 | encoded_size u32 | checksum u32 (Adler-32 of payload)
+// Structured payloads are explicit little-endian fields written by ByteWriter; never a
+// memcpy'd struct. Decoders validate every field before touching memory and never throw.
+#pragma once
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "bricks.h"
+#include "camera.h"
+#include "codec.h"
+#include "image.h"
+#include "result.h"
+#include "scene.h"
+
+namespace tessera::proto {
+
+inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
+inline constexpr uint16_t kVersion = 1;
+inline constexpr size_t kHeaderSize = 32;
+inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
+
+enum class Type : uint16_t {
+  Hello = 1, Welcome, FrameParams, Piece, Strips, FrameDone, Heartbeat, Input, Stats, Shutdown
+};
+inline constexpr uint16_t kTypeCount = 10;
+const char* typeName(Type t);
+
+enum class Role : uint8_t { Renderer = 1, Compositor = 2, Display = 3 };
+enum class PixelFormat : uint8_t { RGBA8 = 1, RGBA16F = 2, RGBA32F = 3 };
+size_t bytesPerPixel(PixelFormat f);
+
+struct Header {
+  uint16_t version = kVersion;
+  Type type = Type::Hello;
+  uint64_t frame = 0;
+  uint32_t sender = 0;
+  Codec codec = Codec::None;
+  uint32_t raw_size = 0, encoded_size = 0, checksum = 0;
+};
+
+// ---- messages ---------------------------------------------------------------------
+struct Hello { Role role; uint32_t pid = 0; std::string endpoint; };      // stage -> master
+struct Welcome { Role role; uint32_t rank = 0; };                          // master -> stage
+struct Heartbeat { Role role; uint32_t rank = 0; };                        // stage -> master
+struct Shutdown { std::string reason; };                                   // master -> all
+
+struct BrickAssignment { uint32_t renderer = 0; BrickBox brick; };
+struct CompositorRegion { uint32_t compositor = 0; Rect region; std::string endpoint; };
+struct FrameParams {                                                       // master -> all (PUB)
+  uint64_t frame = 0;
+  Camera camera;
+  Quality quality;
+  int width = 0, height = 0;
+  Codec codec = Codec::Lzo;                  // for pieces and strips
+  PixelFormat format = PixelFormat::RGBA8;   // of pieces
+  std::vector<BrickAssignment> bricks;       // one per renderer that has work
+  std::vector<int> order;                    // brick indices (into `bricks`) front to back
+  std::vector<CompositorRegion> regions;     // tile the image, disjoint
+  std::string display_endpoint;
+};
+
+struct Piece {                                 // renderer -> compositor
+  uint64_t frame = 0;
+  uint32_t renderer = 0, brick = 0;            // brick = index into FrameParams::bricks
+  Rect region;                                 // the compositor's region (for validation)
+  Rect active;                                 // sub-rect of region carried; empty => no pixels
+  PixelFormat format = PixelFormat::RGBA8;
+  std::vector<std::byte> pixels;               // raw (decoded) pixels of `active`, rows top to bottom
+  double render_ms = 0, encode_ms = 0;
+};
+
+struct Strips {                                // compositor -> display
+  uint64_t frame = 0;
+  uint32_t compositor = 0;
+  std::vector<uint8_t> stream;                 // raw (decoded) strip stream, see strips.h
+  double composite_ms = 0, encode_ms = 0;
+  uint64_t active_pixels = 0;
+};
+
+struct StageStats {                            // renderer/compositor -> master, per frame
+  Role role; uint32_t rank = 0; uint64_t frame = 0;
+  double work_ms = 0, encode_ms = 0;
+  uint64_t bytes_raw = 0, bytes_encoded = 0, active_pixels = 0;
+  Rect active;                                 // renderer: active region of its brick image
+  uint64_t dropped = 0;                        // messages dropped so far (cumulative)
+};
+
+struct FrameDone {                             // display -> master
+  uint64_t frame = 0;
+  double display_ms = 0, route_ms = 0;
+  uint64_t bytes_encoded = 0, strips_rejected = 0, dropped = 0;
+};
+
+struct Input {                                 // display -> master (interactive camera)
+  double orbit_dx = 0, orbit_dy = 0;           // degrees
+  double zoom = 1;                             // multiply eye distance
+  std::string quality;                         // "" = unchanged
+};
+
+// ---- encode: header + payload; pixel payloads are compressed with `codec` -----------
+std::vector<std::byte> encode(const Hello&, uint32_t sender);
+std::vector<std::byte> encode(const Welcome&, uint32_t sender);
+std::vector<std::byte> encode(const Heartbeat&, uint32_t sender);
+std::vector<std::byte> encode(const Shutdown&, uint32_t sender);
+std::vector<std::byte> encode(const FrameParams&, uint32_t sender);
+std::vector<std::byte> encode(const Piece&, uint32_t sender, Codec codec);
+std::vector<std::byte> encode(const Strips&, uint32_t sender, Codec codec);
+std::vector<std::byte> encode(const StageStats&, uint32_t sender);
+std::vector<std::byte> encode(const FrameDone&, uint32_t sender);
+std::vector<std::byte> encode(const Input&, uint32_t sender);
+
+// ---- decode: validate header (magic, version, type range, sizes, checksum) ----------
+Result<Header> decodeHeader(std::span<const std::byte> msg);
+Result<Hello> decodeHello(std::span<const std::byte> msg);
+Result<Welcome> decodeWelcome(std::span<const std::byte> msg);
+Result<Heartbeat> decodeHeartbeat(std::span<const std::byte> msg);
+Result<Shutdown> decodeShutdown(std::span<const std::byte> msg);
+Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg);
+Result<Piece> decodePiece(std::span<const std::byte> msg);     // checks active within region, pixel count
+Result<Strips> decodeStrips(std::span<const std::byte> msg);
+Result<StageStats> decodeStageStats(std::span<const std::byte> msg);
+Result<FrameDone> decodeFrameDone(std::span<const std::byte> msg);
+Result<Input> decodeInput(std::span<const std::byte> msg);
+
+}  // namespace tessera::proto
