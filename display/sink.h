@@ -1,0 +1,39 @@
+// Where the display stage puts finished frames: an SDL2 window or a folder of PNG files.
+// A Sink is used from one thread (the display loop). Frames are premultiplied rgba8.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/image.h"
+
+namespace tessera::display {
+
+struct InputEvent {
+  double orbit_dx = 0, orbit_dy = 0;  // degrees (drag)
+  double zoom = 1;                    // multiply eye distance (wheel)
+  std::string quality;                // "reference" | "default" | "fast" | "" (keys 1/2/3)
+  bool quit = false;                  // window closed, Esc or q
+};
+
+class Sink {
+ public:
+  virtual ~Sink() = default;
+  // Shows or writes frame `id`; `status` is the fps/latency/per-stage line drawn on screen.
+  virtual void present(const Image8& frame, uint64_t id, const std::string& status) = 0;
+  // Input since the last call (windows only).
+  virtual std::vector<InputEvent> poll() { return {}; }
+};
+
+// Writes <dir>/frame_<id 6 digits>.png (straight alpha, or composited over background).
+std::unique_ptr<Sink> makePngSink(const std::string& dir,
+                                  std::optional<std::array<double, 3>> background = std::nullopt);
+// Opens a window of the image's size; throws std::runtime_error if no display server.
+std::unique_ptr<Sink> makeWindowSink(int width, int height, const std::string& title);
+// True if a display server is reachable (DISPLAY or WAYLAND_DISPLAY set and SDL video inits).
+bool windowAvailable();
+
+}  // namespace tessera::display
