@@ -55,6 +55,7 @@ struct BrickAssignment { uint32_t renderer = 0; BrickBox brick; };
 struct CompositorRegion { uint32_t compositor = 0; Rect region; std::string endpoint; };
 struct FrameParams {                                                       // master -> all (PUB)
   uint64_t frame = 0;
+  uint32_t epoch = 0;                        // bumped when membership changes; stale work is dropped
   Camera camera;
   Quality quality;
   int width = 0, height = 0;
@@ -68,6 +69,7 @@ struct FrameParams {                                                       // ma
 
 struct Piece {                                 // renderer -> compositor
   uint64_t frame = 0;
+  uint32_t epoch = 0;                          // FrameParams::epoch it was rendered for
   uint32_t renderer = 0, brick = 0;            // brick = index into FrameParams::bricks
   Rect region;                                 // the compositor's region (for validation)
   Rect active;                                 // sub-rect of region carried; empty => no pixels
@@ -78,6 +80,7 @@ struct Piece {                                 // renderer -> compositor
 
 struct Strips {                                // compositor -> display
   uint64_t frame = 0;
+  uint32_t epoch = 0;
   uint32_t compositor = 0;
   std::vector<uint8_t> stream;                 // raw (decoded) strip stream, see strips.h
   double composite_ms = 0, encode_ms = 0;
