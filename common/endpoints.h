@@ -1,0 +1,28 @@
+// Where the farm's sockets live, derived from one base address so that replicas need no
+// per-process configuration. ipc://DIR puts sockets in DIR; tcp://HOST:PORT uses PORT..PORT+2
+// for the master and display and PORT+10+rank for compositors; inproc://NAME runs a farm
+// inside one process (tests). Loopback by default: nothing listens publicly unless asked.
+#pragma once
+#include <cstdint>
+#include <string>
+
+namespace tessera {
+
+struct Endpoints {
+  std::string base;
+  std::string masterPub() const;      // master binds PUB (FrameParams, Shutdown)
+  std::string masterControl() const;  // master binds ROUTER (Hello, Heartbeat, Stats, FrameDone, Input)
+  std::string display() const;        // display binds PULL (Strips)
+  std::string compositor(uint32_t rank) const;       // address compositors advertise
+  std::string compositorBind(uint32_t rank) const;   // address a compositor binds
+  // Bind forms: tcp binds on TESSERA_BIND_HOST (default: the base host) so containers can
+  // bind 0.0.0.0 while peers connect by service name.
+  std::string bind(const std::string& connect_form) const;
+};
+
+// Validates the base (ipc://, tcp://host:port, inproc://); throws std::invalid_argument.
+Endpoints makeEndpoints(const std::string& base);
+// TESSERA_ENDPOINTS, or ipc://<tmp>/tessera-<uid> when unset.
+std::string defaultEndpointBase();
+
+}  // namespace tessera
