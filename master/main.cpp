@@ -1,0 +1,42 @@
+// tessera-master: loads the scene, registers the stages and drives the frames.
+#include <CLI/CLI.hpp>
+
+#include "common/log.h"
+#include "common/stop.h"
+#include "master.h"
+
+int main(int argc, char** argv) {
+  using namespace tessera;
+  auto log = setupLogging("master");
+  CLI::App app{"Tessera master: drives frames through the render farm"};
+  std::string scene_path, codec = "lzo", format = "rgba8", base;
+  master::MasterOptions opt;
+  app.add_option("scene", scene_path, "scene file (default: the built-in scene)")->envname("TESSERA_SCENE");
+  app.add_option("--renderers", opt.renderers, "renderers to wait for")->envname("TESSERA_RENDERERS")->check(CLI::Range(1, 1024));
+  app.add_option("--compositors", opt.compositors, "compositors to wait for")->envname("TESSERA_COMPOSITORS")->check(CLI::Range(1, 256));
+  app.add_option("--frames", opt.frames, "frames to render (-1: the scene's orbit; 0: interactive)")->envname("TESSERA_FRAMES");
+  app.add_option("--window", opt.window, "frames in flight")->envname("TESSERA_WINDOW")->check(CLI::Range(1, 64));
+  app.add_option("--codec", codec, "none | lzo | lz4 | zstd")->envname("TESSERA_CODEC");
+  app.add_option("--format", format, "pixel format of pieces: rgba8 | rgba16f | rgba32f");
+  app.add_option("--metrics", opt.metrics_path, "JSON-lines metrics file")->envname("TESSERA_METRICS");
+  app.add_option("--endpoints", base, "endpoint base (ipc://DIR | tcp://HOST:PORT)")->envname("TESSERA_ENDPOINTS");
+  app.add_option("--heartbeat-timeout", opt.heartbeat_timeout_s, "seconds of silence before a stage counts as lost");
+  bool no_balance = false;
+  app.add_flag("--no-balance", no_balance, "equal compositor regions instead of balancing active pixels");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    opt.scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
+    opt.endpoints = makeEndpoints(base.empty() ? defaultEndpointBase() : base);
+    opt.codec = parseCodec(codec);
+    opt.format = format == "rgba8"     ? proto::PixelFormat::RGBA8
+                 : format == "rgba16f" ? proto::PixelFormat::RGBA16F
+                 : format == "rgba32f" ? proto::PixelFormat::RGBA32F
+                                       : throw std::invalid_argument("--format: expected rgba8, rgba16f or rgba32f");
+    opt.balance = !no_balance;
+    zmq::context_t ctx(1);
+    return master::run(opt, ctx, &installStopSignals());
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,34 @@
+// The master: owns the scene, camera and work assignment; registers stages (membership,
+// heartbeats), broadcasts FrameParams, keeps at most `window` frames in flight, and writes
+// one JSON line of metrics per frame. run() blocks until the last frame is done.
+#pragma once
+#include <atomic>
+#include <string>
+
+#include <zmq.hpp>
+
+#include "common/codec.h"
+#include "common/endpoints.h"
+#include "common/protocol.h"
+#include "common/scene.h"
+
+namespace tessera::master {
+
+struct MasterOptions {
+  Scene scene;
+  Endpoints endpoints;
+  int renderers = 1, compositors = 1;
+  int frames = -1;          // -1: the scene's orbit frames; 0: interactive (until the display quits)
+  int window = 3;           // frames in flight
+  Codec codec = Codec::Lzo;
+  proto::PixelFormat format = proto::PixelFormat::RGBA8;
+  bool balance = true;      // re-split compositor regions by active pixels every frame
+  std::string metrics_path; // JSON lines; "" = none
+  double heartbeat_timeout_s = 3.0;
+  double start_timeout_s = 60.0;
+};
+
+// Returns the process exit code. `stop` (optional) ends it early (signals, tests).
+int run(const MasterOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);
+
+}  // namespace tessera::master

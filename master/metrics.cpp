@@ -1,0 +1,117 @@
+#include "metrics.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include <spdlog/spdlog.h>
+
+#include "balance.h"
+
+namespace tessera::master {
+
+Metrics::Metrics(const std::string& path) {
+  if (path.empty()) return;
+  out_.open(path);
+  if (!out_) throw std::runtime_error("cannot write metrics file " + path);
+}
+
+void Metrics::issued(uint64_t frame, uint32_t epoch, int renderers, int compositors) {
+  Frame& f = frames_[frame];
+  f = Frame{};  // a frame issued again under a new epoch starts over
+  f.epoch = epoch;
+  f.renderers = renderers;
+  f.compositors = compositors;
+}
+
+void Metrics::stats(const proto::StageStats& s) {
+  auto it = frames_.find(s.frame);
+  if (it == frames_.end()) return;  // written already
+  (s.role == proto::Role::Renderer ? it->second.r : it->second.c).push_back(s);
+  if (it->second.done && (int)it->second.r.size() >= it->second.renderers &&
+      (int)it->second.c.size() >= it->second.compositors)
+    write(it->first, it->second), frames_.erase(it);
+}
+
+void Metrics::done(const proto::FrameDone& d, double latency_ms, uint64_t master_dropped) {
+  Frame& f = frames_[d.frame];
+  f.done = true;
+  f.d = d;
+  f.latency_ms = latency_ms;
+  f.master_dropped = master_dropped;
+  f.done_at = std::chrono::steady_clock::now();
+  if ((int)f.r.size() >= f.renderers && (int)f.c.size() >= f.compositors) write(d.frame, f), frames_.erase(d.frame);
+}
+
+void Metrics::flushOlderThan(std::chrono::steady_clock::time_point t) {
+  for (auto it = frames_.begin(); it != frames_.end();) {
+    if (it->second.done && it->second.done_at < t) {
+      write(it->first, it->second);
+      it = frames_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+void Metrics::flushAll() { flushOlderThan(std::chrono::steady_clock::time_point::max()); }
+
+nlohmann::json Metrics::summarize(const std::vector<proto::StageStats>& renderers,
+                                  const std::vector<proto::StageStats>& compositors, const proto::FrameDone& done,
+                                  double latency_ms) {
+  auto stage = [](const std::vector<proto::StageStats>& v, nlohmann::json& j, const char* prefix) {
+    std::vector<double> work, active;
+    double enc = 0, dropped = 0;
+    uint64_t raw = 0, encoded = 0, px = 0;
+    for (const auto& s : v) {
+      work.push_back(s.work_ms);
+      active.push_back((double)s.active_pixels);
+      enc = std::max(enc, s.encode_ms);
+      raw += s.bytes_raw;
+      encoded += s.bytes_encoded;
+      px += s.active_pixels;
+      dropped += (double)s.dropped;
+    }
+    std::string p = prefix;
+    j[p + "_ms_max"] = work.empty() ? 0 : *std::max_element(work.begin(), work.end());
+    j[p + "_encode_ms_max"] = enc;
+    j[p + "_bytes_raw"] = raw;
+    j[p + "_bytes_encoded"] = encoded;
+    j[p + "_active_pixels"] = px;
+    j[p + "_imbalance_time"] = imbalance(work);
+    j[p + "_imbalance_pixels"] = imbalance(active);
+    j[p + "_dropped"] = dropped;
+    j[p + "_reports"] = v.size();
+  };
+  nlohmann::json j;
+  j["frame"] = done.frame;
+  j["latency_ms"] = latency_ms;
+  stage(renderers, j, "render");
+  stage(compositors, j, "composite");
+  j["display_ms"] = done.display_ms;
+  j["route_ms"] = done.route_ms;
+  j["display_bytes_encoded"] = done.bytes_encoded;
+  j["strips_rejected"] = done.strips_rejected;
+  j["display_dropped"] = done.dropped;
+  return j;
+}
+
+void Metrics::write(uint64_t frame, Frame& f) {
+  auto now = std::chrono::steady_clock::now();
+  if (frames_done_ == 0) first_done_ = now;
+  ++frames_done_;
+  auto j = summarize(f.r, f.c, f.d, f.latency_ms);
+  j["frame"] = frame;
+  j["epoch"] = f.epoch;
+  j["master_dropped"] = f.master_dropped;
+  double interval = std::chrono::duration<double, std::milli>(now - last_done_).count();
+  j["interval_ms"] = frames_done_ > 1 ? interval : 0.0;
+  last_done_ = now;
+  spdlog::info("frame={} latency_ms={:.1f} render_ms={:.1f} composite_ms={:.1f} display_ms={:.1f} bytes_raw={} "
+               "bytes_encoded={} render_imbalance={:.2f} composite_imbalance={:.2f}",
+               frame, f.latency_ms, j["render_ms_max"].get<double>(), j["composite_ms_max"].get<double>(),
+               f.d.display_ms, j["render_bytes_raw"].get<uint64_t>(), j["render_bytes_encoded"].get<uint64_t>(),
+               j["render_imbalance_time"].get<double>(), j["composite_imbalance_pixels"].get<double>());
+  if (out_) out_ << j.dump() << '\n' << std::flush;
+}
+
+}  // namespace tessera::master

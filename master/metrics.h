@@ -1,0 +1,54 @@
+// Per-frame metrics of the farm, written as one JSON line per frame: per-stage times,
+// bytes raw and compressed, active pixels, imbalance, latency, dropped messages.
+// A frame's line is written once its FrameDone and every stage's stats are in (or a
+// grace period has passed, since stats and FrameDone travel on different paths).
+#pragma once
+#include <chrono>
+#include <cstdint>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/protocol.h"
+
+namespace tessera::master {
+
+class Metrics {
+ public:
+  explicit Metrics(const std::string& path);  // "" = log only
+
+  void issued(uint64_t frame, uint32_t epoch, int renderers, int compositors);
+  void stats(const proto::StageStats& s);
+  void done(const proto::FrameDone& d, double latency_ms, uint64_t master_dropped);
+  void flushOlderThan(std::chrono::steady_clock::time_point t);
+  void flushAll();
+  uint64_t framesDone() const { return frames_done_; }
+
+  // The JSON object of one frame (exposed for tests).
+  static nlohmann::json summarize(const std::vector<proto::StageStats>& renderers,
+                                  const std::vector<proto::StageStats>& compositors, const proto::FrameDone& done,
+                                  double latency_ms);
+
+ private:
+  struct Frame {
+    uint32_t epoch = 0;
+    int renderers = 0, compositors = 0;
+    std::vector<proto::StageStats> r, c;
+    bool done = false;
+    proto::FrameDone d;
+    double latency_ms = 0;
+    uint64_t master_dropped = 0;
+    std::chrono::steady_clock::time_point done_at;
+  };
+  void write(uint64_t frame, Frame& f);
+
+  std::ofstream out_;
+  std::map<uint64_t, Frame> frames_;
+  uint64_t frames_done_ = 0;
+  std::chrono::steady_clock::time_point first_done_{}, last_done_{};
+};
+
+}  // namespace tessera::master
