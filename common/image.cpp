@@ -1,0 +1,137 @@
+// Image values and pixel kernels: cropping, quantization, "over" compositing, error metrics.
+#include "common/image.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace tessera {
+
+Rect intersect(const Rect& a, const Rect& b) {
+  int x0 = std::max(a.x, b.x), y0 = std::max(a.y, b.y);
+  int x1 = std::min(a.x + a.w, b.x + b.w), y1 = std::min(a.y + a.h, b.y + b.h);
+  if (x1 <= x0 || y1 <= y0) return Rect{};
+  return Rect{x0, y0, x1 - x0, y1 - y0};
+}
+
+Rect unite(const Rect& a, const Rect& b) {
+  if (a.empty()) return b.empty() ? Rect{} : b;
+  if (b.empty()) return a;
+  int x0 = std::min(a.x, b.x), y0 = std::min(a.y, b.y);
+  int x1 = std::max(a.x + a.w, b.x + b.w), y1 = std::max(a.y + a.h, b.y + b.h);
+  return Rect{x0, y0, x1 - x0, y1 - y0};
+}
+
+static void checkSize(int w, int h) {
+  if (w < 0 || h < 0) throw std::invalid_argument("image size must be non-negative");
+}
+
+ImageF::ImageF(int w, int h) : width(w), height(h) {
+  checkSize(w, h);
+  px.assign((size_t)w * h * 4, 0.0f);
+}
+
+Image8::Image8(int w, int h) : width(w), height(h) {
+  checkSize(w, h);
+  px.assign((size_t)w * h * 4, 0);
+}
+
+namespace {
+template <class Img>
+Rect activeRegionImpl(const Img& img) {
+  int x0 = img.width, y0 = img.height, x1 = -1, y1 = -1;
+  for (int y = 0; y < img.height; ++y) {
+    const auto* row = img.at(0, y);
+    int first = -1, last = -1;
+    for (int x = 0; x < img.width; ++x) {
+      if (row[4 * x + 3] > 0) {
+        if (first < 0) first = x;
+        last = x;
+      }
+    }
+    if (first < 0) continue;
+    x0 = std::min(x0, first);
+    x1 = std::max(x1, last);
+    y0 = std::min(y0, y);
+    y1 = y;
+  }
+  if (x1 < 0) return Rect{};
+  return Rect{x0, y0, x1 - x0 + 1, y1 - y0 + 1};
+}
+}  // namespace
+
+Rect activeRegion(const ImageF& img) { return activeRegionImpl(img); }
+Rect activeRegion(const Image8& img) { return activeRegionImpl(img); }
+
+Image8 toRGBA8(const ImageF& img) {
+  Image8 out(img.width, img.height);
+  const size_t n = img.px.size();
+  const float* __restrict s = img.px.data();
+  uint8_t* __restrict d = out.px.data();
+  for (size_t i = 0; i < n; ++i) {
+    // NaN fails both comparisons and ends at 0, so a bad pixel never becomes garbage.
+    float v = s[i] * 255.0f + 0.5f;
+    v = v > 0.0f ? v : 0.0f;
+    v = v < 255.0f ? v : 255.0f;
+    d[i] = (uint8_t)v;
+  }
+  return out;
+}
+
+ImageF toFloat(const Image8& img) {
+  ImageF out(img.width, img.height);
+  const size_t n = img.px.size();
+  for (size_t i = 0; i < n; ++i) out.px[i] = img.px[i] * (1.0f / 255.0f);
+  return out;
+}
+
+void compositeOver(ImageF& dst, const ImageF& src, const Rect& r) {
+  if (dst.width != src.width || dst.height != src.height)
+    throw std::invalid_argument("compositeOver: image sizes differ");
+  Rect c = intersect(r, Rect{0, 0, dst.width, dst.height});
+  for (int y = c.y; y < c.y + c.h; ++y) {
+    float* __restrict d = dst.at(c.x, y);
+    const float* __restrict s = src.at(c.x, y);
+    const int n = c.w;
+    // Straight-line per-pixel body: GCC -O3 turns this into SIMD (SLP over the 4 lanes).
+    for (int p = 0; p < n; ++p) {
+      const float k = 1.0f - d[4 * p + 3];
+      d[4 * p + 0] += k * s[4 * p + 0];
+      d[4 * p + 1] += k * s[4 * p + 1];
+      d[4 * p + 2] += k * s[4 * p + 2];
+      d[4 * p + 3] += k * s[4 * p + 3];
+    }
+  }
+}
+
+namespace {
+template <class Img, class F>
+ImageError compareImpl(const Img& a, const Img& b, F toUnit) {
+  if (a.width != b.width || a.height != b.height)
+    throw std::invalid_argument("compare: image sizes differ (" + std::to_string(a.width) + "x" +
+                                std::to_string(a.height) + " vs " + std::to_string(b.width) + "x" +
+                                std::to_string(b.height) + ")");
+  ImageError e;
+  double sum = 0;
+  const size_t n = a.px.size();
+  for (size_t i = 0; i < n; ++i) {
+    double d = std::abs(toUnit(a.px[i]) - toUnit(b.px[i]));
+    if (!(d <= e.max_abs)) e.max_abs = d;  // also propagates NaN
+    sum += d * d;
+  }
+  double mse = n ? sum / (double)n : 0.0;
+  e.rmse = std::sqrt(mse);
+  e.psnr = mse == 0 ? std::numeric_limits<double>::infinity() : 10.0 * std::log10(1.0 / mse);
+  return e;
+}
+}  // namespace
+
+ImageError compare(const ImageF& a, const ImageF& b) {
+  return compareImpl(a, b, [](float v) { return (double)v; });
+}
+ImageError compare(const Image8& a, const Image8& b) {
+  return compareImpl(a, b, [](uint8_t v) { return v / 255.0; });
+}
+
+}  // namespace tessera

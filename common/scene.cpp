@@ -1,0 +1,332 @@
+// Scene file parser (DESIGN.md "Scene file"): strict YAML with errors naming file and key path.
+#include "common/scene.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <sstream>
+
+namespace tessera {
+
+Quality namedQuality(const std::string& name) {
+  Quality q;
+  q.name = name;
+  if (name == "reference") {
+    q.step = kL0 / 16;
+    q.early_termination = 2.0;  // > 1: never terminates
+    q.skip_empty = false;
+    q.reference = true;
+  } else if (name == "default") {
+    q.step = kL0;
+    q.early_termination = 0.99;
+  } else if (name == "fast") {
+    q.step = 2 * kL0;
+    q.early_termination = 0.95;
+  } else {
+    throw std::invalid_argument("unknown quality '" + name + "' (reference | default | fast)");
+  }
+  return q;
+}
+
+Camera Orbit::at(const Camera& base, int frame) const {
+  if (frames <= 1) return base;
+  return base.orbited(axis, 360.0 * frame / frames);
+}
+
+namespace {
+
+// Carries the file name so every error starts with it.
+class Parser {
+ public:
+  Parser(std::string file, std::string base) : file_(std::move(file)), base_(std::move(base)) {}
+
+  [[noreturn]] void fail(const std::string& path, const std::string& msg) const {
+    throw SceneError(file_ + ": " + (path.empty() ? "" : path + ": ") + msg);
+  }
+
+  static std::string describe(const YAML::Node& n) {
+    if (n.IsScalar()) return "'" + n.Scalar() + "'";
+    if (n.IsSequence()) return "a list";
+    if (n.IsMap()) return "a map";
+    return "nothing";
+  }
+
+  void checkKeys(const YAML::Node& n, const std::string& path, std::initializer_list<const char*> allowed) const {
+    if (!n.IsMap()) fail(path, "expected a map, got " + describe(n));
+    for (const auto& kv : n) {
+      std::string k = kv.first.Scalar();
+      bool ok = false;
+      for (const char* a : allowed) ok = ok || k == a;
+      if (!ok) {
+        std::string list;
+        for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+        fail(join(path, k), "unknown key (allowed: " + list + ")");
+      }
+    }
+  }
+
+  static std::string join(const std::string& path, const std::string& k) { return path.empty() ? k : path + "." + k; }
+
+  YAML::Node require(const YAML::Node& n, const std::string& path, const char* key) const {
+    YAML::Node c = n[key];
+    if (!c) fail(join(path, key), "missing required key");
+    return c;
+  }
+
+  double number(const YAML::Node& n, const std::string& path) const {
+    if (!n.IsScalar()) fail(path, "expected a number, got " + describe(n));
+    double v;
+    try {
+      v = n.as<double>();
+    } catch (const YAML::Exception&) {
+      fail(path, "expected a number, got " + describe(n));
+    }
+    if (!std::isfinite(v)) fail(path, "expected a finite number, got " + describe(n));
+    return v;
+  }
+
+  long long integer(const YAML::Node& n, const std::string& path, long long lo, long long hi) const {
+    if (!n.IsScalar()) fail(path, "expected an integer, got " + describe(n));
+    long long v;
+    try {
+      v = n.as<long long>();
+    } catch (const YAML::Exception&) {
+      fail(path, "expected an integer, got " + describe(n));
+    }
+    if (v < lo || v > hi)
+      fail(path, "must be in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " + std::to_string(v));
+    return v;
+  }
+
+  bool boolean(const YAML::Node& n, const std::string& path) const {
+    if (!n.IsScalar()) fail(path, "expected true or false, got " + describe(n));
+    try {
+      return n.as<bool>();
+    } catch (const YAML::Exception&) {
+      fail(path, "expected true or false, got " + describe(n));
+    }
+  }
+
+  std::string string(const YAML::Node& n, const std::string& path) const {
+    if (!n.IsScalar()) fail(path, "expected a string, got " + describe(n));
+    return n.Scalar();
+  }
+
+  std::vector<double> numbers(const YAML::Node& n, const std::string& path, size_t count) const {
+    if (!n.IsSequence() || n.size() != count)
+      fail(path, "expected a list of " + std::to_string(count) + " numbers, got " + describe(n));
+    std::vector<double> out;
+    for (size_t i = 0; i < count; ++i) out.push_back(number(n[i], path + "[" + std::to_string(i) + "]"));
+    return out;
+  }
+
+  Vec3 vec3(const YAML::Node& n, const std::string& path) const {
+    auto v = numbers(n, path, 3);
+    return {v[0], v[1], v[2]};
+  }
+
+  std::array<double, 3> spacing(const YAML::Node& n, const std::string& path) const {
+    auto v = numbers(n, path, 3);
+    for (size_t i = 0; i < 3; ++i)
+      if (!(v[i] > 0)) fail(path + "[" + std::to_string(i) + "]", "spacing must be > 0");
+    return {v[0], v[1], v[2]};
+  }
+
+  std::variant<RawVolumeSpec, GeneratorSpec> volume(const YAML::Node& n) const;
+  TransferFunction transferFunction(const YAML::Node& n) const;
+  Camera camera(const YAML::Node& n) const;
+  Quality quality(const YAML::Node& n) const;
+  Orbit orbit(const YAML::Node& n) const;
+
+  std::string file_, base_;
+};
+
+std::variant<RawVolumeSpec, GeneratorSpec> Parser::volume(const YAML::Node& n) const {
+  checkKeys(n, "volume", {"file", "dims", "type", "spacing", "range", "generator"});
+  if (n["generator"]) {
+    if (n["file"] || n["dims"] || n["type"] || n["range"])
+      fail("volume", "give either generator or file/dims/type/range, not both");
+    YAML::Node g = n["generator"];
+    checkKeys(g, "volume.generator", {"name", "size", "seed"});
+    GeneratorSpec s;
+    s.name = string(require(g, "volume.generator", "name"), "volume.generator.name");
+    if (s.name != "hollow-shell" && s.name != "marschner-lobb" && s.name != "noise-cloud")
+      fail("volume.generator.name", "unknown generator '" + s.name + "' (hollow-shell | marschner-lobb | noise-cloud)");
+    s.size = g["size"] ? (int)integer(g["size"], "volume.generator.size", 2, 2048) : 256;
+    s.seed = g["seed"] ? (uint32_t)integer(g["seed"], "volume.generator.seed", 0, 0xffffffffll) : 1;
+    if (n["spacing"]) s.spacing = spacing(n["spacing"], "volume.spacing");
+    return s;
+  }
+  RawVolumeSpec s;
+  std::string f = string(require(n, "volume", "file"), "volume.file");
+  std::filesystem::path p(f);
+  s.file = (p.is_relative() ? std::filesystem::path(base_) / p : p).lexically_normal().string();
+  YAML::Node d = require(n, "volume", "dims");
+  if (!d.IsSequence() || d.size() != 3) fail("volume.dims", "expected a list of 3 integers, got " + describe(d));
+  for (int i = 0; i < 3; ++i) s.dims[i] = (int)integer(d[i], "volume.dims[" + std::to_string(i) + "]", 1, 65536);
+  std::string t = string(require(n, "volume", "type"), "volume.type");
+  if (t == "uint8") s.type = VoxelType::UInt8;
+  else if (t == "uint16") s.type = VoxelType::UInt16;
+  else if (t == "float32") s.type = VoxelType::Float32;
+  else fail("volume.type", "expected uint8, uint16 or float32, got '" + t + "'");
+  if (n["spacing"]) s.spacing = spacing(n["spacing"], "volume.spacing");
+  if (n["range"]) {
+    auto r = numbers(n["range"], "volume.range", 2);
+    if (!(r[0] < r[1])) fail("volume.range", "expected [min, max] with min < max");
+    s.has_range = true;
+    s.range = {r[0], r[1]};
+  } else {
+    s.range = {0, t == "uint16" ? 65535.0 : 255.0};
+  }
+  // Cheap checks now (a stat), so a bad file fails at startup rather than in a renderer.
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(s.file, ec)) fail("volume.file", "file not found: " + s.file);
+  uintmax_t have = std::filesystem::file_size(s.file, ec);
+  uintmax_t need = (uintmax_t)s.dims[0] * s.dims[1] * s.dims[2] * (t == "uint8" ? 1 : t == "uint16" ? 2 : 4);
+  if (ec || have != need)
+    fail("volume.file", s.file + " has " + std::to_string(have) + " bytes but dims x type size need " +
+                            std::to_string(need) + " bytes");
+  return s;
+}
+
+TransferFunction Parser::transferFunction(const YAML::Node& n) const {
+  if (!n.IsSequence() || n.size() == 0)
+    fail("transfer_function", "expected a non-empty list of [s, r, g, b, a], got " + describe(n));
+  std::vector<TfPoint> pts;
+  for (size_t i = 0; i < n.size(); ++i) {
+    auto v = numbers(n[i], "transfer_function[" + std::to_string(i) + "]", 5);
+    pts.push_back({v[0], v[1], v[2], v[3], v[4]});
+  }
+  try {
+    return TransferFunction(std::move(pts));
+  } catch (const std::invalid_argument& e) {
+    fail("transfer_function", e.what());
+  }
+}
+
+Camera Parser::camera(const YAML::Node& n) const {
+  checkKeys(n, "camera", {"eye", "target", "up", "fov", "orthographic", "height"});
+  Camera c;
+  c.eye = vec3(require(n, "camera", "eye"), "camera.eye");
+  c.target = vec3(require(n, "camera", "target"), "camera.target");
+  if (n["up"]) c.up = vec3(n["up"], "camera.up");
+  if (n["orthographic"]) c.orthographic = boolean(n["orthographic"], "camera.orthographic");
+  if (n["fov"]) c.fov = number(n["fov"], "camera.fov");
+  if (c.orthographic) c.height = number(require(n, "camera", "height"), "camera.height");
+  else if (n["height"]) fail("camera.height", "only valid with orthographic: true");
+  try {
+    c.validate();
+  } catch (const std::invalid_argument& e) {
+    fail("camera", e.what());
+  }
+  return c;
+}
+
+Quality Parser::quality(const YAML::Node& n) const {
+  if (n.IsScalar()) {
+    try {
+      return namedQuality(n.Scalar());
+    } catch (const std::invalid_argument& e) {
+      fail("quality", e.what());
+    }
+  }
+  checkKeys(n, "quality", {"step", "early_termination", "skip_empty"});
+  Quality q = namedQuality("default");
+  q.name = "custom";
+  if (n["step"]) {
+    q.step = number(n["step"], "quality.step");
+    if (!(q.step > 0)) fail("quality.step", "must be > 0");
+  }
+  if (n["early_termination"]) {
+    q.early_termination = number(n["early_termination"], "quality.early_termination");
+    if (!(q.early_termination > 0)) fail("quality.early_termination", "must be > 0 (values > 1 disable it)");
+  }
+  if (n["skip_empty"]) q.skip_empty = boolean(n["skip_empty"], "quality.skip_empty");
+  return q;
+}
+
+Orbit Parser::orbit(const YAML::Node& n) const {
+  checkKeys(n, "orbit", {"frames", "axis"});
+  Orbit o;
+  if (n["frames"]) o.frames = (int)integer(n["frames"], "orbit.frames", 1, 1000000);
+  if (n["axis"]) {
+    o.axis = vec3(n["axis"], "orbit.axis");
+    if (!(length(o.axis) > 0)) fail("orbit.axis", "must be non-zero");
+  }
+  return o;
+}
+
+}  // namespace
+
+Scene parseScene(const std::string& yaml_text, const std::string& base_dir, const std::string& name_for_errors) {
+  Parser p(name_for_errors, base_dir);
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    p.fail("", "YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  if (!root.IsMap()) p.fail("", "expected a map of scene keys at the top level");
+  if (root["mesh"]) p.fail("mesh", "mesh scenes are not supported yet");
+  p.checkKeys(root, "", {"volume", "transfer_function", "camera", "image", "quality", "orbit"});
+  Scene s;
+  s.path = name_for_errors;
+  s.volume = p.volume(p.require(root, "", "volume"));
+  s.tf = p.transferFunction(p.require(root, "", "transfer_function"));
+  s.camera = p.camera(p.require(root, "", "camera"));
+  if (root["image"]) {
+    YAML::Node im = root["image"];
+    if (!im.IsSequence() || im.size() != 2) p.fail("image", "expected [width, height], got " + Parser::describe(im));
+    s.width = (int)p.integer(im[0], "image[0]", 1, 16384);
+    s.height = (int)p.integer(im[1], "image[1]", 1, 16384);
+  }
+  if (root["quality"]) s.quality = p.quality(root["quality"]);
+  if (root["orbit"]) s.orbit = p.orbit(root["orbit"]);
+  return s;
+}
+
+Scene loadScene(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(path + ": cannot open scene file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::filesystem::path base = std::filesystem::path(path).parent_path();
+  Scene s = parseScene(ss.str(), base.empty() ? "." : base.string(), path);
+  s.path = path;
+  return s;
+}
+
+Scene defaultScene() {
+  Scene s;
+  s.path = "";
+  s.volume = GeneratorSpec{"hollow-shell", 256, 1, {1, 1, 1}};
+  // Shell values peak at 0.5 (semi-transparent orange), the core at 1.0 (bright, nearly opaque).
+  s.tf = TransferFunction({{0.00, 0.0, 0.0, 0.0, 0.0},
+                           {0.05, 1.0, 0.45, 0.1, 0.0},
+                           {0.50, 1.0, 0.55, 0.15, 0.06},
+                           {0.70, 1.0, 0.8, 0.5, 0.2},
+                           {1.00, 1.0, 1.0, 0.9, 0.9}});
+  s.camera = Camera{{0, 0.6, 2.2}, {0, 0, 0}, {0, 1, 0}, 30, false, 1};
+  s.width = 1024;
+  s.height = 1024;
+  s.quality = namedQuality("default");
+  s.orbit = Orbit{90, {0, 1, 0}};
+  return s;
+}
+
+Volume loadVolume(const Scene& scene) {
+  const std::string name = scene.path.empty() ? "<default scene>" : scene.path;
+  try {
+    if (const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume)) return loadRawVolume(*raw);
+    return generateVolume(std::get<GeneratorSpec>(scene.volume));
+  } catch (const SceneError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw SceneError(name + ": volume: " + e.what());
+  }
+}
+
+}  // namespace tessera

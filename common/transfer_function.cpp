@@ -1,0 +1,59 @@
+// Piecewise-linear transfer function and opacity correction (DESIGN.md "Transfer function").
+#include "common/transfer_function.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace tessera {
+
+TransferFunction::TransferFunction(std::vector<TfPoint> points) : points_(std::move(points)) {
+  if (points_.empty()) throw std::invalid_argument("transfer function: no control points");
+  for (size_t i = 0; i < points_.size(); ++i) {
+    const TfPoint& p = points_[i];
+    for (double v : {p.s, p.r, p.g, p.b, p.a}) {
+      if (!(v >= 0.0 && v <= 1.0))  // NaN fails too
+        throw std::invalid_argument("transfer function: point " + std::to_string(i) +
+                                    ": values must be in [0, 1], got " + std::to_string(v));
+    }
+    // Equal scalars are allowed: they make a step (a jump in colour/opacity).
+    if (i > 0 && p.s < points_[i - 1].s)
+      throw std::invalid_argument("transfer function: point " + std::to_string(i) + ": scalar " +
+                                  std::to_string(p.s) + " is less than the previous " +
+                                  std::to_string(points_[i - 1].s) + " (points must be sorted)");
+  }
+}
+
+std::array<double, 4> TransferFunction::eval(double s) const {
+  if (points_.empty()) return {0, 0, 0, 0};
+  auto rgba = [](const TfPoint& p) { return std::array<double, 4>{p.r, p.g, p.b, p.a}; };
+  if (!(s > points_.front().s)) return rgba(points_.front());  // also catches NaN
+  if (s >= points_.back().s) return rgba(points_.back());
+  // First point with scalar > s; its predecessor has scalar <= s, and at a step the right value wins.
+  auto it = std::upper_bound(points_.begin(), points_.end(), s,
+                             [](double v, const TfPoint& p) { return v < p.s; });
+  const TfPoint& b = *it;
+  const TfPoint& a = *(it - 1);
+  double t = (s - a.s) / (b.s - a.s);
+  return {a.r + t * (b.r - a.r), a.g + t * (b.g - a.g), a.b + t * (b.b - a.b), a.a + t * (b.a - a.a)};
+}
+
+double TransferFunction::maxAlpha(double lo, double hi) const {
+  if (points_.empty()) return 0;
+  if (lo > hi) std::swap(lo, hi);
+  // Piecewise linear: the maximum is at an end point or at a control point inside [lo, hi].
+  double m = std::max(eval(lo)[3], eval(hi)[3]);
+  for (const TfPoint& p : points_)
+    if (p.s >= lo && p.s <= hi) m = std::max(m, p.a);
+  return m;
+}
+
+double correctOpacity(double alpha, double d) {
+  if (alpha <= 0) return 0;
+  if (alpha >= 1) return 1;
+  // expm1/log1p keep precision when alpha is tiny and d/L0 is small or large.
+  return -std::expm1(std::log1p(-alpha) * (d / kL0));
+}
+
+}  // namespace tessera
