@@ -22,4 +22,9 @@ std::vector<std::byte> compress(Codec c, std::span<const std::byte> raw);
 // Fails (never throws) on corrupt data or when the output is not exactly raw_size bytes.
 Result<std::vector<std::byte>> decompress(Codec c, std::span<const std::byte> encoded, size_t raw_size);
 
+// Zero-copy variants for the protocol: compressAppend appends the encoded bytes to `out`;
+// decompressInto fills `out` and fails unless exactly out.size() bytes were decoded.
+void compressAppend(Codec c, std::span<const std::byte> raw, std::vector<std::byte>& out);
+Result<size_t> decompressInto(Codec c, std::span<const std::byte> encoded, std::span<std::byte> out);
+
 }  // namespace tessera

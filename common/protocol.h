@@ -1,7 +1,10 @@
 // The wire protocol: the one place that knows the byte layout of every message.
-// Every message = 32-byte little-endian header + payload. Header fields:
+// Every message = 36-byte little-endian header + payload. Header fields:
 //   magic u32 "TSER" | version u16 | type u16 | frame u64 | sender u32 |
 //   codec u8 | flags u8 | reserved u16 | raw_size u32 | encoded_size u32 | checksum u32 (Adler-32 of payload)
+// raw_size = payload size once decoded; encoded_size = bytes after the header. Pixel
+// messages carry uncompressed metadata then the codec-compressed pixels; others use none.
+// The header's frame field carries the `frame` of messages that have one.
 // Structured payloads are explicit little-endian fields written by ByteWriter; never a
 // memcpy'd struct. Decoders validate every field before touching memory and never throw.
 #pragma once
@@ -23,7 +26,7 @@ namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
 inline constexpr uint16_t kVersion = 1;
-inline constexpr size_t kHeaderSize = 32;
+inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
 enum class Type : uint16_t {
