@@ -1,0 +1,23 @@
+// Packing a rectangle of a float image into wire pixels (rgba8 rounded to nearest,
+// rgba16f round-to-nearest-even, rgba32f exact) and compositing wire pixels "over" a
+// float image front to back. Pure functions; thread-safe.
+#pragma once
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include "image.h"
+#include "protocol.h"
+
+namespace tessera {
+
+std::vector<std::byte> packPixels(const ImageF& img, const Rect& r, proto::PixelFormat f);
+// dst (covering screen rect dst_rect) += (1 - dst.a) * src, where src holds `src_rect`
+// (inside dst_rect) in format f. Sizes must already be validated (decodePiece does).
+void compositeUnder(ImageF& dst, const Rect& dst_rect, std::span<const std::byte> src, const Rect& src_rect,
+                    proto::PixelFormat f);
+
+uint16_t floatToHalf(float f);
+float halfToFloat(uint16_t h);
+
+}  // namespace tessera

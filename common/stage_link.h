@@ -1,0 +1,41 @@
+// A stage's link to the master: SUB for FrameParams/Shutdown, DEALER for Hello and
+// reports, and a heartbeat thread (its own socket) so a long render never looks like a
+// dead stage. join() waits for the master's probe (so the subscription is live), says
+// Hello and waits for the Welcome that carries this stage's rank.
+#pragma once
+#include <atomic>
+#include <string>
+#include <thread>
+
+#include <zmq.hpp>
+
+#include "endpoints.h"
+#include "protocol.h"
+
+namespace tessera {
+
+class StageLink {
+ public:
+  StageLink(zmq::context_t& ctx, const Endpoints& ep, proto::Role role, std::string advertise = "");
+  ~StageLink();
+  StageLink(const StageLink&) = delete;
+  StageLink& operator=(const StageLink&) = delete;
+
+  // False if `stop` was raised or no Welcome came within timeout_s.
+  bool join(const std::atomic<bool>* stop, double timeout_s = 120);
+  uint32_t rank() const { return rank_; }
+  zmq::socket_t& sub() { return sub_; }
+  void report(std::vector<std::byte>&& msg);  // to the master, from the owning thread
+
+ private:
+  zmq::context_t& ctx_;
+  Endpoints ep_;
+  proto::Role role_;
+  std::string advertise_;
+  zmq::socket_t sub_, ctl_;
+  uint32_t rank_ = 0;
+  std::atomic<bool> quit_{false};
+  std::thread heartbeat_;
+};
+
+}  // namespace tessera
