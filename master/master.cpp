@@ -62,7 +62,8 @@ class Master {
       issueFrames();
       if (finished()) break;
       pollControl(50);
-      if (msSince(last_probe) > 250) {  // keeps late joiners and liveness checks going
+      if (msSince(last_probe) > 250) {  // the probe lets late joiners (spares) join
+        sendBytes(pub_, proto::encode(proto::Heartbeat{Role::Display, 0}, kMasterRank));
         checkHeartbeats();
         last_probe = Clock::now();
       }

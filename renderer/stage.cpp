@@ -1,0 +1,160 @@
+#include "stage.h"
+
+#include <chrono>
+#include <deque>
+#include <map>
+#include <optional>
+
+#include "common/log.h"
+#include "common/pixels.h"
+#include "common/protocol.h"
+#include "common/stage_link.h"
+#include "common/transport.h"
+#include "raycaster.h"
+
+namespace tessera::renderer {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+// What determines a brick's image: a frame with the same key is not rendered again.
+struct RenderKey {
+  Camera camera;
+  Quality quality;
+  int width = 0, height = 0;
+  BrickBox brick;
+  bool operator==(const RenderKey&) const = default;
+};
+
+class Stage {
+ public:
+  Stage(const StageOptions& opt, zmq::context_t& ctx)
+      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Renderer),
+        volume_(std::make_shared<Volume>(loadVolume(opt.scene))), caster_(volume_, opt.scene.tf) {}
+
+  int run(const std::atomic<bool>* stop) {
+    if (!link_.join(stop)) {
+      spdlog::error("renderer could not join the master at {}", opt_.endpoints.masterControl());
+      return 1;
+    }
+    spdlog::info("renderer rank={} joined", link_.rank());
+    zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}};
+    while (!(stop && *stop)) {
+      zmq::poll(items, 1, std::chrono::milliseconds(100));
+      std::deque<proto::FrameParams> queue;
+      // Drain first, so frames superseded by a newer epoch are skipped, not rendered.
+      while (true) {
+        zmq::message_t m;
+        if (!link_.sub().recv(m, zmq::recv_flags::dontwait)) break;
+        auto h = proto::decodeHeader(view(m));
+        if (!h) {
+          drops_.drop(~0u, h.error());
+          continue;
+        }
+        if (h->type == proto::Type::Shutdown) return 0;
+        if (h->type == proto::Type::Heartbeat) continue;  // the master's membership probe
+        auto p = h->type == proto::Type::FrameParams ? proto::decodeFrameParams(view(m))
+                                                     : Result<proto::FrameParams>::fail("unexpected message on SUB");
+        if (!p) {
+          drops_.drop(h->sender, p.error());
+          continue;
+        }
+        epoch_ = std::max(epoch_, p->epoch);
+        queue.push_back(std::move(*p));
+      }
+      for (const auto& p : queue)
+        if (p.epoch == epoch_) renderFrame(p);
+    }
+    return 0;
+  }
+
+ private:
+  void renderFrame(const proto::FrameParams& p) {
+    proto::StageStats st{proto::Role::Renderer, link_.rank(), p.frame};
+    for (uint32_t b = 0; b < p.bricks.size(); ++b) {
+      if (p.bricks[b].renderer != link_.rank()) continue;
+      auto t0 = Clock::now();
+      const Cached& c = render(p, p.bricks[b].brick);
+      st.work_ms += msSince(t0);
+      st.active = unite(st.active, c.active);
+      st.active_pixels += c.active.area();
+      auto t1 = Clock::now();
+      for (const auto& region : p.regions) sendPiece(p, b, region, c, st);
+      st.encode_ms += msSince(t1);
+    }
+    st.dropped = drops_.total();
+    link_.report(proto::encode(st, link_.rank()));
+  }
+
+  struct Cached {
+    RenderKey key;
+    ImageF image;
+    Rect active;
+  };
+
+  const Cached& render(const proto::FrameParams& p, const BrickBox& brick) {
+    RenderKey key{p.camera, p.quality, p.width, p.height, brick};
+    for (auto& c : cache_)
+      if (c.key == key) return c;  // unchanged inputs: reuse, do not render again
+    RenderOptions ro;
+    ro.quality = p.quality;
+    ro.threads = opt_.threads;
+    RenderStats rs;
+    Cached c{key, {}, {}};
+    c.image = caster_.render(p.camera, p.width, p.height, brick, ro, &rs, &c.active);
+    spdlog::debug("frame={} brick={},{},{} samples={} skipped={} ms={:.1f}", p.frame, brick.lo[0], brick.lo[1],
+                  brick.lo[2], rs.samples, rs.samples_skipped, rs.ms);
+    if (cache_.size() >= 2) cache_.pop_front();  // a renderer may own two bricks after a failure
+    cache_.push_back(std::move(c));
+    return cache_.back();
+  }
+
+  void sendPiece(const proto::FrameParams& p, uint32_t brick, const proto::CompositorRegion& region,
+                 const Cached& c, proto::StageStats& st) {
+    proto::Piece piece;
+    piece.frame = p.frame;
+    piece.epoch = p.epoch;
+    piece.renderer = link_.rank();
+    piece.brick = brick;
+    piece.region = region.region;
+    piece.active = intersect(c.active, region.region);
+    piece.format = p.format;
+    if (!piece.active.empty()) piece.pixels = packPixels(c.image, piece.active, p.format);
+    piece.render_ms = st.work_ms;
+    auto bytes = proto::encode(piece, link_.rank(), p.codec);
+    st.bytes_raw += piece.pixels.size();
+    st.bytes_encoded += bytes.size();
+    sendBytes(socketFor(region.endpoint), std::move(bytes));
+  }
+
+  zmq::socket_t& socketFor(const std::string& endpoint) {
+    auto it = pushes_.find(endpoint);
+    if (it == pushes_.end()) {
+      zmq::socket_t s = makeSocket(ctx_, zmq::socket_type::push);
+      s.set(zmq::sockopt::linger, 1000);  // let the last pieces leave at shutdown
+      s.connect(endpoint);
+      it = pushes_.emplace(endpoint, std::move(s)).first;
+    }
+    return it->second;
+  }
+
+  const StageOptions& opt_;
+  zmq::context_t& ctx_;
+  StageLink link_;
+  std::shared_ptr<Volume> volume_;
+  Raycaster caster_;
+  std::deque<Cached> cache_;
+  std::map<std::string, zmq::socket_t> pushes_;
+  uint32_t epoch_ = 0;
+  DropCounter drops_;
+};
+
+}  // namespace
+
+int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop) {
+  Stage s(opt, ctx);
+  return s.run(stop);
+}
+
+}  // namespace tessera::renderer

@@ -1,0 +1,23 @@
+// The renderer stage of the farm: renders its bricks for every FrameParams, crops each
+// image to its active region, splits it by the compositors' regions (direct send),
+// compresses and sends one Piece per (brick, compositor) — empty parts as empty pieces.
+#pragma once
+#include <atomic>
+
+#include <zmq.hpp>
+
+#include "common/endpoints.h"
+#include "common/scene.h"
+
+namespace tessera::renderer {
+
+struct StageOptions {
+  Scene scene;
+  Endpoints endpoints;
+  int threads = 0;  // ray-casting threads; 0 = all cores
+};
+
+// Returns the exit code: 0 on Shutdown or stop, 1 if it could not join the farm.
+int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);
+
+}  // namespace tessera::renderer
