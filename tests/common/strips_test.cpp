@@ -182,7 +182,8 @@ TEST(PackTiles, NonUniformTilesRouteBackExactly) {
     Image8 fb = packedFramebuffer(img, p, 5);
     Image8 dst(37, 23);
     RouteStats s = routeFramebuffer(fb, dst, 5);
-    EXPECT_EQ(s, (RouteStats{59, 0, false}))  // one strip per tile row: sum of tile heights << "max_w " << max_w;
+    // One strip per tile row: the sum of the tile heights.
+    EXPECT_EQ(s, (RouteStats{59, 0, false})) << "max_w " << max_w;
     EXPECT_EQ(dst, img) << "max_w " << max_w;
     Image8 other(37, 23);
     EXPECT_EQ(routeFramebuffer(fb, other, 4).strips_written, 0) << "display 4 took display 5's strips";
