@@ -1,0 +1,59 @@
+// tessera-up: runs compose.yaml as local processes, no container engine needed.
+//   tessera-up [FILE] [--env KEY=VALUE]... [--dry-run]
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+#include "common/log.h"
+#include "master/compose.h"
+#include "master/launcher.h"
+
+namespace {
+
+void printPlan(const tessera::master::ComposeProject& project,
+               const std::vector<tessera::master::PlannedProcess>& plan) {
+  std::cout << "project " << project.name << " (runs in " << project.directory.string() << ")\n";
+  for (const auto& p : plan) {
+    std::cout << p.label << (p.exit_leader ? " [exit leader]" : "") << "\n";
+    std::cout << "  argv: " << tessera::master::quoteCommand(p.argv) << "\n";
+    std::cout << "  executable: " << p.executable << "\n";
+    for (const auto& [k, v] : p.environment) {
+      std::cout << "  env: " << k << "=" << tessera::master::quoteCommand({v}) << "\n";
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  auto log = tessera::setupLogging("tessera-up");
+  CLI::App app{"Runs a compose.yaml farm as local processes (no container engine)."};
+  std::string file = "compose.yaml";
+  std::vector<std::string> env_args;
+  bool dry_run = false;
+  app.add_option("file", file, "Compose file")->capture_default_str();
+  app.add_option("--env", env_args, "Variable for interpolation, KEY=VALUE (wins over the "
+                                    "environment and .env)");
+  app.add_flag("--dry-run", dry_run, "Print the resolved processes, argv and environment; start nothing");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    tessera::master::ComposeOptions options;
+    for (const std::string& kv : env_args) {
+      const size_t eq = kv.find('=');
+      if (eq == 0 || eq == std::string::npos) throw std::runtime_error("--env " + kv + ": expected KEY=VALUE");
+      options.overrides[kv.substr(0, eq)] = kv.substr(eq + 1);
+    }
+    const auto project = tessera::master::loadCompose(file, options);
+    for (const auto& w : project.warnings) log->warn("{}", w);
+    tessera::master::LaunchOptions launch_options;
+    if (dry_run) {
+      printPlan(project, tessera::master::planProcesses(project, launch_options));
+      return 0;
+    }
+    return tessera::master::launch(project, launch_options);
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
+    return 2;
+  }
+}
