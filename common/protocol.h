@@ -46,16 +46,35 @@ struct Header {
   uint32_t sender = 0;
   Codec codec = Codec::None;
   uint32_t raw_size = 0, encoded_size = 0, checksum = 0;
+  bool operator==(const Header&) const = default;
 };
 
 // ---- messages ---------------------------------------------------------------------
-struct Hello { Role role; uint32_t pid = 0; std::string endpoint; };      // stage -> master
-struct Welcome { Role role; uint32_t rank = 0; };                          // master -> stage
-struct Heartbeat { Role role; uint32_t rank = 0; };                        // stage -> master
-struct Shutdown { std::string reason; };                                   // master -> all
+struct Hello {                                                             // stage -> master
+  Role role = Role::Renderer; uint32_t pid = 0; std::string endpoint;
+  bool operator==(const Hello&) const = default;
+};
+struct Welcome {                                                           // master -> stage
+  Role role = Role::Renderer; uint32_t rank = 0;
+  bool operator==(const Welcome&) const = default;
+};
+struct Heartbeat {                                                         // stage -> master
+  Role role = Role::Renderer; uint32_t rank = 0;
+  bool operator==(const Heartbeat&) const = default;
+};
+struct Shutdown {                                                          // master -> all
+  std::string reason;
+  bool operator==(const Shutdown&) const = default;
+};
 
-struct BrickAssignment { uint32_t renderer = 0; BrickBox brick; };
-struct CompositorRegion { uint32_t compositor = 0; Rect region; std::string endpoint; };
+struct BrickAssignment {
+  uint32_t renderer = 0; BrickBox brick;
+  bool operator==(const BrickAssignment&) const = default;
+};
+struct CompositorRegion {
+  uint32_t compositor = 0; Rect region; std::string endpoint;
+  bool operator==(const CompositorRegion&) const = default;
+};
 struct FrameParams {                                                       // master -> all (PUB)
   uint64_t frame = 0;
   uint32_t epoch = 0;                        // bumped when membership changes; stale work is dropped
@@ -68,6 +87,7 @@ struct FrameParams {                                                       // ma
   std::vector<int> order;                    // brick indices (into `bricks`) front to back
   std::vector<CompositorRegion> regions;     // tile the image, disjoint
   std::string display_endpoint;
+  bool operator==(const FrameParams&) const = default;
 };
 
 struct Piece {                                 // renderer -> compositor
@@ -79,6 +99,7 @@ struct Piece {                                 // renderer -> compositor
   PixelFormat format = PixelFormat::RGBA8;
   std::vector<std::byte> pixels;               // raw (decoded) pixels of `active`, rows top to bottom
   double render_ms = 0, encode_ms = 0;
+  bool operator==(const Piece&) const = default;
 };
 
 struct Strips {                                // compositor -> display
@@ -87,27 +108,32 @@ struct Strips {                                // compositor -> display
   uint32_t compositor = 0;
   std::vector<uint8_t> stream;                 // raw (decoded) strip stream, see strips.h
   double composite_ms = 0, encode_ms = 0;
+  double render_ms = 0;                        // slowest piece's render time (for the status line)
   uint64_t active_pixels = 0;
+  bool operator==(const Strips&) const = default;
 };
 
 struct StageStats {                            // renderer/compositor -> master, per frame
-  Role role; uint32_t rank = 0; uint64_t frame = 0;
+  Role role = Role::Renderer; uint32_t rank = 0; uint64_t frame = 0;
   double work_ms = 0, encode_ms = 0;
   uint64_t bytes_raw = 0, bytes_encoded = 0, active_pixels = 0;
   Rect active;                                 // renderer: active region of its brick image
   uint64_t dropped = 0;                        // messages dropped so far (cumulative)
+  bool operator==(const StageStats&) const = default;
 };
 
 struct FrameDone {                             // display -> master
   uint64_t frame = 0;
   double display_ms = 0, route_ms = 0;
   uint64_t bytes_encoded = 0, strips_rejected = 0, dropped = 0;
+  bool operator==(const FrameDone&) const = default;
 };
 
 struct Input {                                 // display -> master (interactive camera)
   double orbit_dx = 0, orbit_dy = 0;           // degrees
   double zoom = 1;                             // multiply eye distance
   std::string quality;                         // "" = unchanged
+  bool operator==(const Input&) const = default;
 };
 
 // ---- encode: header + payload; pixel payloads are compressed with `codec` -----------
