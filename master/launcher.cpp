@@ -111,6 +111,9 @@ class Supervisor {
     if (pipe2(wake, O_CLOEXEC | O_NONBLOCK) != 0) throw LaunchError(std::string("pipe: ") + std::strerror(errno));
     wake_read_ = wake[0];
     SignalScope signals(wake[1], options_.handle_signals);
+    int was_subreaper = 0;
+    prctl(PR_GET_CHILD_SUBREAPER, &was_subreaper);
+    prctl(PR_SET_CHILD_SUBREAPER, 1);
     for (const auto& c : children_) have_leader_ = have_leader_ || c->plan.exit_leader;
     for (auto& c : children_) {
       if (!c->plan.note.empty()) say(c->plan.label + ": " + c->plan.note);
@@ -121,6 +124,7 @@ class Supervisor {
     }
     supervise();
     cleanup(wake[1]);
+    prctl(PR_SET_CHILD_SUBREAPER, was_subreaper);
     return exit_code_;
   }
 
@@ -304,10 +308,7 @@ class Supervisor {
           while (::read(wake_read_, junk, sizeof junk) > 0) {}
         }
       }
-      for (auto& c : children_) {
-        int status = 0;
-        if (c->running && waitpid(c->pid, &status, WNOHANG) == c->pid) onExit(*c, status);
-      }
+      reap();
       if (g_signal != 0 && g_signal != seen_signal) {
         seen_signal = g_signal;
         if (!stopping_) {
@@ -322,23 +323,47 @@ class Supervisor {
       }
       bool any_running = false;
       for (auto& c : children_) any_running = any_running || c->running;
-      if (!any_running) return;
+      if (!any_running) {
+        if (!groupsAlive()) return;
+        beginStop();  // helpers a finished child left behind in its group
+      }
       if (stopping_ && !killed && Clock::now() >= deadline_) {
         for (auto& c : children_) {
           if (c->running) say(c->plan.label + " did not stop in time; sending SIGKILL");
+          else if (c->pid > 0 && kill(-c->pid, 0) == 0) say(c->plan.label + "'s helper processes did not stop in time; sending SIGKILL");
         }
         signalGroups(SIGKILL);
         killed = true;
         kill_deadline = Clock::now() + kKillWait;
       }
       if (killed && Clock::now() >= kill_deadline) {
+        bool stuck = false;
         for (auto& c : children_) {
           if (c->running) say(c->plan.label + " (pid " + std::to_string(c->pid) + ") could not be reaped");
+          stuck = stuck || c->running;
         }
-        exit_code_ = exit_code_ == 0 ? 1 : exit_code_;
+        if (stuck && exit_code_ == 0) exit_code_ = 1;
         return;
       }
     }
+  }
+
+  // As a child subreaper the launcher inherits its children's orphans; reaping them
+  // (waitpid(-1)) is what lets their process groups disappear.
+  void reap() {
+    int status = 0;
+    for (pid_t pid; (pid = waitpid(-1, &status, WNOHANG)) > 0;) {
+      for (auto& c : children_) {
+        if (c->running && c->pid == pid) onExit(*c, status);
+      }
+    }
+  }
+
+  bool groupsAlive() const {
+    for (const auto& c : children_) {
+      if (c->pid > 0 && kill(-c->pid, 0) == 0) return true;
+    }
+    return false;
   }
 
   void cleanup(int wake_write) {
