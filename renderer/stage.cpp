@@ -71,7 +71,10 @@ class Stage {
 
  private:
   void renderFrame(const proto::FrameParams& p) {
-    proto::StageStats st{proto::Role::Renderer, link_.rank(), p.frame};
+    proto::StageStats st;
+    st.role = proto::Role::Renderer;
+    st.rank = link_.rank();
+    st.frame = p.frame;
     for (uint32_t b = 0; b < p.bricks.size(); ++b) {
       if (p.bricks[b].renderer != link_.rank()) continue;
       auto t0 = Clock::now();

@@ -1,0 +1,155 @@
+#include "stage.h"
+
+#include <chrono>
+#include <map>
+
+#include "common/log.h"
+#include "common/stage_link.h"
+#include "common/strips.h"
+#include "common/transport.h"
+#include "gather.h"
+#include "over.h"
+
+namespace tessera::compositor {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+class Stage {
+ public:
+  Stage(const StageOptions& opt, zmq::context_t& ctx)
+      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Compositor, opt.advertise),
+        pull_(makeSocket(ctx, zmq::socket_type::pull)), gather_(0) {}
+
+  int run(const std::atomic<bool>* stop) {
+    if (!link_.join(stop)) {
+      spdlog::error("compositor could not join the master at {}", opt_.endpoints.masterControl());
+      return 1;
+    }
+    uint32_t rank = link_.rank();
+    gather_ = Gather(rank);
+    std::string bind = opt_.endpoints.compositorBind(rank);
+    pull_.set(zmq::sockopt::rcvhwm, 0);  // pieces are bounded by the master's frame window
+    pull_.bind(bind);
+    spdlog::info("compositor rank={} joined, pieces at {}", rank, bind);
+    zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}, {pull_.handle(), 0, ZMQ_POLLIN, 0}};
+    while (!(stop && *stop)) {
+      zmq::poll(items, 2, std::chrono::milliseconds(100));
+      if ((items[0].revents & ZMQ_POLLIN) && !readParams()) return 0;
+      if (items[1].revents & ZMQ_POLLIN) readPieces();
+      for (auto& why : gather_.takeLateDrops()) drops_.drop(~0u, why);
+      while (auto ready = gather_.pop()) composite(*ready);
+    }
+    return 0;
+  }
+
+ private:
+  // False on Shutdown.
+  bool readParams() {
+    for (int i = 0; i < 256; ++i) {
+      zmq::message_t m;
+      if (!link_.sub().recv(m, zmq::recv_flags::dontwait)) break;
+      auto h = proto::decodeHeader(view(m));
+      if (!h) {
+        drops_.drop(~0u, h.error());
+        continue;
+      }
+      if (h->type == proto::Type::Shutdown) return false;
+      if (h->type == proto::Type::Heartbeat) continue;
+      auto p = proto::decodeFrameParams(view(m));
+      if (!p) {
+        drops_.drop(h->sender, p.error());
+        continue;
+      }
+      if (auto why = gather_.addParams(std::move(*p)); !why.empty()) spdlog::debug("ignored FrameParams: {}", why);
+    }
+    return true;
+  }
+
+  void readPieces() {
+    for (int i = 0; i < 256; ++i) {
+      zmq::message_t m;
+      if (!pull_.recv(m, zmq::recv_flags::dontwait)) break;
+      auto t0 = Clock::now();
+      auto piece = proto::decodePiece(view(m));
+      decode_ms_ += msSince(t0);
+      if (!piece) {
+        auto h = proto::decodeHeader(view(m));
+        drops_.drop(h ? h->sender : ~0u, piece.error());
+        continue;
+      }
+      bytes_in_ += m.size();
+      uint32_t sender = piece->renderer;
+      if (auto why = gather_.addPiece(std::move(*piece)); !why.empty()) drops_.drop(sender, why);
+    }
+  }
+
+  void composite(Gather::Ready& r) {
+    proto::StageStats st;
+    st.role = proto::Role::Compositor;
+    st.rank = link_.rank();
+    st.frame = r.params.frame;
+    st.encode_ms = decode_ms_;
+    decode_ms_ = 0;
+    st.bytes_encoded = bytes_in_;
+    bytes_in_ = 0;
+    if (!r.region) return;  // a spare compositor this frame
+    auto t0 = Clock::now();
+    const Rect& reg = *r.region;
+    if (frame_.width != r.params.width || frame_.height != r.params.height)
+      frame_ = Image8(r.params.width, r.params.height);
+    st.active_pixels = compositeRegion(reg, r.params.order, r.pieces, scratch_, frame_);
+    st.work_ms = msSince(t0);
+    for (const auto& p : r.pieces) {
+      st.bytes_raw += p.pixels.size();
+      st.active = unite(st.active, p.active);
+    }
+    auto t1 = Clock::now();
+    proto::Strips s;
+    s.frame = r.params.frame;
+    s.epoch = r.params.epoch;
+    s.compositor = link_.rank();
+    s.stream = encodeStrips(frame_, reg, 0);
+    s.composite_ms = st.work_ms;
+    s.active_pixels = st.active_pixels;
+    for (const auto& p : r.pieces) s.render_ms = std::max(s.render_ms, p.render_ms);
+    auto bytes = proto::encode(s, link_.rank(), r.params.codec);
+    s.encode_ms = msSince(t1);
+    st.encode_ms += s.encode_ms;
+    sendBytes(display(r.params.display_endpoint), std::move(bytes));
+    st.dropped = drops_.total();
+    link_.report(proto::encode(st, link_.rank()));
+  }
+
+  zmq::socket_t& display(const std::string& endpoint) {
+    if (endpoint != display_endpoint_) {
+      display_ = makeSocket(ctx_, zmq::socket_type::push);
+      display_.set(zmq::sockopt::linger, 1000);
+      display_.connect(endpoint);
+      display_endpoint_ = endpoint;
+    }
+    return display_;
+  }
+
+  const StageOptions& opt_;
+  zmq::context_t& ctx_;
+  StageLink link_;
+  zmq::socket_t pull_, display_;
+  std::string display_endpoint_;
+  Gather gather_;
+  ImageF scratch_;
+  Image8 frame_;
+  double decode_ms_ = 0;
+  uint64_t bytes_in_ = 0;
+  DropCounter drops_;
+};
+
+}  // namespace
+
+int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop) {
+  Stage s(opt, ctx);
+  return s.run(stop);
+}
+
+}  // namespace tessera::compositor

@@ -1,0 +1,20 @@
+// The compositor stage: owns one screen region per frame; gathers the pieces of frame n
+// from every brick, composites them in the master's visibility order (never arrival
+// order), encodes the region as strips with headers, compresses and sends it on.
+#pragma once
+#include <atomic>
+
+#include <zmq.hpp>
+
+#include "common/endpoints.h"
+
+namespace tessera::compositor {
+
+struct StageOptions {
+  Endpoints endpoints;
+  std::string advertise;  // endpoint peers use to reach this compositor ("" = derived from rank)
+};
+
+int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);
+
+}  // namespace tessera::compositor

@@ -1,0 +1,31 @@
+// tessera-display: shows the farm's frames in a window, or writes them as PNG files.
+#include <CLI/CLI.hpp>
+
+#include "common/log.h"
+#include "common/stop.h"
+#include "stage.h"
+
+int main(int argc, char** argv) {
+  using namespace tessera;
+  auto log = setupLogging("display");
+  CLI::App app{"Tessera display: presents the farm's frames"};
+  std::string base, scene;
+  std::vector<double> bg;
+  display::StageOptions opt;
+  app.add_option("scene", scene, "accepted so every process takes the same arguments; unused");
+  app.add_option("--endpoints", base, "endpoint base (ipc://DIR | tcp://HOST:PORT)")->envname("TESSERA_ENDPOINTS");
+  app.add_option("--out", opt.out_dir, "folder for PNG frames (no window)")->envname("TESSERA_OUT");
+  app.add_option("--window", opt.window, "auto | on | off")->envname("TESSERA_WINDOW")
+      ->check(CLI::IsMember({"auto", "on", "off"}));
+  app.add_option("--background", bg, "r,g,b in [0,1]: PNGs composited over this colour")->delimiter(',')->expected(3);
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (!bg.empty()) opt.background = std::array<double, 3>{bg[0], bg[1], bg[2]};
+    opt.endpoints = makeEndpoints(base.empty() ? defaultEndpointBase() : base);
+    zmq::context_t ctx(1);
+    return display::runStage(opt, ctx, &installStopSignals());
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,221 @@
+#include "stage.h"
+
+#include <chrono>
+#include <deque>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "common/log.h"
+#include "common/stage_link.h"
+#include "common/strips.h"
+#include "common/transport.h"
+#include "sink.h"
+
+namespace tessera::display {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+class Stage {
+ public:
+  Stage(const StageOptions& opt, zmq::context_t& ctx)
+      : opt_(opt), link_(ctx, opt.endpoints, proto::Role::Display), pull_(makeSocket(ctx, zmq::socket_type::pull)) {
+    pull_.set(zmq::sockopt::rcvhwm, 0);  // bounded by the master's frame window
+    pull_.bind(opt_.endpoints.bind(opt_.endpoints.display()));
+  }
+
+  int run(const std::atomic<bool>* stop) {
+    if (!link_.join(stop)) {
+      spdlog::error("display could not join the master at {}", opt_.endpoints.masterControl());
+      return 1;
+    }
+    spdlog::info("display joined, strips at {}", opt_.endpoints.display());
+    zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}, {pull_.handle(), 0, ZMQ_POLLIN, 0}};
+    while (!(stop && *stop)) {
+      zmq::poll(items, 2, std::chrono::milliseconds(20));
+      if (items[0].revents & ZMQ_POLLIN) readParams();
+      if (items[1].revents & ZMQ_POLLIN) readStrips();
+      presentReady();
+      if (sink_ && pollInput()) return 0;
+      if (shutdown_ && !frames_.count(next_)) break;
+    }
+    spdlog::info("display done: frames={} strips_rejected={} dropped={}", presented_, rejected_, drops_.total());
+    return 0;
+  }
+
+ private:
+  struct Pending {
+    std::optional<proto::FrameParams> params;
+    std::map<uint32_t, proto::Strips> strips;  // by compositor
+    Clock::time_point first_seen = Clock::now();
+  };
+
+  void readParams() {
+    for (int i = 0; i < 256; ++i) {
+      zmq::message_t m;
+      if (!link_.sub().recv(m, zmq::recv_flags::dontwait)) break;
+      auto h = proto::decodeHeader(view(m));
+      if (!h) {
+        drops_.drop(~0u, h.error());
+        continue;
+      }
+      if (h->type == proto::Type::Shutdown) {
+        shutdown_ = true;
+        continue;
+      }
+      if (h->type == proto::Type::Heartbeat) continue;
+      auto p = proto::decodeFrameParams(view(m));
+      if (!p) {
+        drops_.drop(h->sender, p.error());
+        continue;
+      }
+      if (p->epoch < epoch_) continue;
+      if (p->epoch > epoch_) {  // frames in flight were issued again: forget their old strips
+        epoch_ = p->epoch;
+        for (auto& [f, pend] : frames_) std::erase_if(pend.strips, [&](auto& kv) { return kv.second.epoch < epoch_; });
+      }
+      if (p->frame < next_) continue;
+      frames_[p->frame].params = std::move(*p);
+    }
+  }
+
+  void readStrips() {
+    for (int i = 0; i < 256; ++i) {
+      zmq::message_t m;
+      if (!pull_.recv(m, zmq::recv_flags::dontwait)) break;
+      auto s = proto::decodeStrips(view(m));
+      if (!s) {
+        auto h = proto::decodeHeader(view(m));
+        drops_.drop(h ? h->sender : ~0u, s.error());
+        continue;
+      }
+      if (s->epoch < epoch_) continue;  // stale, not malformed
+      if (s->frame < next_) {
+        drops_.drop(s->compositor, "strips for a frame already shown");
+        continue;
+      }
+      if (frames_.size() > 64 && !frames_.count(s->frame)) {
+        drops_.drop(s->compositor, "strips for a frame too far ahead");
+        continue;
+      }
+      bytes_in_ += m.size();
+      auto& pend = frames_[s->frame];
+      if (pend.strips.count(s->compositor)) {
+        drops_.drop(s->compositor, "duplicate strips");
+        continue;
+      }
+      pend.strips.emplace(s->compositor, std::move(*s));
+    }
+  }
+
+  bool complete(const Pending& p) const {
+    if (!p.params) return false;
+    for (const auto& r : p.params->regions)
+      if (!p.strips.count(r.compositor)) return false;
+    return true;
+  }
+
+  void presentReady() {
+    while (true) {
+      auto it = frames_.find(next_);
+      if (it == frames_.end() || !complete(it->second)) return;
+      present(it->second);
+      frames_.erase(it);
+      ++next_;
+    }
+  }
+
+  void present(Pending& p) {
+    const auto& params = *p.params;
+    auto t0 = Clock::now();
+    if (image_.width != params.width || image_.height != params.height) image_ = Image8(params.width, params.height);
+    else std::fill(image_.px.begin(), image_.px.end(), 0);
+    uint64_t rejected = 0;
+    double render_ms = 0, composite_ms = 0;
+    for (const auto& r : params.regions) {
+      const auto& s = p.strips.at(r.compositor);
+      RouteStats rs = routeStrips(s.stream, image_, 0);
+      rejected += rs.strips_rejected + (rs.truncated ? 1 : 0);
+      render_ms = std::max(render_ms, s.render_ms);
+      composite_ms = std::max(composite_ms, s.composite_ms);
+    }
+    if (rejected) spdlog::warn("frame={} strips_rejected={} (headers pointing outside the image or corrupt)", params.frame, rejected);
+    rejected_ += rejected;
+    double route_ms = msSince(t0);
+    openSink(params);
+    fps_times_.push_back(Clock::now());
+    while (fps_times_.size() > 1 && msSince(fps_times_.front()) > 2000) fps_times_.pop_front();
+    double fps = fps_times_.size() > 1
+                     ? (fps_times_.size() - 1) * 1000.0 /
+                           std::chrono::duration<double, std::milli>(fps_times_.back() - fps_times_.front()).count()
+                     : 0;
+    std::string status = fmt::format("frame {}  {:.1f} fps  latency {:.0f} ms  render {:.0f}  composite {:.1f}  display {:.1f} ms",
+                                     params.frame, fps, msSince(p.first_seen), render_ms, composite_ms, last_display_ms_);
+    sink_->present(image_, params.frame, status);
+    last_display_ms_ = msSince(t0);
+    ++presented_;
+    if (msSince(last_status_) > 1000) {
+      spdlog::info("{}", status);
+      last_status_ = Clock::now();
+    }
+    proto::FrameDone d;
+    d.frame = params.frame;
+    d.display_ms = last_display_ms_;
+    d.route_ms = route_ms;
+    d.bytes_encoded = std::exchange(bytes_in_, 0);
+    d.strips_rejected = rejected_;
+    d.dropped = drops_.total();
+    link_.report(proto::encode(d, 0));
+  }
+
+  void openSink(const proto::FrameParams& p) {
+    if (sink_) return;
+    bool want_window = opt_.window == "on" || (opt_.window == "auto" && windowAvailable());
+    if (want_window) {
+      sink_ = makeWindowSink(p.width, p.height, "Tessera");
+      spdlog::info("display window {}x{}", p.width, p.height);
+    } else {
+      sink_ = makePngSink(opt_.out_dir, opt_.background);
+      spdlog::info("display writing PNG frames to {}/", opt_.out_dir);
+    }
+  }
+
+  // True when the user quit.
+  bool pollInput() {
+    for (const auto& e : sink_->poll()) {
+      if (e.quit) return true;
+      proto::Input in;
+      in.orbit_dx = e.orbit_dx;
+      in.orbit_dy = e.orbit_dy;
+      in.zoom = e.zoom;
+      in.quality = e.quality;
+      link_.report(proto::encode(in, 0));
+    }
+    return false;
+  }
+
+  const StageOptions& opt_;
+  StageLink link_;
+  zmq::socket_t pull_;
+  std::unique_ptr<Sink> sink_;
+  std::map<uint64_t, Pending> frames_;
+  uint64_t next_ = 0, presented_ = 0, rejected_ = 0, bytes_in_ = 0;
+  uint32_t epoch_ = 0;
+  bool shutdown_ = false;
+  Image8 image_;
+  std::deque<Clock::time_point> fps_times_;
+  Clock::time_point last_status_{};
+  double last_display_ms_ = 0;
+  DropCounter drops_;
+};
+
+}  // namespace
+
+int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop) {
+  Stage s(opt, ctx);
+  return s.run(stop);
+}
+
+}  // namespace tessera::display

@@ -1,0 +1,25 @@
+// The display stage: routes the compositors' strips into the frame by their headers
+// alone, presents it (window or PNG files), shows fps/latency/per-stage ms, and returns
+// FrameDone to the master (the credit that lets the next frame start).
+#pragma once
+#include <array>
+#include <atomic>
+#include <optional>
+#include <string>
+
+#include <zmq.hpp>
+
+#include "common/endpoints.h"
+
+namespace tessera::display {
+
+struct StageOptions {
+  Endpoints endpoints;
+  std::string out_dir = "out";  // PNG frames when there is no window
+  std::string window = "auto";  // auto | on | off
+  std::optional<std::array<double, 3>> background;  // PNG: composite over this colour
+};
+
+int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);
+
+}  // namespace tessera::display
