@@ -1,0 +1,38 @@
+// Per-ray sampling kernels: the fast float path (SIMD over 8 consecutive samples of a ray,
+// table classification, empty-space skipping, early termination) and the double-precision
+// reference path. Both composite front to back into premultiplied RGBA. Thread-safe.
+#pragma once
+#include <cstdint>
+
+#include "common/transfer_function.h"
+#include "common/volume.h"
+#include "renderer/minmax.h"
+#include "renderer/ray_setup.h"
+#include "renderer/tf_table.h"
+
+namespace tessera::renderer {
+
+struct SampleCounts {
+  uint64_t taken = 0, skipped = 0, terminated = 0;
+};
+
+struct FastContext {
+  const Volume* volume = nullptr;
+  const TfTable* table = nullptr;
+  const MinMaxHierarchy* hierarchy = nullptr;           // null: no skipping
+  const MinMaxHierarchy::Emptiness* emptiness = nullptr;  // null: no skipping
+  float early_termination = 2.0f;                        // > 1: never
+};
+
+// Samples span.k_first..k_end-1; out receives premultiplied RGBA.
+void castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);
+
+// Double precision, exact transfer function, no skipping, no early termination.
+void castReference(const Volume& v, const TransferFunction& tf, double step, const RaySpan& span,
+                   double out[4], SampleCounts& counts);
+
+// Trilinear interpolation at voxel coordinate u (voxel centres at integers), clamped at
+// the border; double precision (the reference path and tests use it).
+double sampleTrilinear(const Volume& v, double ux, double uy, double uz);
+
+}  // namespace tessera::renderer

@@ -1,0 +1,52 @@
+// Min-max hierarchy for empty-space skipping: value ranges of 8^3-cell blocks (with the
+// one-voxel apron that trilinear sampling touches) and an octree of coarser levels.
+// Built once per volume (immutable, shareable); emptiness is classified per transfer function.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "common/volume.h"
+
+namespace tessera::renderer {
+
+// A sample at voxel coordinate u (voxel centres at integers) is clamped to [0, n-1] and
+// reads voxels i and i+1 with i = clamp(floor(u), 0, n-2). Block b on an axis holds the
+// samples with i in [8b, 8b+8), so it reads voxels [8b, min(8b+8, n-1)].
+class MinMaxHierarchy {
+ public:
+  static constexpr int kBlock = 8;  // cells per block edge at level 0
+
+  explicit MinMaxHierarchy(const Volume& v);
+  // Shares one hierarchy between all raycasters of the same volume (built on first use).
+  static std::shared_ptr<const MinMaxHierarchy> forVolume(const std::shared_ptr<const Volume>& v);
+
+  int levels() const { return (int)levels_.size(); }
+  std::array<int, 3> dims(int level) const { return levels_[level].dims; }
+  // Range of voxel values a sample inside node (x,y,z) of `level` can interpolate from.
+  float minValue(int level, int x, int y, int z) const { return levels_[level].mn[index(level, x, y, z)]; }
+  float maxValue(int level, int x, int y, int z) const { return levels_[level].mx[index(level, x, y, z)]; }
+  size_t index(int level, int x, int y, int z) const {
+    const auto& d = levels_[level].dims;
+    return x + (size_t)d[0] * (y + (size_t)d[1] * z);
+  }
+
+  // Per-level empty flags: level 0 block empty iff isEmpty(min, max); a coarser node is
+  // empty iff all its children are.
+  struct Emptiness {
+    std::vector<std::vector<uint8_t>> empty;  // [level][node index]
+    uint64_t empty_blocks = 0;                // level-0 blocks marked empty
+  };
+  Emptiness classify(const std::function<bool(float lo, float hi)>& isEmpty) const;
+
+ private:
+  struct Level {
+    std::array<int, 3> dims{1, 1, 1};
+    std::vector<float> mn, mx;
+  };
+  std::vector<Level> levels_;
+};
+
+}  // namespace tessera::renderer

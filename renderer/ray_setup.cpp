@@ -1,0 +1,72 @@
+// Ray-box intervals and the global sample grid (see ray_setup.h).
+#include "renderer/ray_setup.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace tessera::renderer {
+
+VolumeGeometry::VolumeGeometry(const Volume& v) : n(v.dims) {
+  const Vec3 h = v.halfExtent();
+  for (int a = 0; a < 3; ++a) {
+    half[a] = h[a];
+    cell[a] = 2.0 * h[a] / n[a];
+  }
+}
+
+bool boxInterval(const VolumeGeometry& g, const Ray& r, const BrickBox& b, double& t_in, double& t_out) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  t_in = -kInf;
+  t_out = kInf;
+  for (int a = 0; a < 3; ++a) {
+    const double o = r.origin[a], d = r.dir[a];
+    const double p_lo = g.plane(a, b.lo[a]), p_hi = g.plane(a, b.hi[a]);
+    if (d == 0) {
+      // Parallel to the slab: inside for all t or for none (half-open, like the t test).
+      if (!(o >= p_lo && o < p_hi)) return false;
+      continue;
+    }
+    // Division (not a reciprocal) keeps t monotone in the plane position under rounding.
+    const double t_lo = (p_lo - o) / d, t_hi = (p_hi - o) / d;
+    t_in = std::max(t_in, d > 0 ? t_lo : t_hi);
+    t_out = std::min(t_out, d > 0 ? t_hi : t_lo);
+  }
+  return t_in < t_out;
+}
+
+namespace {
+double sampleT(double t0, int64_t k, double step) { return t0 + ((double)k + 0.5) * step; }
+
+// Smallest k >= 0 with t_k >= t (the same expression every brick evaluates).
+int64_t firstAtOrAfter(double t0, double t, double step) {
+  double guess = std::ceil((t - t0) / step - 0.5);
+  int64_t k = guess > 0 ? (int64_t)guess : 0;
+  while (k > 0 && sampleT(t0, k - 1, step) >= t) --k;
+  while (sampleT(t0, k, step) < t) ++k;
+  return k;
+}
+}  // namespace
+
+bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span) {
+  const BrickBox whole{{0, 0, 0}, g.n};
+  double w_in, w_out, b_in, b_out;
+  if (!boxInterval(g, r, whole, w_in, w_out)) return false;
+  if (!(w_out > 0)) return false;
+  if (!boxInterval(g, r, brick, b_in, b_out)) return false;
+  span.t0 = std::max(w_in, 0.0);
+  b_in = std::max(b_in, span.t0);
+  b_out = std::min(b_out, w_out);
+  if (!(b_in < b_out)) return false;
+  span.k_first = firstAtOrAfter(span.t0, b_in, step);
+  span.k_end = firstAtOrAfter(span.t0, b_out, step);
+  if (span.k_end <= span.k_first) return false;
+  const double tb = span.t0 + 0.5 * step;
+  for (int a = 0; a < 3; ++a) {
+    span.u0[a] = (r.origin[a] + tb * r.dir[a] + g.half[a]) / g.cell[a] - 0.5;
+    span.du[a] = r.dir[a] * step / g.cell[a];
+  }
+  return true;
+}
+
+}  // namespace tessera::renderer

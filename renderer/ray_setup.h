@@ -1,0 +1,45 @@
+// Per-ray setup shared by all kernels: the global sample grid along a ray and the part of
+// it that belongs to one brick. Double precision; plain functions, thread-safe.
+#pragma once
+#include <array>
+#include <cstdint>
+
+#include "common/bricks.h"
+#include "common/camera.h"
+#include "common/volume.h"
+
+namespace tessera::renderer {
+
+// World <-> voxel mapping of one volume (DESIGN.md: origin-centred box, largest extent 1,
+// voxel i at the centre of its cell).
+struct VolumeGeometry {
+  std::array<int, 3> n{1, 1, 1};
+  std::array<double, 3> half{0.5, 0.5, 0.5};  // half extents (world)
+  std::array<double, 3> cell{1, 1, 1};        // cell edge (world)
+
+  explicit VolumeGeometry(const Volume& v);
+  // World coordinate of the cell boundary q on an axis (q = 0..n). Every box (whole volume
+  // or brick) uses this one expression, so shared faces give bit-identical ray parameters.
+  double plane(int axis, int q) const { return -half[axis] + q * cell[axis]; }
+};
+
+// The samples of one ray inside one brick. Sample k sits at t_k = t0 + (k + 0.5) * step,
+// t0 = max(0, entry into the WHOLE volume), so every brick shares one grid along the ray;
+// a brick takes exactly the k with t_k in [t_in, t_out) of its own box.
+// In voxel coordinates (voxel centres at integers) sample k is at u0 + k * du.
+struct RaySpan {
+  double t0 = 0;
+  int64_t k_first = 0, k_end = 0;  // samples [k_first, k_end); empty if equal
+  std::array<double, 3> u0{}, du{};
+  bool empty() const { return k_end <= k_first; }
+};
+
+// Half-open ray-box interval [t_in, t_out) over the voxel box [lo, hi): a point belongs
+// to the box iff plane(lo) <= x < plane(hi) per axis (in ray parameter form). Adjacent
+// boxes therefore partition every ray exactly. Returns false if the interval is empty.
+bool boxInterval(const VolumeGeometry& g, const Ray& r, const BrickBox& b, double& t_in, double& t_out);
+
+// Computes the span of `brick` on the global grid of `step`. Returns false if empty.
+bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span);
+
+}  // namespace tessera::renderer

@@ -1,0 +1,175 @@
+// Raycaster: per-frame setup (screen footprint of the brick, classification table),
+// image tiles pulled by worker threads from an atomic counter, per-pixel ray spans.
+#include "renderer/raycaster.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "renderer/kernels.h"
+#include "renderer/minmax.h"
+#include "renderer/ray_setup.h"
+#include "renderer/tf_table.h"
+
+namespace tessera::renderer {
+
+RenderStats& RenderStats::operator+=(const RenderStats& o) {
+  samples += o.samples;
+  samples_skipped += o.samples_skipped;
+  samples_terminated += o.samples_terminated;
+  ms += o.ms;
+  return *this;
+}
+
+Brick wholeVolume(const Volume& v) { return Brick{{0, 0, 0}, v.dims}; }
+
+struct Raycaster::Impl {
+  std::shared_ptr<const Volume> volume;
+  TransferFunction tf;
+  std::shared_ptr<const MinMaxHierarchy> hierarchy;
+  MinMaxHierarchy::Emptiness emptiness;
+};
+
+Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf) : impl_(std::make_unique<Impl>()) {
+  if (!volume) throw std::invalid_argument("Raycaster: null volume");
+  const Volume& v = *volume;
+  for (int a = 0; a < 3; ++a)
+    if (v.dims[a] <= 0) throw std::invalid_argument("Raycaster: volume dims must be positive");
+  if (v.values.size() != v.voxelCount()) throw std::invalid_argument("Raycaster: volume value count != dims product");
+  // 32-bit gather indices (AVX2) address at most 2^31 voxels.
+  if (v.voxelCount() >= (size_t{1} << 31)) throw std::invalid_argument("Raycaster: volume larger than 2^31 voxels");
+  if (tf.points().empty()) throw std::invalid_argument("Raycaster: transfer function has no points");
+  impl_->volume = std::move(volume);
+  impl_->tf = std::move(tf);
+  impl_->hierarchy = MinMaxHierarchy::forVolume(impl_->volume);
+  const TransferFunction& f = impl_->tf;
+  impl_->emptiness = impl_->hierarchy->classify([&f](float lo, float hi) { return TfTable::rangeIsEmpty(f, lo, hi); });
+}
+
+Raycaster::~Raycaster() = default;
+
+namespace {
+
+constexpr int kTile = 32;
+
+// Pixels whose centre ray can hit the brick: bounding box of its projected corners plus
+// one pixel; the whole image if a corner is behind the eye (projection not convex then).
+Rect footprint(const RayGenerator& gen, const VolumeGeometry& g, const Brick& b, int w, int h) {
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (int c = 0; c < 8; ++c) {
+    Vec3 p{g.plane(0, (c & 1) ? b.hi[0] : b.lo[0]), g.plane(1, (c & 2) ? b.hi[1] : b.lo[1]),
+           g.plane(2, (c & 4) ? b.hi[2] : b.lo[2])};
+    double sx, sy;
+    if (!gen.project(p, sx, sy) || !std::isfinite(sx) || !std::isfinite(sy)) return Rect{0, 0, w, h};
+    x0 = std::min(x0, sx), x1 = std::max(x1, sx), y0 = std::min(y0, sy), y1 = std::max(y1, sy);
+  }
+  const double lx = std::max(0.0, std::floor(x0) - 1), ly = std::max(0.0, std::floor(y0) - 1);
+  const double hx = std::min((double)w, std::ceil(x1) + 1), hy = std::min((double)h, std::ceil(y1) + 1);
+  if (!(lx < hx && ly < hy)) return Rect{};
+  return Rect{(int)lx, (int)ly, (int)(hx - lx), (int)(hy - ly)};
+}
+
+}  // namespace
+
+ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
+                         RenderStats* stats, Rect* active) const {
+  const auto start = std::chrono::steady_clock::now();
+  const Volume& v = *impl_->volume;
+  if (width <= 0 || height <= 0)
+    throw std::invalid_argument("Raycaster::render: image size must be positive, got " + std::to_string(width) + "x" +
+                                std::to_string(height));
+  for (int a = 0; a < 3; ++a)
+    if (brick.lo[a] < 0 || brick.hi[a] > v.dims[a] || brick.lo[a] >= brick.hi[a])
+      throw std::invalid_argument("Raycaster::render: brick outside the volume or empty on axis " + std::to_string(a));
+  const Quality& q = opt.quality;
+  if (!(q.step > 0) || !std::isfinite(q.step))
+    throw std::invalid_argument("Raycaster::render: quality.step must be positive and finite");
+
+  const RayGenerator gen(cam, width, height);  // validates the camera
+  const VolumeGeometry geom(v);
+  ImageF img(width, height);
+  const Rect fp = footprint(gen, geom, brick, width, height);
+
+  std::optional<TfTable> table;
+  FastContext fast;
+  if (!q.reference) {
+    table.emplace(impl_->tf, q.step);
+    fast.volume = &v;
+    fast.table = &*table;
+    if (q.skip_empty) {
+      fast.hierarchy = impl_->hierarchy.get();
+      fast.emptiness = &impl_->emptiness;
+    }
+    fast.early_termination = (float)std::min(q.early_termination, 2.0);
+  }
+
+  const int tiles_x = (fp.w + kTile - 1) / kTile, tiles_y = (fp.h + kTile - 1) / kTile;
+  const int tile_count = fp.empty() ? 0 : tiles_x * tiles_y;
+  std::atomic<int> next{0};
+  std::mutex mu;
+  SampleCounts total;
+  Rect act;
+  std::exception_ptr error;
+
+  auto worker = [&] {
+    SampleCounts counts;
+    int ax0 = width, ay0 = height, ax1 = -1, ay1 = -1;
+    try {
+      for (int t = next.fetch_add(1); t < tile_count; t = next.fetch_add(1)) {
+        const int tx = fp.x + (t % tiles_x) * kTile, ty = fp.y + (t / tiles_x) * kTile;
+        const int ex = std::min(fp.x + fp.w, tx + kTile), ey = std::min(fp.y + fp.h, ty + kTile);
+        for (int py = ty; py < ey; ++py)
+          for (int px = tx; px < ex; ++px) {
+            RaySpan span;
+            if (!raySpan(geom, gen.pixelRay(px, py), brick, q.step, span)) continue;
+            float* o = img.at(px, py);
+            if (q.reference) {
+              double d[4];
+              castReference(v, impl_->tf, q.step, span, d, counts);
+              for (int c = 0; c < 4; ++c) o[c] = (float)d[c];
+            } else {
+              castFast(fast, span, o, counts);
+            }
+            if (o[3] > 0) {
+              ax0 = std::min(ax0, px), ax1 = std::max(ax1, px);
+              ay0 = std::min(ay0, py), ay1 = std::max(ay1, py);
+            }
+          }
+      }
+    } catch (...) {
+      std::lock_guard lock(mu);
+      if (!error) error = std::current_exception();
+      next.store(tile_count);
+    }
+    std::lock_guard lock(mu);
+    total.taken += counts.taken;
+    total.skipped += counts.skipped;
+    total.terminated += counts.terminated;
+    if (ax1 >= 0) act = unite(act, Rect{ax0, ay0, ax1 - ax0 + 1, ay1 - ay0 + 1});
+  };
+
+  unsigned threads = opt.threads > 0 ? (unsigned)opt.threads : std::max(1u, std::thread::hardware_concurrency());
+  threads = std::min<unsigned>(threads, (unsigned)std::max(1, tile_count));
+  std::vector<std::thread> pool;
+  for (unsigned i = 1; i < threads; ++i) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+
+  if (active) *active = act;
+  if (stats) {
+    stats->samples = total.taken;
+    stats->samples_skipped = total.skipped;
+    stats->samples_terminated = total.terminated;
+    stats->ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
+  return img;
+}
+
+}  // namespace tessera::renderer

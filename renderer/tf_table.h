@@ -1,0 +1,37 @@
+// Classification lookup table for the fast (float) path: premultiplied, opacity-corrected
+// RGBA for one step length, sampled at kEntries scalars and linearly interpolated.
+// Immutable after construction; safe to read from many threads.
+#pragma once
+#include <vector>
+
+#include "common/transfer_function.h"
+
+namespace tessera::renderer {
+
+class TfTable {
+ public:
+  static constexpr int kEntries = 4096;
+
+  TfTable(const TransferFunction& tf, double step);
+
+  // Entry j holds (a*r, a*g, a*b, a) at scalar j/(kEntries-1), a = correctOpacity(alpha, step).
+  const float* rgba() const { return entries_.data()->v; }  // 4 floats per entry, 16-byte aligned
+  const float* alpha() const { return alpha_.data(); }
+
+  // Scalar reference of the lookup the kernels do (same float operations).
+  void lookup(float s, float out[4]) const;
+
+  // True if every sample whose interpolated scalar lies in [lo, hi] classifies to exactly
+  // zero alpha through this table: the table's interpolation reads entries up to one
+  // entry outside [lo, hi], so the exact test widens the range by two entries.
+  static bool rangeIsEmpty(const TransferFunction& tf, float lo, float hi);
+
+ private:
+  struct alignas(16) Entry {
+    float v[4];
+  };
+  std::vector<Entry> entries_;
+  std::vector<float> alpha_;
+};
+
+}  // namespace tessera::renderer
