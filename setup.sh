@@ -11,6 +11,7 @@ PKGS=(
   libpng-dev libsdl2-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox xvfb x11-apps imagemagick clang
+  docker-compose
 )
 missing=()
 for p in "${PKGS[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done

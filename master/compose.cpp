@@ -198,7 +198,7 @@ std::optional<ComposeService> readService(const Context& cx, const std::string& 
   std::optional<bool> leader;
   std::optional<int> scale;
   bool deploy_replicas = false;
-  std::map<std::string, std::string> file_env;
+  std::map<std::string, std::string> file_env, local_env;
   for (const auto& kv : n) {
     const std::string key = kv.first.Scalar();
     const std::string at = where + "." + key;
@@ -217,8 +217,9 @@ std::optional<ComposeService> readService(const Context& cx, const std::string& 
       for (const auto& x : v) {
         const std::string xkey = x.first.Scalar();
         if (xkey == "local_command") local_command = cx.command(x.second, at + ".local_command");
+        else if (xkey == "local_environment") readEnvironment(cx, x.second, at + ".local_environment", local_env);
         else if (xkey == "exit_leader") leader = cx.boolean(x.second, at + ".exit_leader");
-        else cx.fail(at + "." + xkey, "unknown key (known: local_command, exit_leader)");
+        else cx.fail(at + "." + xkey, "unknown key (known: local_command, local_environment, exit_leader)");
       }
     } else if (!kIgnoredServiceKeys.contains(key) && !isExtension(key)) {
       cx.fail(at, "unknown key");
@@ -226,6 +227,7 @@ std::optional<ComposeService> readService(const Context& cx, const std::string& 
   }
   if (scale && !deploy_replicas) s.replicas = *scale;
   for (auto& [k, v] : file_env) s.environment.try_emplace(k, v);  // `environment` wins
+  for (auto& [k, v] : local_env) s.environment[k] = v;  // and x-tessera.local_environment over it
   if (local_command) {
     s.argv = *local_command;
   } else {

@@ -24,7 +24,8 @@ struct ComposeService {
   // entrypoint + command, or x-tessera.local_command (which replaces both: container
   // entrypoints name image paths that do not exist on the host).
   std::vector<std::string> argv;
-  // Only the service's own `env_file` + `environment` entries (in that precedence);
+  // Only the service's own variables: env_file < environment < x-tessera.local_environment
+  // (for values that differ between containers and a local run, e.g. endpoints);
   // the launcher adds them to its own environment plus TESSERA_SERVICE/TESSERA_REPLICA.
   std::map<std::string, std::string> environment;
   int replicas = 1;

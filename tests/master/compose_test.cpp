@@ -195,7 +195,8 @@ TEST(Compose, UnknownKeysNameTheirPath) {
   EXPECT_EQ(errorOf([] { parse("services: {r: {command: x, deploy: {replicas: two}}}"); }),
             "compose.yaml: services.r.deploy.replicas: expected an integer, got \"two\"");
   EXPECT_EQ(errorOf([] { parse("services: {r: {command: x, x-tessera: {local: y}}}"); }),
-            "compose.yaml: services.r.x-tessera.local: unknown key (known: local_command, exit_leader)");
+            "compose.yaml: services.r.x-tessera.local: unknown key (known: local_command, local_environment, "
+            "exit_leader)");
   EXPECT_NE(errorOf([] { parse("services: {r: {image: tessera}}"); }).find("services.r: no command"),
             std::string::npos);
   EXPECT_NE(errorOf([] { parse("services: {r: {command: '${SCENE:?set TESSERA_SCENE}'}}"); })
@@ -209,13 +210,18 @@ services:
   master:
     entrypoint: ["/usr/local/bin/tessera-master"]
     command: ["--window", "3"]
-    x-tessera: {local_command: "tessera-master --window 3 --log ${LOG:-info}"}
+    environment: {TESSERA_ENDPOINTS: "tcp://master:5555", KEEP: "1"}
+    x-tessera:
+      local_command: "tessera-master --window 3 --log ${LOG:-info}"
+      local_environment: ["TESSERA_ENDPOINTS=ipc://${DIR:-/tmp/farm}"]
   display: {command: show}
   viewer: {command: view, x-tessera: {exit_leader: true}}
   sink: {command: sink, x-tessera: {exit_leader: "false"}}
 )");
   EXPECT_EQ(p.find("master")->argv,
             (std::vector<std::string>{"tessera-master", "--window", "3", "--log", "info"}));
+  const std::map<std::string, std::string> env = {{"TESSERA_ENDPOINTS", "ipc:///tmp/farm"}, {"KEEP", "1"}};
+  EXPECT_EQ(p.find("master")->environment, env);
   EXPECT_FALSE(p.find("master")->exit_leader);
   EXPECT_TRUE(p.find("display")->exit_leader);  // by name
   EXPECT_TRUE(p.find("viewer")->exit_leader);   // by flag
