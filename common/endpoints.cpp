@@ -67,8 +67,13 @@ std::string Endpoints::masterPub() const { return named(base, "master-pub", 0, "
 std::string Endpoints::masterControl() const { return named(base, "master-ctl", 1, "TESSERA_MASTER_HOST"); }
 std::string Endpoints::display() const { return named(base, "display", 2, "TESSERA_DISPLAY_HOST"); }
 std::string Endpoints::compositor(uint32_t rank) const {
-  return named(base, "compositor-" + std::to_string(rank), 10 + (int)rank, "TESSERA_ADVERTISE_HOST");
+  return named(base, "compositor-" + std::to_string(rank), 10 + (int)rank, "");
 }
+std::string Endpoints::compositorOn(uint32_t rank, const std::string& host) const {
+  if (host.empty() || !startsWith(base, "tcp://")) return compositor(rank);
+  return "tcp://" + host + ":" + std::to_string(parseTcp(base).port + 10 + (int)rank);
+}
+
 std::string Endpoints::compositorBind(uint32_t rank) const { return bind(compositor(rank)); }
 
 std::string Endpoints::bind(const std::string& connect_form) const {

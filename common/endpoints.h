@@ -14,6 +14,8 @@ struct Endpoints {
   std::string masterControl() const;  // master binds ROUTER (Hello, Heartbeat, Stats, FrameDone, Input)
   std::string display() const;        // display binds PULL (Strips)
   std::string compositor(uint32_t rank) const;       // address compositors advertise
+  // The same on a named host (tcp only; containers advertise their own hostname).
+  std::string compositorOn(uint32_t rank, const std::string& host) const;
   std::string compositorBind(uint32_t rank) const;   // address a compositor binds
   // Bind forms: tcp binds on TESSERA_BIND_HOST (default: the base host) so containers can
   // bind 0.0.0.0 while peers connect by service name.

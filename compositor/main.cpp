@@ -1,4 +1,6 @@
 // tessera-compositor: one compositor stage of the farm (ranks come from the master).
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 
 #include "common/log.h"
@@ -13,10 +15,16 @@ int main(int argc, char** argv) {
   compositor::StageOptions opt;
   app.add_option("scene", scene, "accepted so every process takes the same arguments; unused");
   app.add_option("--endpoints", base, "endpoint base (ipc://DIR | tcp://HOST:PORT)")->envname("TESSERA_ENDPOINTS");
-  app.add_option("--advertise", opt.advertise, "endpoint renderers use to reach this compositor")
-      ->envname("TESSERA_ADVERTISE");
+  app.add_option("--advertise-host", opt.advertise_host,
+                 "tcp: host renderers use to reach this compositor ('hostname' = this machine's name)")
+      ->envname("TESSERA_ADVERTISE_HOST");
   CLI11_PARSE(app, argc, argv);
   try {
+    if (opt.advertise_host == "hostname") {
+      char name[256] = {};
+      gethostname(name, sizeof name - 1);
+      opt.advertise_host = name;
+    }
     opt.endpoints = makeEndpoints(base.empty() ? defaultEndpointBase() : base);
     zmq::context_t ctx(1);
     return compositor::runStage(opt, ctx, &installStopSignals());

@@ -19,7 +19,7 @@ double msSince(Clock::time_point t) { return std::chrono::duration<double, std::
 class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
-      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Compositor, opt.advertise),
+      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Compositor, opt.advertise_host),
         pull_(makeSocket(ctx, zmq::socket_type::pull)), gather_(0) {}
 
   int run(const std::atomic<bool>* stop) {

@@ -12,7 +12,7 @@ namespace tessera::compositor {
 
 struct StageOptions {
   Endpoints endpoints;
-  std::string advertise;  // endpoint peers use to reach this compositor ("" = derived from rank)
+  std::string advertise_host;  // tcp: host renderers use to reach this compositor ("" = the base host)
 };
 
 int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);

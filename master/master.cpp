@@ -108,8 +108,7 @@ class Master {
     uint32_t rank = 0;
     while (members_.count({h.role, rank})) ++rank;
     Member m{h.role, rank, h.pid, identity, "", Clock::now(), true};
-    if (h.role == Role::Compositor) m.endpoint = opt_.endpoints.compositor(rank);
-    if (h.role == Role::Compositor && !h.endpoint.empty()) m.endpoint = h.endpoint;
+    if (h.role == Role::Compositor) m.endpoint = opt_.endpoints.compositorOn(rank, h.endpoint);
     members_[{h.role, rank}] = m;
     sendTo(identity, proto::encode(proto::Welcome{h.role, rank}, kMasterRank));
     spdlog::info("{} {} joined pid={}{}", roleName(h.role), rank, h.pid,
