@@ -180,7 +180,7 @@ TEST_F(LauncherTest, ImagePathFallsBackToPath) {
 
 // The real binary: SIGTERM to tessera-up stops the farm with exit code 143.
 TEST_F(LauncherTest, BinaryStopsOnSigterm) {
-  const std::string binary = TESSERA_BINARY_DIR "/master/tessera-up";
+  const std::string binary = TESSERA_BINARY_DIR "/bin/tessera-up";
   if (access(binary.c_str(), X_OK) != 0) GTEST_SKIP() << binary << " not built";
   std::ofstream(dir_ / "compose.yaml") << std::string("services:") + kRenderer;
   const pid_t pid = fork();
