@@ -58,8 +58,9 @@ std::string resolveExecutable(const std::string& cmd, const std::string& path,
                               const std::filesystem::path& cwd);
 
 // Every process in start order. Throws LaunchError naming the service whose command is
-// not found.
-std::vector<PlannedProcess> planProcesses(const ComposeProject& project, const LaunchOptions& options);
+// not found, unless `allow_missing` (dry runs): then `executable` is empty.
+std::vector<PlannedProcess> planProcesses(const ComposeProject& project, const LaunchOptions& options,
+                                          bool allow_missing = false);
 
 // Starts the farm and supervises it until it ends; returns the exit code:
 // 0 when an exit leader exits 0 (or, with no leader, when every process exited 0);

@@ -59,7 +59,8 @@ std::string resolveExecutable(const std::string& cmd, const std::string& path, c
   return {};
 }
 
-std::vector<PlannedProcess> planProcesses(const ComposeProject& project, const LaunchOptions& options) {
+std::vector<PlannedProcess> planProcesses(const ComposeProject& project, const LaunchOptions& options,
+                                          bool allow_missing) {
   std::vector<std::filesystem::path> dirs = options.binary_dirs;
   if (options.use_default_binary_dirs) {
     for (auto& d : defaultBinaryDirectories()) dirs.push_back(d);
@@ -74,7 +75,7 @@ std::vector<PlannedProcess> planProcesses(const ComposeProject& project, const L
                                            ? own_path->second
                                            : std::string(inherited ? inherited : "/usr/local/bin:/usr/bin:/bin"));
     const std::string exe = resolveExecutable(s.argv.front(), path, project.directory);
-    if (exe.empty()) {
+    if (exe.empty() && !allow_missing) {
       throw LaunchError("services." + s.name + ": command \"" + s.argv.front() +
                         "\" not found (PATH=" + path + ")");
     }
@@ -90,7 +91,7 @@ std::vector<PlannedProcess> planProcesses(const ComposeProject& project, const L
       p.environment["PATH"] = path;
       p.environment["TESSERA_SERVICE"] = s.name;
       p.environment["TESSERA_REPLICA"] = std::to_string(r);
-      if (exe != s.argv.front() && s.argv.front().find('/') != std::string::npos &&
+      if (!exe.empty() && exe != s.argv.front() && s.argv.front().find('/') != std::string::npos &&
           std::filesystem::path(s.argv.front()).is_absolute()) {
         p.note = s.argv.front() + " does not exist here; using " + exe;
       }

@@ -10,17 +10,23 @@
 
 namespace {
 
-void printPlan(const tessera::master::ComposeProject& project,
+// Returns false if some executable was not found.
+bool printPlan(const tessera::master::ComposeProject& project,
                const std::vector<tessera::master::PlannedProcess>& plan) {
   std::cout << "project " << project.name << " (runs in " << project.directory.string() << ")\n";
+  if (!plan.empty()) std::cout << "PATH=" << plan.front().environment.at("PATH") << "\n";
+  bool all_found = true;
   for (const auto& p : plan) {
     std::cout << p.label << (p.exit_leader ? " [exit leader]" : "") << "\n";
     std::cout << "  argv: " << tessera::master::quoteCommand(p.argv) << "\n";
-    std::cout << "  executable: " << p.executable << "\n";
+    std::cout << "  executable: " << (p.executable.empty() ? "NOT FOUND on PATH" : p.executable) << "\n";
+    if (!p.note.empty()) std::cout << "  note: " << p.note << "\n";
     for (const auto& [k, v] : p.environment) {
-      std::cout << "  env: " << k << "=" << tessera::master::quoteCommand({v}) << "\n";
+      if (k != "PATH") std::cout << "  env: " << k << "=" << tessera::master::quoteCommand({v}) << "\n";
     }
+    all_found = all_found && !p.executable.empty();
   }
+  return all_found;
 }
 
 }  // namespace
@@ -48,8 +54,7 @@ int main(int argc, char** argv) {
     for (const auto& w : project.warnings) log->warn("{}", w);
     tessera::master::LaunchOptions launch_options;
     if (dry_run) {
-      printPlan(project, tessera::master::planProcesses(project, launch_options));
-      return 0;
+      return printPlan(project, tessera::master::planProcesses(project, launch_options, true)) ? 0 : 1;
     }
     return tessera::master::launch(project, launch_options);
   } catch (const std::exception& e) {

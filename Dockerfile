@@ -1,0 +1,19 @@
+# Tessera farm image: every process binary in /usr/local/bin, for compose.yaml under
+# `docker compose` / Docker Swarm. Locally, tessera-up runs the same compose.yaml without it.
+FROM debian:12
+ENV DEBIAN_FRONTEND=noninteractive
+WORKDIR /opt/tessera/src
+# Packages first, in their own layer, so a source edit does not reinstall them.
+COPY setup.sh ./
+RUN ./setup.sh && rm -rf /var/lib/apt/lists/*
+COPY . .
+# TESSERA_NATIVE=OFF: -march=native would tie the image to the CPU of the build host.
+RUN cmake -S . -B /opt/tessera/build -G Ninja -DCMAKE_BUILD_TYPE=Release -DTESSERA_NATIVE=OFF \
+ && cmake --build /opt/tessera/build -j"$(nproc)" --target \
+      tessera-master tessera-renderer tessera-compositor tessera-display tessera-render tessera-up \
+ && cd /opt/tessera/build \
+ && install -m 0755 master/tessera-master master/tessera-up renderer/tessera-renderer \
+      renderer/tessera-render compositor/tessera-compositor display/tessera-display /usr/local/bin/
+# Scene paths in compose.yaml (scenes/...) are relative to the source tree.
+WORKDIR /opt/tessera/src
+CMD ["tessera-up", "--help"]
