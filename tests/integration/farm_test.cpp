@@ -1,0 +1,54 @@
+// The farm's frames equal the one-process render (DESIGN.md accuracy contract: sort-last,
+// rgba8, max abs <= 1/255 per channel), for 1, 2 and 4 renderers and 1 and 2 compositors.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "farm_util.h"
+
+namespace tessera::test {
+namespace {
+
+struct Shape {
+  int renderers, compositors;
+};
+
+class FarmMatchesOneProcess : public ::testing::TestWithParam<Shape> {};
+
+TEST_P(FarmMatchesOneProcess, EveryFrameWithinOneLevel) {
+  const auto [renderers, compositors] = GetParam();
+  FarmDir dir("match-" + std::to_string(renderers) + "x" + std::to_string(compositors));
+  const int frames = 3;
+  auto scene = dir.writeScene(6);
+  auto run = dir.runFarm(scene, renderers, compositors, frames);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  for (int k = 0; k < frames; ++k) {
+    ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " missing\n" << run.output;
+    Image8 farm = readPng(dir.frame(k).string());
+    Image8 ref = dir.reference(scene, k);
+    // 1/255: each brick's piece is quantized to rgba8 once before compositing.
+    EXPECT_LE(maxAbsDiff(farm, ref), 1) << "frame " << k << " in " << dir.path();
+    EXPECT_GT(activeRegion(farm).area(), 100) << "frame " << k << " is (nearly) empty";
+  }
+  // One metrics line per frame, with every stage's report in it.
+  std::ifstream metrics(dir.path() / "out" / "metrics.jsonl");
+  int lines = 0;
+  for (std::string line; std::getline(metrics, line); ++lines) {
+    auto j = nlohmann::json::parse(line);
+    EXPECT_EQ(j["render_reports"].get<int>(), renderers);
+    EXPECT_EQ(j["composite_reports"].get<int>(), compositors);
+    EXPECT_GT(j["render_bytes_raw"].get<uint64_t>(), 0u);
+    EXPECT_LT(j["render_bytes_encoded"].get<uint64_t>(), j["render_bytes_raw"].get<uint64_t>() + 1024);
+  }
+  EXPECT_EQ(lines, frames);
+}
+
+INSTANTIATE_TEST_SUITE_P(Shapes, FarmMatchesOneProcess,
+                         ::testing::Values(Shape{1, 1}, Shape{2, 1}, Shape{2, 2}, Shape{4, 2}),
+                         [](const auto& info) {
+                           return std::to_string(info.param.renderers) + "r" + std::to_string(info.param.compositors) + "c";
+                         });
+
+}  // namespace
+}  // namespace tessera::test

@@ -1,0 +1,103 @@
+// Helpers for farm tests: a temporary folder with a small scene, running tessera-up on
+// the project's compose.yaml with overrides, and comparing frames with tessera-render.
+#pragma once
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <string>
+
+#include "common/image.h"
+#include "common/image_io.h"
+
+namespace tessera::test {
+
+namespace fs = std::filesystem;
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;
+};
+
+// Runs a shell command, bounded by `timeout_s` (coreutils timeout kills it after that).
+inline CommandResult runCommand(const std::string& cmd, int timeout_s) {
+  std::string full = "timeout -k 5 " + std::to_string(timeout_s) + " " + cmd + " 2>&1";
+  CommandResult r;
+  FILE* p = popen(full.c_str(), "r");
+  if (!p) return r;
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
+  int status = pclose(p);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+inline std::string bin(const std::string& name) { return std::string(TESSERA_BINARY_DIR) + "/bin/" + name; }
+
+class FarmDir {
+ public:
+  explicit FarmDir(const std::string& name) {
+    std::random_device rd;
+    dir_ = fs::temp_directory_path() / ("tessera-it-" + name + "-" + std::to_string(getpid()) + "-" + std::to_string(rd() % 100000));
+    fs::create_directories(dir_);
+  }
+  ~FarmDir() {
+    if (!getenv("TESSERA_KEEP_TEST_DIRS")) fs::remove_all(dir_);
+  }
+  const fs::path& path() const { return dir_; }
+
+  // A small scene: hollow shell, odd image size, a short orbit.
+  fs::path writeScene(int frames, int size = 40, int w = 97, int h = 83) const {
+    fs::path p = dir_ / "scene.yaml";
+    std::ofstream(p) << "volume:\n  generator: {name: hollow-shell, size: " << size << ", seed: 1}\n"
+                     << "transfer_function:\n  - [0.0, 0.0, 0.0, 0.0, 0.0]\n  - [0.3, 1.0, 0.5, 0.2, 0.05]\n"
+                     << "  - [1.0, 1.0, 1.0, 1.0, 0.9]\n"
+                     << "camera: {eye: [0.3, 0.5, 2.2], target: [0, 0, 0], up: [0, 1, 0], fov: 30}\n"
+                     << "image: [" << w << ", " << h << "]\nquality: default\n"
+                     << "orbit: {frames: " << frames << ", axis: [0, 1, 0]}\n";
+    return p;
+  }
+
+  // tessera-up on the project's compose.yaml, sockets and output in this folder.
+  CommandResult runFarm(const fs::path& scene, int renderers, int compositors, int frames, int timeout_s = 120,
+                        const std::string& extra = "") const {
+    std::string cmd = bin("tessera-up") + " " + TESSERA_SOURCE_DIR "/compose.yaml" +
+                      " --env TESSERA_SCENE=" + scene.string() + " --env TESSERA_RENDERERS=" + std::to_string(renderers) +
+                      " --env TESSERA_COMPOSITORS=" + std::to_string(compositors) +
+                      " --env TESSERA_FRAMES=" + std::to_string(frames) + " --env TESSERA_OUT=" + (dir_ / "out").string() +
+                      " --env TESSERA_ENDPOINTS=ipc://" + (dir_ / "sockets").string() + " --env TESSERA_WINDOW=off " + extra;
+    return runCommand(cmd, timeout_s);
+  }
+
+  fs::path frame(int k) const {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%06d.png", k);
+    return dir_ / "out" / name;
+  }
+
+  // The one-process render of orbit frame k (bricks = 1: the whole volume at once).
+  Image8 reference(const fs::path& scene, int k) const {
+    fs::path out = dir_ / ("ref_" + std::to_string(k) + ".png");
+    auto r = runCommand(bin("tessera-render") + " " + scene.string() + " --frame " + std::to_string(k) + " -o " + out.string(), 120);
+    if (r.exit_code != 0) throw std::runtime_error("tessera-render failed: " + r.output);
+    return readPng(out.string());
+  }
+
+ private:
+  fs::path dir_;
+};
+
+// Largest difference of any channel, in rgba8 units.
+inline int maxAbsDiff(const Image8& a, const Image8& b) {
+  if (a.width != b.width || a.height != b.height) return 256;
+  int m = 0;
+  for (size_t i = 0; i < a.px.size(); ++i) m = std::max(m, std::abs(int(a.px[i]) - int(b.px[i])));
+  return m;
+}
+
+}  // namespace tessera::test
