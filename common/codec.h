@@ -24,6 +24,10 @@ Result<std::vector<std::byte>> decompress(Codec c, std::span<const std::byte> en
 
 // Zero-copy variants for the protocol: compressAppend appends the encoded bytes to `out`;
 // decompressInto fills `out` and fails unless exactly out.size() bytes were decoded.
+// Cheap check before allocating raw_size bytes for untrusted input: false when `encoded`
+// cannot possibly decode to raw_size bytes (beyond the codec's maximum ratio, or a zstd
+// frame that declares another size). True does not mean the data is valid.
+bool plausibleRawSize(Codec c, std::span<const std::byte> encoded, size_t raw_size);
 void compressAppend(Codec c, std::span<const std::byte> raw, std::vector<std::byte>& out);
 Result<size_t> decompressInto(Codec c, std::span<const std::byte> encoded, std::span<std::byte> out);
 

@@ -83,6 +83,10 @@ Result<Piece> decodePiece(std::span<const std::byte> msg) {
     return R::fail("Piece: " + std::to_string(*bytes) + " pixel bytes for active " + detail::rectText(m.active) +
                    " (expected " + std::to_string(want) + ")");
   }
+  if (!plausibleRawSize(o->header.codec, r.rest(), want)) {
+    return R::fail("Piece: " + std::to_string(r.remaining()) + " " + codecName(o->header.codec) +
+                   " bytes cannot hold " + std::to_string(want) + " pixel bytes");
+  }
   m.pixels.resize(want);
   auto d = decompressInto(o->header.codec, r.rest(), m.pixels);
   if (!d) return R::fail("Piece: pixels: " + d.error());
@@ -114,6 +118,10 @@ Result<Strips> decodeStrips(std::span<const std::byte> msg) {
   if (!r.ok()) return R::fail("Strips: " + r.error());
   auto bytes = pixelBytes(o->header, r);
   if (!bytes) return R::fail("Strips: " + bytes.error());
+  if (!plausibleRawSize(o->header.codec, r.rest(), *bytes)) {
+    return R::fail("Strips: " + std::to_string(r.remaining()) + " " + codecName(o->header.codec) +
+                   " bytes cannot hold a " + std::to_string(*bytes) + "-byte stream");
+  }
   m.stream.resize(*bytes);
   auto d = decompressInto(o->header.codec, r.rest(), std::as_writable_bytes(std::span(m.stream)));
   if (!d) return R::fail("Strips: stream: " + d.error());
