@@ -107,6 +107,19 @@ TEST_P(CodecTest, CorruptInputNeverCrashesAndNeverLies) {
   }
 }
 
+TEST_P(CodecTest, ImpossibleRawSizeFailsBeforeAllocating) {
+  const Codec c = GetParam();
+  auto raw = imageLike(32, 32);
+  auto enc = compress(c, raw);
+  EXPECT_TRUE(plausibleRawSize(c, enc, raw.size())) << codecName(c);
+  // 1 TiB from a few KiB: allocating it would throw bad_alloc; it must be a clean failure.
+  const size_t huge = size_t(1) << 40;
+  EXPECT_FALSE(plausibleRawSize(c, enc, huge)) << codecName(c);
+  auto r = decompress(c, enc, huge);
+  ASSERT_FALSE(r) << codecName(c);
+  EXPECT_NE(r.error().find(codecName(c)), std::string::npos) << r.error();
+}
+
 INSTANTIATE_TEST_SUITE_P(Codecs, CodecTest, ::testing::ValuesIn(kAll),
                          [](const auto& p) { return std::string(codecName(p.param)); });
 
