@@ -33,7 +33,7 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   zmq::pollitem_t sub_item[] = {{sub_.handle(), 0, ZMQ_POLLIN, 0}};
   while (true) {
     if ((stop && *stop) || expired()) return false;
-    zmq::poll(sub_item, 1, std::chrono::milliseconds(100));
+    pollFor(sub_item, 1, std::chrono::milliseconds(100));
     if (sub_item[0].revents & ZMQ_POLLIN) {
       zmq::message_t m;
       (void)sub_.recv(m);
@@ -45,7 +45,7 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   sendBytes(ctl_, proto::encode(proto::Hello{role_, (uint32_t)getpid(), advertise_}, 0));
   while (true) {
     if ((stop && *stop) || expired()) return false;
-    zmq::poll(ctl_item, 1, std::chrono::milliseconds(100));
+    pollFor(ctl_item, 1, std::chrono::milliseconds(100));
     if (!(ctl_item[0].revents & ZMQ_POLLIN)) continue;
     zmq::message_t m;
     (void)ctl_.recv(m);

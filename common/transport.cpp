@@ -16,6 +16,15 @@ bool sendBytes(zmq::socket_t& s, std::vector<std::byte>&& bytes, bool more, bool
   }
 }
 
+void pollFor(zmq::pollitem_t* items, size_t n, std::chrono::milliseconds timeout) {
+  try {
+    zmq::poll(items, n, timeout);
+  } catch (const zmq::error_t& e) {
+    if (e.num() != EINTR) throw;
+    for (size_t i = 0; i < n; ++i) items[i].revents = 0;
+  }
+}
+
 zmq::socket_t makeSocket(zmq::context_t& ctx, zmq::socket_type type) {
   zmq::socket_t s(ctx, type);
   s.set(zmq::sockopt::linger, 0);

@@ -2,6 +2,7 @@
 // received ones. Every stage's run() takes the zmq::context_t, so a whole farm can also
 // run inside one process over inproc:// (tests), or over ipc:// / tcp:// for real.
 #pragma once
+#include <chrono>
 #include <cstddef>
 #include <span>
 #include <vector>
@@ -17,6 +18,10 @@ bool sendBytes(zmq::socket_t& s, std::vector<std::byte>&& bytes, bool more = fal
 inline std::span<const std::byte> view(const zmq::message_t& m) {
   return {static_cast<const std::byte*>(m.data()), m.size()};
 }
+
+// zmq::poll that treats a signal (EINTR) as "nothing ready": the caller's loop then
+// sees its stop flag. Other errors propagate.
+void pollFor(zmq::pollitem_t* items, size_t n, std::chrono::milliseconds timeout);
 
 // A socket with the options every Tessera socket wants: no linger at close, and bounded
 // queues so no queue grows without bound.

@@ -35,7 +35,7 @@ class Stage {
     spdlog::info("compositor rank={} joined, pieces at {}", rank, bind);
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}, {pull_.handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
-      zmq::poll(items, 2, std::chrono::milliseconds(100));
+      pollFor(items, 2, std::chrono::milliseconds(100));
       if ((items[0].revents & ZMQ_POLLIN) && !readParams()) return 0;
       if (items[1].revents & ZMQ_POLLIN) readPieces();
       for (auto& why : gather_.takeLateDrops()) drops_.drop(~0u, why);

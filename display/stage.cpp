@@ -34,7 +34,7 @@ class Stage {
     spdlog::info("display joined, strips at {}", opt_.endpoints.display());
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}, {pull_.handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
-      zmq::poll(items, 2, std::chrono::milliseconds(20));
+      pollFor(items, 2, std::chrono::milliseconds(20));
       if (items[0].revents & ZMQ_POLLIN) readParams();
       if (items[1].revents & ZMQ_POLLIN) readStrips();
       presentReady();

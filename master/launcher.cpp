@@ -50,6 +50,33 @@ std::string describe(int status) {
   return "exit code " + std::to_string(WEXITSTATUS(status));
 }
 
+// Runs in the forked child: only async-signal-safe calls. Reports exec failure's errno
+// through `status_fd` (closed on exec success by O_CLOEXEC, so the parent reads EOF).
+[[noreturn]] void execChild(pid_t parent, const char* dir, const char* exe, char* const* argv,
+                            char* const* envp, int out_fd, int err_fd, int status_fd) {
+  setpgid(0, 0);  // own group: Ctrl-C reaches only the launcher, which stops whole groups
+  prctl(PR_SET_PDEATHSIG, SIGTERM);
+  if (getppid() != parent) _exit(126);  // the launcher died before prctl took effect
+  struct sigaction dfl {};
+  dfl.sa_handler = SIG_DFL;  // SIG_IGN (SIGPIPE) would otherwise survive exec
+  for (int s : {SIGINT, SIGTERM, SIGCHLD, SIGPIPE, SIGQUIT, SIGHUP}) sigaction(s, &dfl, nullptr);
+  sigset_t none;
+  sigemptyset(&none);
+  sigprocmask(SIG_SETMASK, &none, nullptr);
+  const int devnull = open("/dev/null", O_RDONLY | O_CLOEXEC);  // a background group must not read the tty
+  if (devnull >= 0) dup2(devnull, STDIN_FILENO);
+  dup2(out_fd, STDOUT_FILENO);
+  dup2(err_fd, STDERR_FILENO);
+  int e = 0;
+  if (chdir(dir) != 0) e = errno;
+  if (e == 0) {
+    execve(exe, argv, envp);
+    e = errno;
+  }
+  [[maybe_unused]] ssize_t n = ::write(status_fd, &e, sizeof e);
+  _exit(127);
+}
+
 // Installs the launcher's handlers for its lifetime and restores the previous ones.
 class SignalScope {
  public:
@@ -156,29 +183,7 @@ class Supervisor {
     const pid_t parent = getpid();
 
     const pid_t pid = fork();
-    if (pid == 0) {
-      setpgid(0, 0);  // own group: Ctrl-C reaches only the launcher, which stops groups
-      prctl(PR_SET_PDEATHSIG, SIGTERM);
-      if (getppid() != parent) _exit(126);  // the launcher died before prctl took effect
-      struct sigaction dfl {};
-      dfl.sa_handler = SIG_DFL;
-      for (int s : {SIGINT, SIGTERM, SIGCHLD, SIGPIPE, SIGQUIT, SIGHUP}) sigaction(s, &dfl, nullptr);
-      sigset_t none;
-      sigemptyset(&none);
-      sigprocmask(SIG_SETMASK, &none, nullptr);
-      const int devnull = open("/dev/null", O_RDONLY);
-      if (devnull >= 0) dup2(devnull, STDIN_FILENO);
-      dup2(out[1], STDOUT_FILENO);
-      dup2(err[1], STDERR_FILENO);
-      int e = 0;
-      if (chdir(dir.c_str()) != 0) e = errno;
-      if (e == 0) {
-        execve(c.plan.executable.c_str(), argv.data(), envp.data());
-        e = errno;
-      }
-      [[maybe_unused]] ssize_t n = ::write(status_pipe[1], &e, sizeof e);
-      _exit(127);
-    }
+    if (pid == 0) execChild(parent, dir.c_str(), c.plan.executable.c_str(), argv.data(), envp.data(), out[1], err[1], status_pipe[1]);
     close(out[1]);
     close(err[1]);
     close(status_pipe[1]);
@@ -273,11 +278,13 @@ class Supervisor {
       say(c.plan.label + " finished; stopping the farm");
       exit_code_ = 0;
       beginStop();
-    } else if (clean && !have_leader_) {
-      return;  // without a leader, the farm is done when everything has finished
+    } else if (clean) {
+      // Stages finish on the master's Shutdown in any order; the farm is done when the
+      // leader is (or, without a leader, when everything has finished).
+      if (have_leader_) say(c.plan.label + " finished");
+      return;
     } else {
-      say(c.plan.label + (clean ? " exited (exit code 0) before the exit leader" : " died (" + describe(status) + ")") +
-          "; stopping the farm");
+      say(c.plan.label + " died (" + describe(status) + "); stopping the farm");
       exit_code_ = 1;
       beginStop();
     }

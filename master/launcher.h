@@ -47,8 +47,7 @@ struct PlannedProcess {
   std::string note;  // why the executable differs from argv[0], if it does
 };
 
-// The launcher's own folder (from /proc/self/exe) and, when that lies inside a CMake
-// build tree, the tree's master/renderer/compositor/display folders.
+// The launcher's own folder (from /proc/self/exe): build/bin, or /usr/local/bin in the image.
 std::vector<std::filesystem::path> defaultBinaryDirectories();
 
 // Resolves argv[0] of `cmd` against `path` (a PATH value). A relative name with a '/' is
@@ -63,7 +62,8 @@ std::vector<PlannedProcess> planProcesses(const ComposeProject& project, const L
                                           bool allow_missing = false);
 
 // Starts the farm and supervises it until it ends; returns the exit code:
-// 0 when an exit leader exits 0 (or, with no leader, when every process exited 0);
+// 0 when an exit leader exits 0 (others exiting 0 before it is normal: stages end on
+// the master's Shutdown in any order), or, with no leader, when every process exited 0;
 // 128+signal when stopped by SIGINT/SIGTERM; 1 when a process died unexpectedly or a
 // process could not be started. Every child is stopped and reaped before returning.
 int launch(const ComposeProject& project, const LaunchOptions& options);

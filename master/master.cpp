@@ -202,7 +202,7 @@ class Master {
   // ---- control messages ---------------------------------------------------------------
   void pollControl(int timeout_ms) {
     zmq::pollitem_t items[] = {{ctl_.handle(), 0, ZMQ_POLLIN, 0}};
-    zmq::poll(items, 1, std::chrono::milliseconds(timeout_ms));
+    pollFor(items, 1, std::chrono::milliseconds(timeout_ms));
     for (int budget = 0; (items[0].revents & ZMQ_POLLIN) && budget < 1000; ++budget) {
       zmq::message_t id, body;
       if (!ctl_.recv(id, zmq::recv_flags::dontwait)) break;

@@ -1,6 +1,7 @@
 #include "metrics.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <stdexcept>
 
 #include <spdlog/spdlog.h>
@@ -11,6 +12,8 @@ namespace tessera::master {
 
 Metrics::Metrics(const std::string& path) {
   if (path.empty()) return;
+  auto dir = std::filesystem::path(path).parent_path();
+  if (!dir.empty()) std::filesystem::create_directories(dir);
   out_.open(path);
   if (!out_) throw std::runtime_error("cannot write metrics file " + path);
 }

@@ -41,7 +41,7 @@ class Stage {
     spdlog::info("renderer rank={} joined", link_.rank());
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
-      zmq::poll(items, 1, std::chrono::milliseconds(100));
+      pollFor(items, 1, std::chrono::milliseconds(100));
       std::deque<proto::FrameParams> queue;
       // Drain first, so frames superseded by a newer epoch are skipped, not rendered.
       while (true) {
