@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include <spdlog/spdlog.h>
+
 #include "display/font.h"
 #include "display/sink.h"
 
@@ -19,8 +21,8 @@ constexpr uint8_t kBackground[3] = {32, 32, 36};  // a window has no alpha: show
 constexpr uint8_t kStripDim = 96;  // strip pixels keep 96/256 of their colour behind the text
 constexpr std::array<uint8_t, 4> kTextColor = {230, 230, 230, 255};
 
-// Premultiplied over an opaque background: out = c + (1 - a) * bg. the table holds the
-// rounded second term (term[ch][a]) so the per-pixel work is two table look-ups and an add per channel.
+// Premultiplied over an opaque background: out = c + (1 - a) * bg. term[ch][a] holds the
+// rounded second term, so each channel costs one table look-up and one add.
 struct BackgroundTable {
   uint8_t term[3][256];
   BackgroundTable() {
@@ -57,6 +59,9 @@ class WindowSink final : public Sink {
       SDL_QuitSubSystem(SDL_INIT_VIDEO);
       throw err;
     }
+    SDL_RendererInfo info{};
+    SDL_GetRendererInfo(renderer_, &info);
+    spdlog::info("window open size={}x{} renderer={}", width, height, info.name ? info.name : "?");
   }
 
   ~WindowSink() override {

@@ -31,21 +31,12 @@ std::string searchPath(const std::string& name, const std::string& path, const s
 }  // namespace
 
 std::vector<std::filesystem::path> defaultBinaryDirectories() {
-  std::vector<std::filesystem::path> dirs;
+  // The build puts every executable in build/bin and the image in /usr/local/bin, so the
+  // launcher's own folder holds the whole farm.
   std::error_code ec;
   const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (ec) return dirs;
-  dirs.push_back(exe.parent_path());
-  // Each executable of a CMake build sits in its own folder (build/master, build/renderer,
-  // ...): from a build tree, put all of them on PATH so the farm runs uninstalled.
-  const std::filesystem::path root = exe.parent_path().parent_path();
-  if (std::filesystem::exists(root / "CMakeCache.txt", ec)) {
-    for (const char* sub : {"master", "renderer", "compositor", "display", "tools"}) {
-      const std::filesystem::path d = root / sub;
-      if (d != dirs.front() && std::filesystem::is_directory(d, ec)) dirs.push_back(d);
-    }
-  }
-  return dirs;
+  if (ec) return {};
+  return {exe.parent_path()};
 }
 
 std::string resolveExecutable(const std::string& cmd, const std::string& path, const std::filesystem::path& cwd) {

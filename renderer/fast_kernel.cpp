@@ -29,12 +29,15 @@ constexpr int64_t kMaxSamples = int64_t{1} << 24;
 struct Consts {
   float u0[3], du[3], umax[3];
   int imax[3];
-  int stride_y, stride_z;   // linear index strides
-  int off[3];               // offset of the +1 corner (0 on one-voxel axes)
-  const float* vol;
+  int stride_y, stride_z;  // linear index strides
+  int off_y, off_z;        // offset of the +1 corner in y and z (0 on one-voxel axes)
+  const uint16_t* vol;     // quantized; a 32-bit read at i holds voxels i and i+1
   const float* rgba;
-  const float* alpha;
+  const int32_t* nonzero;
 };
+
+// Table position of a scalar in quantized units [0, 65535].
+constexpr float kToTable = (float)(TfTable::kEntries - 1) / VolumeAccel::kQuantScale;
 
 #ifdef TESSERA_AVX2
 // Samples k0..k0+lanes-1 and composites them into acc. Returns how many samples were
@@ -52,27 +55,27 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, __m128& acc,
   const __m256i idx = _mm256_add_epi32(
       i[0], _mm256_add_epi32(_mm256_mullo_epi32(i[1], _mm256_set1_epi32(c.stride_y)),
                              _mm256_mullo_epi32(i[2], _mm256_set1_epi32(c.stride_z))));
-  const float* p = c.vol;
-  const int ox = c.off[0], oy = c.off[1], oz = c.off[2];
-  const __m256 v000 = _mm256_i32gather_ps(p, idx, 4);
-  const __m256 v100 = _mm256_i32gather_ps(p + ox, idx, 4);
-  const __m256 v010 = _mm256_i32gather_ps(p + oy, idx, 4);
-  const __m256 v110 = _mm256_i32gather_ps(p + oy + ox, idx, 4);
-  const __m256 v001 = _mm256_i32gather_ps(p + oz, idx, 4);
-  const __m256 v101 = _mm256_i32gather_ps(p + oz + ox, idx, 4);
-  const __m256 v011 = _mm256_i32gather_ps(p + oz + oy, idx, 4);
-  const __m256 v111 = _mm256_i32gather_ps(p + oz + oy + ox, idx, 4);
-  auto lerp = [](__m256 a, __m256 b, __m256 t) { return _mm256_fmadd_ps(t, _mm256_sub_ps(b, a), a); };
-  const __m256 c00 = lerp(v000, v100, f[0]), c10 = lerp(v010, v110, f[0]);
-  const __m256 c01 = lerp(v001, v101, f[0]), c11 = lerp(v011, v111, f[0]);
-  __m256 s = lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2]);
-  s = _mm256_min_ps(_mm256_max_ps(s, _mm256_setzero_ps()), _mm256_set1_ps(1.0f));
-  const __m256 ft = _mm256_mul_ps(s, _mm256_set1_ps((float)(TfTable::kEntries - 1)));
+  // Four 32-bit gathers (scale 2 on uint16 data) fetch the eight corners as x pairs.
+  const int* p = reinterpret_cast<const int*>(c.vol);
+  const auto* b = c.vol;
+  const __m256i g00 = _mm256_i32gather_epi32(p, idx, 2);
+  const __m256i g10 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b + c.off_y), idx, 2);
+  const __m256i g01 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b + c.off_z), idx, 2);
+  const __m256i g11 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b + c.off_y + c.off_z), idx, 2);
+  const __m256i low = _mm256_set1_epi32(0xFFFF);
+  auto lerpx = [&](__m256i g) {
+    const __m256 v0 = _mm256_cvtepi32_ps(_mm256_and_si256(g, low));
+    const __m256 v1 = _mm256_cvtepi32_ps(_mm256_srli_epi32(g, 16));
+    return _mm256_fmadd_ps(f[0], _mm256_sub_ps(v1, v0), v0);
+  };
+  auto lerp = [](__m256 a, __m256 b2, __m256 t) { return _mm256_fmadd_ps(t, _mm256_sub_ps(b2, a), a); };
+  const __m256 s = lerp(lerp(lerpx(g00), lerpx(g10), f[1]), lerp(lerpx(g01), lerpx(g11), f[1]), f[2]);
+  __m256 ft = _mm256_mul_ps(s, _mm256_set1_ps(kToTable));
+  ft = _mm256_min_ps(_mm256_max_ps(ft, _mm256_setzero_ps()), _mm256_set1_ps((float)(TfTable::kEntries - 1)));
   const __m256i ti = _mm256_min_epi32(_mm256_cvttps_epi32(ft), _mm256_set1_epi32(TfTable::kEntries - 2));
   const __m256 w = _mm256_sub_ps(ft, _mm256_cvtepi32_ps(ti));
-  const __m256 a0 = _mm256_i32gather_ps(c.alpha, ti, 4), a1 = _mm256_i32gather_ps(c.alpha + 1, ti, 4);
-  const __m256 alpha = _mm256_fmadd_ps(w, _mm256_sub_ps(a1, a0), a0);
-  int mask = _mm256_movemask_ps(_mm256_cmp_ps(alpha, _mm256_setzero_ps(), _CMP_GT_OQ));
+  const __m256i nz = _mm256_i32gather_epi32(c.nonzero, ti, 4);
+  int mask = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(nz, _mm256_setzero_si256())));
   mask &= (1 << lanes) - 1;
   if (mask == 0) return lanes;  // zero-alpha samples leave acc bit-identical
   alignas(32) int tis[kLanes];
@@ -98,6 +101,7 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, __m128& acc,
 #else
 // Portable version of the same arithmetic (one sample at a time).
 inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4], bool& done) {
+  auto lerp = [](float a, float b, float t) { return std::fma(t, b - a, a); };
   for (int l = 0; l < lanes; ++l) {
     const float kf = (float)k0 + (float)l;
     float f[3];
@@ -107,23 +111,16 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4]
       i[a] = std::min((int)u, c.imax[a]);
       f[a] = u - (float)i[a];
     }
-    const float* p = c.vol + i[0] + (size_t)i[1] * c.stride_y + (size_t)i[2] * c.stride_z;
-    const int ox = c.off[0], oy = c.off[1], oz = c.off[2];
-    auto lerp = [](float a, float b, float t) { return std::fma(t, b - a, a); };
-    const float c00 = lerp(p[0], p[ox], f[0]), c10 = lerp(p[oy], p[oy + ox], f[0]);
-    const float c01 = lerp(p[oz], p[oz + ox], f[0]), c11 = lerp(p[oz + oy], p[oz + oy + ox], f[0]);
-    float s = lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2]);
-    s = std::min(std::max(s, 0.0f), 1.0f);
-    const float ft = s * (float)(TfTable::kEntries - 1);
+    const uint16_t* p = c.vol + i[0] + (size_t)i[1] * c.stride_y + (size_t)i[2] * c.stride_z;
+    const int oy = c.off_y, oz = c.off_z;
+    auto lx = [&](const uint16_t* q) { return lerp((float)q[0], (float)q[1], f[0]); };
+    const float s = lerp(lerp(lx(p), lx(p + oy), f[1]), lerp(lx(p + oz), lx(p + oy + oz), f[1]), f[2]);
+    const float ft = std::min(std::max(s * kToTable, 0.0f), (float)(TfTable::kEntries - 1));
     const int ti = std::min((int)ft, TfTable::kEntries - 2);
     const float w = ft - (float)ti;
-    const float alpha = lerp(c.alpha[ti], c.alpha[ti + 1], w);
-    if (!(alpha > 0)) continue;
+    if (!c.nonzero[ti]) continue;
     const float t = 1.0f - acc[3];
-    for (int ch = 0; ch < 4; ++ch) {
-      const float pc = lerp(c.rgba[4 * ti + ch], c.rgba[4 * ti + 4 + ch], w);
-      acc[ch] = std::fma(t, pc, acc[ch]);
-    }
+    for (int ch = 0; ch < 4; ++ch) acc[ch] = std::fma(t, lerp(c.rgba[4 * ti + ch], c.rgba[4 * ti + 4 + ch], w), acc[ch]);
     if (acc[3] >= et) {
       done = true;
       return l + 1;
@@ -144,12 +141,12 @@ void nodeBounds(const MinMaxHierarchy& h, int level, const int node[3], double l
   }
 }
 
-// Parameter k at which u0 + k*du leaves [lo, hi] (>= k if inside).
-double exitParam(const RaySpan& s, const double lo[3], const double hi[3]) {
+// Parameter k at which u0 + k*du leaves [lo, hi] (>= k if inside); inv = 1/du.
+inline double exitParam(const RaySpan& s, const double inv[3], const double lo[3], const double hi[3]) {
   double e = kInf;
   for (int a = 0; a < 3; ++a) {
-    if (s.du[a] > 0) e = std::min(e, (hi[a] - s.u0[a]) / s.du[a]);
-    else if (s.du[a] < 0) e = std::min(e, (lo[a] - s.u0[a]) / s.du[a]);
+    if (s.du[a] > 0) e = std::min(e, (hi[a] - s.u0[a]) * inv[a]);
+    else if (s.du[a] < 0) e = std::min(e, (lo[a] - s.u0[a]) * inv[a]);
   }
   return e;
 }
@@ -168,14 +165,15 @@ void castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
   }
   c.stride_y = v.dims[0];
   c.stride_z = v.dims[0] * v.dims[1];
-  c.off[0] = v.dims[0] > 1 ? 1 : 0;
-  c.off[1] = v.dims[1] > 1 ? c.stride_y : 0;
-  c.off[2] = v.dims[2] > 1 ? c.stride_z : 0;
-  c.vol = v.values.data();
+  c.off_y = v.dims[1] > 1 ? c.stride_y : 0;
+  c.off_z = v.dims[2] > 1 ? c.stride_z : 0;
+  c.vol = ctx.accel->quantized.data();
   c.rgba = ctx.table->rgba();
-  c.alpha = ctx.table->alpha();
+  c.nonzero = ctx.table->nonzero();
+  double inv[3];
+  for (int a = 0; a < 3; ++a) inv[a] = span.du[a] != 0 ? 1.0 / span.du[a] : 0.0;
   const float et = ctx.early_termination;
-  const bool skip = ctx.hierarchy && ctx.emptiness;
+  const bool skip = ctx.skip && ctx.emptiness;
 
 #ifdef TESSERA_AVX2
   __m128 acc = _mm_setzero_ps();
@@ -187,7 +185,7 @@ void castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
   while (k < k_end) {
     int64_t run_end = k_end;
     if (skip) {
-      const MinMaxHierarchy& h = *ctx.hierarchy;
+      const MinMaxHierarchy& h = ctx.accel->hierarchy;
       const auto& empty = ctx.emptiness->empty;
       double u[3];
       int node[3];
@@ -212,8 +210,10 @@ void castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
           inside = inside && u[a] >= lo[a] && u[a] <= hi[a];
         }
         if (inside) {
-          const double e = std::min(exitParam(span, lo, hi), (double)k_end);
-          const int64_t next = (int64_t)std::floor(e);  // samples k..next-1 are inside
+          const double e = std::min(exitParam(span, inv, lo, hi), (double)k_end);
+          // Samples k..floor(e) lie inside the shrunk box; double rounding of e (~1e-13)
+          // is far below the margin, so the last of them is still safe to skip.
+          const int64_t next = std::min(k_end, (int64_t)std::floor(e) + 1);
           if (next > k) {
             counts.skipped += (uint64_t)(next - k);
             k = next;
@@ -223,7 +223,7 @@ void castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
       }
       // Sample up to where the ray leaves this block, in whole packets (extra samples are harmless).
       nodeBounds(h, 0, node, lo, hi);
-      const double e = std::min(exitParam(span, lo, hi), (double)k_end);
+      const double e = std::min(exitParam(span, inv, lo, hi), (double)k_end);
       const int64_t n = std::max<int64_t>(1, (int64_t)std::ceil(e) - k);
       run_end = std::min(k_end, k + (n + kLanes - 1) / kLanes * kLanes);
     }

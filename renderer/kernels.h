@@ -9,6 +9,7 @@
 #include "renderer/minmax.h"
 #include "renderer/ray_setup.h"
 #include "renderer/tf_table.h"
+#include "renderer/volume_accel.h"
 
 namespace tessera::renderer {
 
@@ -18,9 +19,10 @@ struct SampleCounts {
 
 struct FastContext {
   const Volume* volume = nullptr;
+  const VolumeAccel* accel = nullptr;                     // quantized values, hierarchy
   const TfTable* table = nullptr;
-  const MinMaxHierarchy* hierarchy = nullptr;           // null: no skipping
-  const MinMaxHierarchy::Emptiness* emptiness = nullptr;  // null: no skipping
+  const MinMaxHierarchy::Emptiness* emptiness = nullptr;  // of `table`'s transfer function
+  bool skip = true;                                       // empty-space skipping
   float early_termination = 2.0f;                        // > 1: never
 };
 

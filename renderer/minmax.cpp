@@ -2,8 +2,6 @@
 #include "renderer/minmax.h"
 
 #include <algorithm>
-#include <map>
-#include <mutex>
 #include <stdexcept>
 #include <thread>
 
@@ -74,24 +72,6 @@ MinMaxHierarchy::MinMaxHierarchy(const Volume& v) {
         }
     levels_.push_back(std::move(c));
   }
-}
-
-std::shared_ptr<const MinMaxHierarchy> MinMaxHierarchy::forVolume(const std::shared_ptr<const Volume>& v) {
-  static std::mutex mu;
-  static std::map<const Volume*, std::pair<std::weak_ptr<const Volume>, std::weak_ptr<const MinMaxHierarchy>>> cache;
-  std::lock_guard lock(mu);
-  for (auto it = cache.begin(); it != cache.end();) {  // drop entries of freed volumes
-    if (it->second.first.expired() || it->second.second.expired()) it = cache.erase(it);
-    else ++it;
-  }
-  auto it = cache.find(v.get());
-  if (it != cache.end()) {
-    auto owner = it->second.first.lock();
-    if (owner == v) return it->second.second.lock();
-  }
-  auto h = std::make_shared<const MinMaxHierarchy>(*v);
-  cache[v.get()] = {v, h};
-  return h;
 }
 
 MinMaxHierarchy::Emptiness MinMaxHierarchy::classify(const std::function<bool(float, float)>& isEmpty) const {

@@ -5,7 +5,6 @@
 #include <array>
 #include <cstdint>
 #include <functional>
-#include <memory>
 #include <vector>
 
 #include "common/volume.h"
@@ -20,8 +19,6 @@ class MinMaxHierarchy {
   static constexpr int kBlock = 8;  // cells per block edge at level 0
 
   explicit MinMaxHierarchy(const Volume& v);
-  // Shares one hierarchy between all raycasters of the same volume (built on first use).
-  static std::shared_ptr<const MinMaxHierarchy> forVolume(const std::shared_ptr<const Volume>& v);
 
   int levels() const { return (int)levels_.size(); }
   std::array<int, 3> dims(int level) const { return levels_[level].dims; }

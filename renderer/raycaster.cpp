@@ -16,6 +16,7 @@
 #include "renderer/minmax.h"
 #include "renderer/ray_setup.h"
 #include "renderer/tf_table.h"
+#include "renderer/volume_accel.h"
 
 namespace tessera::renderer {
 
@@ -32,7 +33,7 @@ Brick wholeVolume(const Volume& v) { return Brick{{0, 0, 0}, v.dims}; }
 struct Raycaster::Impl {
   std::shared_ptr<const Volume> volume;
   TransferFunction tf;
-  std::shared_ptr<const MinMaxHierarchy> hierarchy;
+  std::shared_ptr<const VolumeAccel> accel;
   MinMaxHierarchy::Emptiness emptiness;
 };
 
@@ -47,9 +48,9 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf) 
   if (tf.points().empty()) throw std::invalid_argument("Raycaster: transfer function has no points");
   impl_->volume = std::move(volume);
   impl_->tf = std::move(tf);
-  impl_->hierarchy = MinMaxHierarchy::forVolume(impl_->volume);
+  impl_->accel = VolumeAccel::forVolume(impl_->volume);
   const TransferFunction& f = impl_->tf;
-  impl_->emptiness = impl_->hierarchy->classify([&f](float lo, float hi) { return TfTable::rangeIsEmpty(f, lo, hi); });
+  impl_->emptiness = impl_->accel->hierarchy.classify([&f](float lo, float hi) { return TfTable::rangeIsEmpty(f, lo, hi); });
 }
 
 Raycaster::~Raycaster() = default;
@@ -101,11 +102,10 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   if (!q.reference) {
     table.emplace(impl_->tf, q.step);
     fast.volume = &v;
+    fast.accel = impl_->accel.get();
     fast.table = &*table;
-    if (q.skip_empty) {
-      fast.hierarchy = impl_->hierarchy.get();
-      fast.emptiness = &impl_->emptiness;
-    }
+    fast.emptiness = &impl_->emptiness;
+    fast.skip = q.skip_empty;
     fast.early_termination = (float)std::min(q.early_termination, 2.0);
   }
 

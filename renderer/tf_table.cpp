@@ -7,15 +7,15 @@
 
 namespace tessera::renderer {
 
-TfTable::TfTable(const TransferFunction& tf, double step) : entries_(kEntries), alpha_(kEntries) {
+TfTable::TfTable(const TransferFunction& tf, double step) : entries_(kEntries), nonzero_(kEntries, 0) {
   if (!(step > 0) || !std::isfinite(step)) throw std::invalid_argument("TfTable: step must be positive and finite");
   for (int j = 0; j < kEntries; ++j) {
     const double s = (double)j / (kEntries - 1);
     const auto c = tf.eval(s);
     const double a = correctOpacity(c[3], step);
     entries_[j] = Entry{{(float)(a * c[0]), (float)(a * c[1]), (float)(a * c[2]), (float)a}};
-    alpha_[j] = (float)a;
   }
+  for (int j = 0; j + 1 < kEntries; ++j) nonzero_[j] = (entries_[j].v[3] > 0 || entries_[j + 1].v[3] > 0) ? 1 : 0;
 }
 
 void TfTable::lookup(float s, float out[4]) const {

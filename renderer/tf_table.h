@@ -2,6 +2,7 @@
 // RGBA for one step length, sampled at kEntries scalars and linearly interpolated.
 // Immutable after construction; safe to read from many threads.
 #pragma once
+#include <cstdint>
 #include <vector>
 
 #include "common/transfer_function.h"
@@ -16,7 +17,9 @@ class TfTable {
 
   // Entry j holds (a*r, a*g, a*b, a) at scalar j/(kEntries-1), a = correctOpacity(alpha, step).
   const float* rgba() const { return entries_.data()->v; }  // 4 floats per entry, 16-byte aligned
-  const float* alpha() const { return alpha_.data(); }
+  // nonzero()[j] != 0 iff entry j or j+1 has alpha > 0: interpolating between two
+  // zero-alpha entries gives exactly zero, so such samples can be passed over.
+  const int32_t* nonzero() const { return nonzero_.data(); }
 
   // Scalar reference of the lookup the kernels do (same float operations).
   void lookup(float s, float out[4]) const;
@@ -31,7 +34,7 @@ class TfTable {
     float v[4];
   };
   std::vector<Entry> entries_;
-  std::vector<float> alpha_;
+  std::vector<int32_t> nonzero_;
 };
 
 }  // namespace tessera::renderer

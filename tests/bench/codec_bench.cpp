@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/codec.h"
+#include "common/protocol.h"
 
 namespace {
 
@@ -75,6 +76,36 @@ void decompressBench(benchmark::State& state, tessera::Codec c, bool empty) {
   setCounters(state, raw.size(), enc.size());
 }
 
+// Whole-message cost on top of the codec: framing, metadata, Adler-32 and validation.
+tessera::proto::Piece framePiece() {
+  tessera::proto::Piece p;
+  p.region = p.active = {0, 0, kSide, kSide};
+  p.pixels = frame(false);
+  return p;
+}
+
+void encodePieceBench(benchmark::State& state, tessera::Codec c) {
+  const auto piece = framePiece();
+  size_t size = 0;
+  for (auto _ : state) {
+    auto msg = tessera::proto::encode(piece, 1, c);
+    size = msg.size();
+    benchmark::DoNotOptimize(msg.data());
+  }
+  setCounters(state, piece.pixels.size(), size);
+}
+
+void decodePieceBench(benchmark::State& state, tessera::Codec c) {
+  const auto piece = framePiece();
+  const auto msg = tessera::proto::encode(piece, 1, c);
+  for (auto _ : state) {
+    auto r = tessera::proto::decodePiece(msg);
+    if (!r) state.SkipWithError(r.error().c_str());
+    benchmark::DoNotOptimize(r->pixels.data());
+  }
+  setCounters(state, piece.pixels.size(), msg.size());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -90,6 +121,15 @@ int main(int argc, char** argv) {
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime();
     }
+  }
+  for (tessera::Codec c : {tessera::Codec::None, tessera::Codec::Lz4}) {
+    const std::string name = std::string("/") + tessera::codecName(c) + "/render";
+    benchmark::RegisterBenchmark(("encode_piece" + name).c_str(), encodePieceBench, c)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+    benchmark::RegisterBenchmark(("decode_piece" + name).c_str(), decodePieceBench, c)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
   }
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
