@@ -11,9 +11,9 @@ COPY . .
 RUN cmake -S . -B /opt/tessera/build -G Ninja -DCMAKE_BUILD_TYPE=Release -DTESSERA_NATIVE=OFF \
  && cmake --build /opt/tessera/build -j"$(nproc)" --target \
       tessera-master tessera-renderer tessera-compositor tessera-display tessera-render tessera-up \
- && cd /opt/tessera/build \
- && install -m 0755 master/tessera-master master/tessera-up renderer/tessera-renderer \
-      renderer/tessera-render compositor/tessera-compositor display/tessera-display /usr/local/bin/
+ && cd /opt/tessera/build/bin \
+ && install -m 0755 tessera-master tessera-renderer tessera-compositor tessera-display \
+      tessera-render tessera-up /usr/local/bin/
 # Scene paths in compose.yaml (scenes/...) are relative to the source tree.
 WORKDIR /opt/tessera/src
 CMD ["tessera-up", "--help"]
