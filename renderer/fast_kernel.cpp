@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "renderer/kernels.h"
@@ -130,26 +131,74 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4]
 }
 #endif
 
-// Per-axis extent of a hierarchy node in voxel coordinates; outer nodes extend to
-// infinity because positions are clamped into the border blocks.
-void nodeBounds(const MinMaxHierarchy& h, int level, const int node[3], double lo[3], double hi[3]) {
-  const auto d0 = h.dims(0);
-  for (int a = 0; a < 3; ++a) {
-    const int first = node[a] << level, last = (node[a] + 1) << level;
-    lo[a] = first == 0 ? -kInf : (double)first * MinMaxHierarchy::kBlock;
-    hi[a] = last >= d0[a] ? kInf : (double)last * MinMaxHierarchy::kBlock;
-  }
-}
+// Empty-space leaps over the level-0 block grid, using the chessboard distance map.
+// Double precision; samples are only leapt over when they lie kSkipMargin inside a cube of
+// empty blocks, so their float positions (the kernel's) are inside it too.
+struct Leaper {
+  double u0[3], du[3], inv[3], umax[3];
+  int imax[3], nb[3];
+  bool fwd[3], moving[3];
+  int nbx, nbxy;
+  const uint8_t* dist;
 
-// Parameter k at which u0 + k*du leaves [lo, hi] (>= k if inside); inv = 1/du.
-inline double exitParam(const RaySpan& s, const double inv[3], const double lo[3], const double hi[3]) {
-  double e = kInf;
-  for (int a = 0; a < 3; ++a) {
-    if (s.du[a] > 0) e = std::min(e, (hi[a] - s.u0[a]) * inv[a]);
-    else if (s.du[a] < 0) e = std::min(e, (lo[a] - s.u0[a]) * inv[a]);
+  Leaper(const RaySpan& s, const Volume& v, const MinMaxHierarchy& h, const MinMaxHierarchy::Emptiness& e) {
+    const auto d0 = h.dims(0);
+    for (int a = 0; a < 3; ++a) {
+      u0[a] = s.u0[a];
+      du[a] = s.du[a];
+      moving[a] = s.du[a] != 0;
+      fwd[a] = s.du[a] > 0;
+      inv[a] = moving[a] ? 1.0 / s.du[a] : 0.0;
+      umax[a] = v.dims[a] - 1;
+      imax[a] = std::max(0, v.dims[a] - 2);
+      nb[a] = d0[a];
+    }
+    nbx = d0[0];
+    nbxy = d0[0] * d0[1];
+    dist = e.distance.data();
   }
-  return e;
-}
+
+  // Where the ray (from sample k) leaves the cube of blocks within radius r - 1 of block b,
+  // shrunk by `margin`; `inside` tells whether sample k itself is in the shrunk cube.
+  double exit(const double u[3], const int b[3], int r, double margin, bool& inside) const {
+    constexpr double B = MinMaxHierarchy::kBlock;
+    double e = kInf;
+    inside = true;
+    for (int a = 0; a < 3; ++a) {
+      const int first = b[a] - r + 1, last = b[a] + r;
+      const double lo = first <= 0 ? -kInf : first * B + margin;
+      const double hi = last >= nb[a] ? kInf : last * B - margin;
+      inside = inside & (u[a] >= lo) & (u[a] <= hi);
+      const double ea = moving[a] ? ((fwd[a] ? hi : lo) - u0[a]) * inv[a] : kInf;
+      e = std::min(e, ea);
+    }
+    return e;
+  }
+
+  // Returns the first sample not leapt over (== k if sample k must be taken) and sets
+  // run_end to a sample index where the ray has left k's block (the next decision point).
+  int64_t step(int64_t k, int64_t k_end, int64_t& run_end) const {
+    double u[3];
+    int b[3];
+    for (int a = 0; a < 3; ++a) {
+      u[a] = u0[a] + (double)k * du[a];
+      const double uc = std::min(std::max(u[a], 0.0), umax[a]);
+      b[a] = std::min((int)uc, imax[a]) / MinMaxHierarchy::kBlock;
+    }
+    const int d = dist[b[0] + nbx * b[1] + nbxy * b[2]];
+    bool inside;
+    if (d > 0) {
+      const double e = std::min(exit(u, b, d, kSkipMargin, inside), (double)k_end);
+      // Samples k..floor(e) lie inside the shrunk cube; double rounding of e (~1e-13 of a
+      // step) is far below the margin, so the last of them is still safe to leap over.
+      const int64_t next = std::min(k_end, (int64_t)e + 1);
+      if (inside && next > k) return next;
+    }
+    const double e = std::min(exit(u, b, 1, 0.0, inside), (double)k_end);
+    run_end = (int64_t)e + 1;
+    return k;
+  }
+};
 
 }  // namespace
 
@@ -170,8 +219,6 @@ void castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
   c.vol = ctx.accel->quantized.data();
   c.rgba = ctx.table->rgba();
   c.nonzero = ctx.table->nonzero();
-  double inv[3];
-  for (int a = 0; a < 3; ++a) inv[a] = span.du[a] != 0 ? 1.0 / span.du[a] : 0.0;
   const float et = ctx.early_termination;
   const bool skip = ctx.skip && ctx.emptiness;
 
@@ -182,50 +229,19 @@ void castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
 #endif
   int64_t k = span.k_first;
   const int64_t k_end = span.k_end;
+  std::optional<Leaper> leaper;
+  if (skip) leaper.emplace(span, v, ctx.accel->hierarchy, *ctx.emptiness);
   while (k < k_end) {
     int64_t run_end = k_end;
-    if (skip) {
-      const MinMaxHierarchy& h = ctx.accel->hierarchy;
-      const auto& empty = ctx.emptiness->empty;
-      double u[3];
-      int node[3];
-      for (int a = 0; a < 3; ++a) {
-        u[a] = span.u0[a] + (double)k * span.du[a];
-        const double uc = std::clamp(u[a], 0.0, (double)(v.dims[a] - 1));
-        node[a] = std::clamp((int)uc, 0, std::max(0, v.dims[a] - 2)) / MinMaxHierarchy::kBlock;
+    if (leaper) {
+      const int64_t next = leaper->step(k, k_end, run_end);
+      if (next > k) {
+        counts.skipped += (uint64_t)(next - k);
+        k = next;
+        continue;
       }
-      double lo[3], hi[3];
-      if (empty[0][h.index(0, node[0], node[1], node[2])]) {
-        // Climb to the coarsest empty ancestor and jump over it.
-        int level = 0;
-        while (level + 1 < h.levels() &&
-               empty[level + 1][h.index(level + 1, node[0] >> (level + 1), node[1] >> (level + 1), node[2] >> (level + 1))])
-          ++level;
-        const int nn[3] = {node[0] >> level, node[1] >> level, node[2] >> level};
-        nodeBounds(h, level, nn, lo, hi);
-        bool inside = true;
-        for (int a = 0; a < 3; ++a) {
-          lo[a] += kSkipMargin;
-          hi[a] -= kSkipMargin;
-          inside = inside && u[a] >= lo[a] && u[a] <= hi[a];
-        }
-        if (inside) {
-          const double e = std::min(exitParam(span, inv, lo, hi), (double)k_end);
-          // Samples k..floor(e) lie inside the shrunk box; double rounding of e (~1e-13)
-          // is far below the margin, so the last of them is still safe to skip.
-          const int64_t next = std::min(k_end, (int64_t)std::floor(e) + 1);
-          if (next > k) {
-            counts.skipped += (uint64_t)(next - k);
-            k = next;
-            continue;
-          }
-        }
-      }
-      // Sample up to where the ray leaves this block, in whole packets (extra samples are harmless).
-      nodeBounds(h, 0, node, lo, hi);
-      const double e = std::min(exitParam(span, inv, lo, hi), (double)k_end);
-      const int64_t n = std::max<int64_t>(1, (int64_t)std::ceil(e) - k);
-      run_end = std::min(k_end, k + (n + kLanes - 1) / kLanes * kLanes);
+      // Whole packets up to the block exit (extra samples are harmless, just not skipped).
+      run_end = std::min(k_end, k + (std::max<int64_t>(1, run_end - k) + kLanes - 1) / kLanes * kLanes);
     }
     bool done = false;
     while (k < run_end) {

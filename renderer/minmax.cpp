@@ -9,6 +9,36 @@ namespace tessera::renderer {
 
 namespace {
 int blocksOnAxis(int n) { return std::max(1, (n - 2) / MinMaxHierarchy::kBlock + 1); }
+
+// Exact chessboard distance transform by two chamfer passes over the 26-neighbourhood.
+void distanceTransform(const std::array<int, 3>& d, const std::vector<uint8_t>& empty, std::vector<uint8_t>& out) {
+  const int nx = d[0], ny = d[1], nz = d[2];
+  std::vector<int> dist(empty.size());
+  for (size_t i = 0; i < empty.size(); ++i) dist[i] = empty[i] ? 1 << 20 : 0;
+  auto at = [&](int x, int y, int z) -> int& { return dist[x + (size_t)nx * (y + (size_t)ny * z)]; };
+  auto pass = [&](int sgn) {
+    const int z0 = sgn > 0 ? 0 : nz - 1, y0 = sgn > 0 ? 0 : ny - 1, x0 = sgn > 0 ? 0 : nx - 1;
+    for (int z = z0; z >= 0 && z < nz; z += sgn)
+      for (int y = y0; y >= 0 && y < ny; y += sgn)
+        for (int x = x0; x >= 0 && x < nx; x += sgn) {
+          int& c = at(x, y, z);
+          if (c == 0) continue;
+          // Neighbours already visited in this scan order: the 13 "behind" the cell.
+          for (int dz = -1; dz <= 0; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx) {
+                if (dz == 0 && (dy > 0 || (dy == 0 && dx >= 0))) continue;
+                const int X = x + sgn * dx, Y = y + sgn * dy, Z = z + sgn * dz;
+                if (X < 0 || Y < 0 || Z < 0 || X >= nx || Y >= ny || Z >= nz) continue;
+                c = std::min(c, at(X, Y, Z) + 1);
+              }
+        }
+  };
+  pass(1);
+  pass(-1);
+  out.resize(dist.size());
+  for (size_t i = 0; i < dist.size(); ++i) out[i] = (uint8_t)std::min(dist[i], 255);
+}
 }  // namespace
 
 MinMaxHierarchy::MinMaxHierarchy(const Volume& v) {
@@ -83,6 +113,7 @@ MinMaxHierarchy::Emptiness MinMaxHierarchy::classify(const std::function<bool(fl
     e.empty[0][i] = isEmpty(l0.mn[i], l0.mx[i]) ? 1 : 0;
     e.empty_blocks += e.empty[0][i];
   }
+  distanceTransform(l0.dims, e.empty[0], e.distance);
   for (size_t l = 1; l < levels_.size(); ++l) {
     const Level& f = levels_[l - 1];
     const Level& c = levels_[l];

@@ -35,6 +35,10 @@ class MinMaxHierarchy {
   struct Emptiness {
     std::vector<std::vector<uint8_t>> empty;  // [level][node index]
     uint64_t empty_blocks = 0;                // level-0 blocks marked empty
+    // Chessboard distance (in level-0 blocks, capped at 255) from each level-0 block to the
+    // nearest non-empty one: every block within distance - 1 is empty, so a ray can leap
+    // across that cube in one step, however the cube is aligned.
+    std::vector<uint8_t> distance;
   };
   Emptiness classify(const std::function<bool(float lo, float hi)>& isEmpty) const;
 

@@ -1,0 +1,56 @@
+// Shared helpers for the renderer tests: small volumes, the default transfer function,
+// finiteness checks and a diff dump for failing image comparisons.
+#pragma once
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "common/image.h"
+#include "common/image_io.h"
+#include "common/scene.h"
+#include "common/volume.h"
+#include "renderer/raycaster.h"
+
+namespace tessera::renderer::test {
+
+inline std::shared_ptr<const Volume> generated(const std::string& name, int size, std::array<double, 3> spacing = {1, 1, 1}) {
+  return std::make_shared<const Volume>(generateVolume(GeneratorSpec{name, size, 1, spacing}));
+}
+
+inline std::shared_ptr<const Volume> constant(std::array<int, 3> dims, float value, std::array<double, 3> spacing = {1, 1, 1}) {
+  auto v = std::make_shared<Volume>();
+  v->dims = dims;
+  v->spacing = spacing;
+  v->values.assign(v->voxelCount(), value);
+  return v;
+}
+
+inline TransferFunction defaultTf() { return defaultScene().tf; }
+inline Camera defaultCamera() { return defaultScene().camera; }
+
+inline RenderOptions options(const std::string& quality, int threads = 0) {
+  RenderOptions o;
+  o.quality = namedQuality(quality);
+  o.threads = threads;
+  return o;
+}
+
+inline bool allFinite(const ImageF& img) {
+  for (float v : img.px)
+    if (!std::isfinite(v) || v < 0.0f || v > 1.0f + 1e-5f) return false;
+  return true;
+}
+
+// Writes expected/actual PNGs into a folder and returns its path (named in failure messages).
+inline std::string dumpImages(const std::string& name, const ImageF& expected, const ImageF& actual) {
+  const std::filesystem::path dir = std::filesystem::path(TESSERA_BINARY_DIR) / "test-output" / "renderer" / name;
+  std::filesystem::create_directories(dir);
+  writePng((dir / "expected.png").string(), expected);
+  writePng((dir / "actual.png").string(), actual);
+  return dir.string();
+}
+
+}  // namespace tessera::renderer::test
