@@ -129,6 +129,7 @@ void readRegions(ByteReader& r, FrameParams& m) {
 
 std::vector<std::byte> encode(const FrameParams& m, uint32_t sender) {
   return detail::encodeStructured(Type::FrameParams, m.frame, sender, [&](ByteWriter& w) {
+    w.u32(m.epoch);
     writeCamera(w, m.camera);
     writeQuality(w, m.quality);
     w.i32(m.width);
@@ -157,6 +158,7 @@ Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
   return detail::decodeStructured<FrameParams>(
       msg, Type::FrameParams, [](ByteReader& r, const Header& h, FrameParams& m) {
         m.frame = h.frame;
+        m.epoch = r.u32("epoch");
         m.camera = readCamera(r);
         m.quality = readQuality(r);
         m.width = r.i32("width");

@@ -41,6 +41,7 @@ std::vector<std::byte> encode(const Piece& m, uint32_t sender, Codec codec) {
   }
   auto msg = detail::beginMessage();
   ByteWriter w(msg);
+  w.u32(m.epoch);
   w.u32(m.renderer);
   w.u32(m.brick);
   detail::writeRect(w, m.region);
@@ -59,6 +60,7 @@ Result<Piece> decodePiece(std::span<const std::byte> msg) {
   ByteReader r(o->payload);
   Piece m;
   m.frame = o->header.frame;
+  m.epoch = r.u32("epoch");
   m.renderer = r.u32("renderer");
   m.brick = r.u32("brick");
   m.region = detail::readRect(r, "region");
@@ -96,9 +98,11 @@ Result<Piece> decodePiece(std::span<const std::byte> msg) {
 std::vector<std::byte> encode(const Strips& m, uint32_t sender, Codec codec) {
   auto msg = detail::beginMessage();
   ByteWriter w(msg);
+  w.u32(m.epoch);
   w.u32(m.compositor);
   w.f64(m.composite_ms);
   w.f64(m.encode_ms);
+  w.f64(m.render_ms);
   w.u64(m.active_pixels);
   appendPixels(msg, Type::Strips, m.frame, sender, codec, std::as_bytes(std::span(m.stream)));
   return msg;
@@ -111,9 +115,11 @@ Result<Strips> decodeStrips(std::span<const std::byte> msg) {
   ByteReader r(o->payload);
   Strips m;
   m.frame = o->header.frame;
+  m.epoch = r.u32("epoch");
   m.compositor = r.u32("compositor");
   m.composite_ms = detail::readFinite(r, "composite_ms");
   m.encode_ms = detail::readFinite(r, "encode_ms");
+  m.render_ms = detail::readFinite(r, "render_ms");
   m.active_pixels = r.u64("active_pixels");
   if (!r.ok()) return R::fail("Strips: " + r.error());
   auto bytes = pixelBytes(o->header, r);

@@ -20,7 +20,7 @@ struct Quality {
   bool reference = false;          // double precision, no skipping, no early termination
   bool operator==(const Quality&) const = default;
 };
-// reference: step L0/16, no ET, no skipping; default: step L0, ET 0.99; fast: step 2*L0, ET 0.95.
+// reference: step L0/16, no ET, no skipping; default: step L0, ET 1 - 0.5/255; fast: step 2*L0, ET 0.95.
 Quality namedQuality(const std::string& name);  // throws std::invalid_argument
 
 struct Orbit {

@@ -15,6 +15,7 @@ using Bytes = std::vector<std::byte>;
 FrameParams sampleParams() {
   FrameParams p;
   p.frame = 42;
+  p.epoch = 3;
   p.camera.eye = {1.5, -2, 3.25};
   p.camera.fov = 45;
   p.quality = {"fast", 1.0 / 128, 0.95, true, false};
@@ -32,6 +33,7 @@ FrameParams sampleParams() {
 Piece samplePiece(PixelFormat f) {
   Piece p;
   p.frame = 7;
+  p.epoch = 3;
   p.renderer = 3;
   p.brick = 2;
   p.region = {0, 100, 64, 32};
@@ -47,6 +49,8 @@ Piece samplePiece(PixelFormat f) {
 Strips sampleStrips() {
   Strips s;
   s.frame = 9;
+  s.epoch = 3;
+  s.render_ms = 4.5;
   s.compositor = 1;
   s.stream.assign(1000, 0);
   for (size_t i = 0; i < 300; ++i) s.stream[i] = uint8_t(i);

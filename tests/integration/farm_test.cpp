@@ -46,8 +46,8 @@ TEST_P(FarmMatchesOneProcess, EveryFrameWithinOneLevel) {
 
 INSTANTIATE_TEST_SUITE_P(Shapes, FarmMatchesOneProcess,
                          ::testing::Values(Shape{1, 1}, Shape{2, 1}, Shape{2, 2}, Shape{4, 2}),
-                         [](const auto& info) {
-                           return std::to_string(info.param.renderers) + "r" + std::to_string(info.param.compositors) + "c";
+                         [](const auto& param_info) {
+                           return std::to_string(param_info.param.renderers) + "r" + std::to_string(param_info.param.compositors) + "c";
                          });
 
 }  // namespace

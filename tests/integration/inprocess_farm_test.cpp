@@ -1,0 +1,93 @@
+// The whole farm inside one process over inproc:// (the transport the stages share with
+// ipc:// and tcp://): a renderer that vanishes mid-run is detected by heartbeat, its
+// bricks are reassigned under a new epoch, and every frame still matches the one-process
+// render.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <future>
+#include <fstream>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "common/image_io.h"
+#include "compositor/stage.h"
+#include "display/stage.h"
+#include "farm_util.h"
+#include "master/master.h"
+#include "renderer/raycaster.h"
+#include "renderer/stage.h"
+
+namespace tessera::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+Scene smallScene(int frames) {
+  Scene s = defaultScene();
+  s.volume = GeneratorSpec{"hollow-shell", 32, 1};
+  s.width = 64;
+  s.height = 48;
+  s.orbit.frames = frames;
+  return s;
+}
+
+TEST(InProcessFarm, LostRendererIsDetectedAndItsWorkReassigned) {
+  FarmDir dir("inproc");
+  const int frames = 40;
+  Scene scene = smallScene(frames);
+  Endpoints ep = makeEndpoints("inproc://farm-lost-renderer");
+  zmq::context_t ctx;
+  std::atomic<bool> stop_all{false}, stop_r1{false};
+
+  master::MasterOptions mo;
+  mo.scene = scene;
+  mo.endpoints = ep;
+  mo.renderers = 2;
+  mo.heartbeat_timeout_s = 0.5;
+  mo.metrics_path = (dir.path() / "metrics.jsonl").string();
+  renderer::StageOptions ro{scene, ep, 1};
+  compositor::StageOptions co{ep, ""};
+  display::StageOptions dopt{ep, (dir.path() / "out").string(), "off", std::nullopt};
+
+  std::vector<std::future<int>> stages;
+  stages.push_back(std::async(std::launch::async, [&] { return master::run(mo, ctx, &stop_all); }));
+  stages.push_back(std::async(std::launch::async, [&] { return renderer::runStage(ro, ctx, &stop_all); }));
+  auto lost = std::async(std::launch::async, [&] { return renderer::runStage(ro, ctx, &stop_r1); });
+  stages.push_back(std::async(std::launch::async, [&] { return compositor::runStage(co, ctx, &stop_all); }));
+  stages.push_back(std::async(std::launch::async, [&] { return display::runStage(dopt, ctx, &stop_all); }));
+
+  // Let a few frames through, then the second renderer vanishes without a word.
+  auto deadline = std::chrono::steady_clock::now() + 30s;
+  while (!fs::exists(dir.frame(3)) && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(10ms);
+  stop_r1 = true;
+  EXPECT_EQ(lost.get(), 0);
+
+  bool finished = true;
+  for (auto& f : stages) finished = finished && f.wait_for(60s) == std::future_status::ready;
+  if (!finished) stop_all = true;  // do not hang the suite: stop and report
+  for (auto& f : stages) EXPECT_EQ(f.get(), 0);
+  ASSERT_TRUE(finished) << "the farm did not finish after losing a renderer";
+
+  auto volume = std::make_shared<Volume>(loadVolume(scene));
+  renderer::Raycaster caster(volume, scene.tf);
+  renderer::RenderOptions opt;
+  opt.quality = scene.quality;
+  for (int k = 0; k < frames; ++k) {
+    ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " missing";
+    Camera cam = scene.orbit.at(scene.camera, k);
+    Image8 ref = toRGBA8(caster.render(cam, scene.width, scene.height, renderer::wholeVolume(*volume), opt));
+    // 1/255: pieces are quantized to rgba8 once before compositing.
+    EXPECT_LE(maxAbsDiff(readPng(dir.frame(k).string()), ref), 1) << "frame " << k;
+  }
+  // The metrics show the new epoch: the master noticed and reassigned.
+  std::ifstream metrics(dir.path() / "metrics.jsonl");
+  uint32_t max_epoch = 0;
+  for (std::string line; std::getline(metrics, line);)
+    max_epoch = std::max(max_epoch, nlohmann::json::parse(line)["epoch"].get<uint32_t>());
+  EXPECT_GE(max_epoch, 1u);
+}
+
+}  // namespace
+}  // namespace tessera::test
