@@ -1,0 +1,278 @@
+// Display sinks: PNG folder (exact read-back), the bitmap font, and the SDL2 window under a
+// private Xvfb (screenshot with xwd, synthetic input events, present() timing).
+#include <SDL.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+#include "common/image_io.h"
+#include "display/font.h"
+#include "display/sink.h"
+#include "xvfb.h"
+
+namespace tessera::display {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path freshDir(const std::string& name) {
+  fs::path d = fs::temp_directory_path() / ("tessera_sink_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(d);
+  return d;
+}
+
+void setPx(Image8& img, int x, int y, uint8_t r, uint8_t g, uint8_t b, uint8_t a) {
+  uint8_t* p = img.at(x, y);
+  p[0] = r, p[1] = g, p[2] = b, p[3] = a;
+}
+
+// Valid premultiplied pixels (colour <= alpha), including partial and zero alpha.
+Image8 testFrame(int seed) {
+  Image8 img(7, 5);
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const int a = (37 * x + 53 * y + 11 * seed) % 256;
+      setPx(img, x, y, (uint8_t)(a * 3 / 4), (uint8_t)(a / 3), (uint8_t)a, (uint8_t)a);
+    }
+  setPx(img, 0, 0, 0, 0, 0, 0);
+  setPx(img, 1, 0, 255, 0, 10, 255);
+  return img;
+}
+
+TEST(PngSink, WritesNumberedFilesThatReadBackExactly) {
+  const fs::path dir = freshDir("png") / "nested" / "out";  // folder must be created
+  auto sink = makePngSink(dir.string());
+  const Image8 a = testFrame(1), b = testFrame(2);
+  sink->present(a, 0, "status is not burnt into files");
+  sink->present(b, 123456, "");
+  ASSERT_TRUE(fs::exists(dir / "frame_000000.png"));
+  ASSERT_TRUE(fs::exists(dir / "frame_123456.png"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 2);
+  // Exact: un-premultiplying with rounding then re-premultiplying with rounding recovers
+  // every valid 8-bit premultiplied value (the error before the second rounding is < 0.5).
+  EXPECT_EQ(readPng((dir / "frame_000000.png").string()), a);
+  EXPECT_EQ(readPng((dir / "frame_123456.png").string()), b);
+  fs::remove_all(dir.parent_path().parent_path());
+}
+
+TEST(PngSink, CompositesOverBackground) {
+  const fs::path dir = freshDir("pngbg");
+  const std::array<double, 3> bg = {0.2, 0.4, 0.6};
+  auto sink = makePngSink(dir.string(), bg);
+  Image8 img(2, 1);
+  setPx(img, 0, 0, 100, 50, 0, 100);  // partly transparent
+  setPx(img, 1, 0, 0, 0, 0, 0);       // fully transparent: background shows
+  sink->present(img, 7, "");
+  const Image8 got = readPng((dir / "frame_000007.png").string());
+  ASSERT_EQ(got.width, 2);
+  // Exact: expected values c + (1 - a) * bg are computed in the same double arithmetic and
+  // none lies near a rounding tie (checked: fractional parts 0.0-0.3 away from .5).
+  for (int x = 0; x < 2; ++x)
+    for (int ch = 0; ch < 3; ++ch) {
+      const double c = img.at(x, 0)[ch] / 255.0, a = img.at(x, 0)[3] / 255.0;
+      const int want = (int)std::floor(255.0 * (c + (1 - a) * bg[ch]) + 0.5);
+      EXPECT_EQ(got.at(x, 0)[ch], want) << "x=" << x << " ch=" << ch;
+    }
+  EXPECT_EQ(got.at(0, 0)[3], 255);
+  fs::remove_all(dir);
+}
+
+TEST(Font, KnownGlyphPixels) {
+  // 'A' and '1' as drawn by the 5x7 table; '#' is ink.
+  const char* kA[7] = {".###.", "#...#", "#...#", "#...#", "#####", "#...#", "#...#"};
+  const char* k1[7] = {"..#..", ".##..", "..#..", "..#..", "..#..", "..#..", ".###."};
+  for (int y = 0; y < kGlyphH; ++y)
+    for (int x = 0; x < kGlyphW; ++x) {
+      EXPECT_EQ(glyphPixel('A', x, y), kA[y][x] == '#') << "A at " << x << "," << y;
+      EXPECT_EQ(glyphPixel('1', x, y), k1[y][x] == '#') << "1 at " << x << "," << y;
+      EXPECT_FALSE(glyphPixel(' ', x, y));
+      EXPECT_EQ(glyphPixel('\x01', x, y), glyphPixel('?', x, y));  // unprintable -> '?'
+    }
+  EXPECT_FALSE(glyphPixel('A', 5, 0));
+  EXPECT_FALSE(glyphPixel('A', 0, -1));
+  EXPECT_EQ(textWidth("fps 30", 2), 6 * kCellW * 2);
+}
+
+TEST(Font, DrawTextScalesAndClips) {
+  Image8 img(20, 20);
+  const std::array<uint8_t, 4> ink = {200, 100, 50, 255};
+  EXPECT_EQ(drawText(img, 1, 2, "A", ink, 2), 1 + kCellW * 2);
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const bool want = glyphPixel('A', (x - 1) / 2, (y - 2) / 2) && x >= 1 && y >= 2;
+      EXPECT_EQ(img.at(x, y)[3], want ? 255 : 0) << x << "," << y;
+    }
+  // Clipped at every edge without touching memory outside the image (ASan would see it).
+  Image8 small(3, 3);
+  drawText(small, -4, -3, "WWWW", ink, 3);
+  // Pixel (0,0) shows glyph pixel ((0 + 4) / 3, (0 + 3) / 3) of the first 'W'.
+  EXPECT_EQ(small.at(0, 0)[3], glyphPixel('W', 1, 1) ? 255 : 0);
+  EXPECT_EQ(small.at(2, 2)[3], glyphPixel('W', 2, 1) ? 255 : 0);
+  // '#' from x = -3 at scale 4: glyph column 0 (no ink in row 0) lands on x = 0,
+  // column 1 (full) on x = 1..2.
+  Image8 hash(3, 3);
+  drawText(hash, -3, 1, "#", ink, 4);
+  EXPECT_EQ(hash.at(0, 1)[3], 0);
+  EXPECT_EQ(hash.at(2, 2)[3], 255);
+  EXPECT_EQ(hash.at(2, 0)[3], 0);
+}
+
+TEST(WindowSink, UnavailableWithoutDisplayEnvironment) {
+  const char* d = std::getenv("DISPLAY");
+  const std::string saved = d ? d : "";
+  unsetenv("DISPLAY");
+  unsetenv("WAYLAND_DISPLAY");
+  EXPECT_FALSE(windowAvailable());
+  if (d) setenv("DISPLAY", saved.c_str(), 1);
+}
+
+class WindowSinkXvfb : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!testing::onPath("Xvfb")) GTEST_SKIP() << "Xvfb not installed (Debian package xvfb)";
+    std::string err;
+    ASSERT_TRUE(xvfb_.start(err)) << err;
+    setenv("DISPLAY", xvfb_.display().c_str(), 1);
+    unsetenv("WAYLAND_DISPLAY");
+  }
+  void TearDown() override { xvfb_.stop(); }
+  testing::Xvfb xvfb_;
+};
+
+// Opaque window colour of a premultiplied pixel: c + (1 - a) * background (32, 32, 36).
+std::array<int, 3> overDark(int r, int g, int b, int a) {
+  const int bg[3] = {32, 32, 36}, c[3] = {r, g, b};
+  std::array<int, 3> o{};
+  for (int ch = 0; ch < 3; ++ch) o[ch] = c[ch] + (bg[ch] * (255 - a) + 127) / 255;
+  return o;
+}
+
+TEST_F(WindowSinkXvfb, ShowsFrameQuadrantsAndStatusLine) {
+  ASSERT_TRUE(windowAvailable());
+  constexpr int kW = 320, kH = 240;
+  auto sink = makeWindowSink(kW, kH, "tessera sink test");
+  // Quadrants: red, green / blue, half-transparent white (premultiplied 128/128).
+  Image8 frame(kW, kH);
+  const uint8_t q[4][4] = {{255, 0, 0, 255}, {0, 255, 0, 255}, {0, 0, 255, 255}, {128, 128, 128, 128}};
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const uint8_t* c = q[(y >= kH / 2) * 2 + (x >= kW / 2)];
+      setPx(frame, x, y, c[0], c[1], c[2], c[3]);
+    }
+  const std::string status = "FPS 9";
+  sink->present(frame, 1, status);
+  // The window maps asynchronously; let expose events arrive, then present again.
+  for (int i = 0; i < 10; ++i) {
+    sink->poll();
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  sink->present(frame, 2, status);
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  std::string err;
+  const Image8 shot = testing::screenshotRoot(xvfb_.display(), err);
+  ASSERT_FALSE(shot.px.empty()) << err;
+  ASSERT_EQ(shot.width, 1280);
+  const fs::path png = fs::path(TESSERA_BINARY_DIR) / "screenshots" / "window.png";
+  fs::create_directories(png.parent_path());
+  writePng(png.string(), shot);
+
+  // The window is centred on the 1280x1024 screen (no window manager, no border).
+  const int ox = (1280 - kW) / 2, oy = (1024 - kH) / 2;
+  // Tolerance 2 per channel: a 24-bit visual is lossless, but a GL render driver may round
+  // differently when sampling the texture; the quadrants' colours differ by >= 100.
+  auto near = [&](int x, int y, std::array<int, 3> want) {
+    const uint8_t* p = shot.at(ox + x, oy + y);
+    for (int ch = 0; ch < 3; ++ch)
+      if (std::abs(p[ch] - want[ch]) > 2) return false;
+    return true;
+  };
+  const std::array<int, 3> want[4] = {overDark(255, 0, 0, 255), overDark(0, 255, 0, 255),
+                                      overDark(0, 0, 255, 255), overDark(128, 128, 128, 128)};
+  const int strip = kCellH + 4;  // status strip at scale 1 (window narrower than 800)
+  int mismatches = 0;
+  for (int y = 0; y < kH - strip; y += 3)
+    for (int x = 0; x < kW; x += 3)
+      mismatches += !near(x, y, want[(y >= kH / 2) * 2 + (x >= kW / 2)]);
+  EXPECT_EQ(mismatches, 0) << "see " << png;
+  // Just outside the window is not the frame.
+  EXPECT_FALSE(near(-1, 10, want[0]));
+  EXPECT_FALSE(near(kW, kH / 2 + 10, want[3]));
+  // The status text: glyph ink is bright (230), strip background is dimmed (<= 96/256 * 255).
+  const int tx = 2, ty = kH - strip + 2;
+  int ink_errors = 0;
+  for (size_t i = 0; i < status.size(); ++i)
+    for (int gy = 0; gy < kGlyphH; ++gy)
+      for (int gx = 0; gx < kGlyphW; ++gx) {
+        const uint8_t* p = shot.at(ox + tx + (int)i * kCellW + gx, oy + ty + gy);
+        const bool ink = p[0] > 200 && p[1] > 200 && p[2] > 200;
+        const bool dim = p[0] < 100 && p[1] < 100 && p[2] < 100;
+        ink_errors += glyphPixel(status[i], gx, gy) ? !ink : !dim;
+      }
+  EXPECT_EQ(ink_errors, 0) << "status text pixels wrong; see " << png;
+}
+
+TEST_F(WindowSinkXvfb, PollTranslatesInput) {
+  auto sink = makeWindowSink(64, 48, "tessera input test");
+  sink->poll();  // drop window-management events
+  SDL_Event e{};
+  e.type = SDL_KEYDOWN;
+  e.key.keysym.sym = SDLK_2;
+  ASSERT_EQ(SDL_PushEvent(&e), 1) << SDL_GetError();
+  e = {};
+  e.type = SDL_MOUSEMOTION;
+  e.motion.state = SDL_BUTTON_LMASK;
+  e.motion.xrel = 10, e.motion.yrel = -4;
+  SDL_PushEvent(&e);
+  e.motion.xrel = 5, e.motion.yrel = 0;
+  SDL_PushEvent(&e);  // merges with the previous drag
+  e.motion.state = 0;
+  SDL_PushEvent(&e);  // no button held: not a drag
+  e = {};
+  e.type = SDL_MOUSEWHEEL;
+  e.wheel.y = 2;
+  SDL_PushEvent(&e);
+  e = {};
+  e.type = SDL_KEYDOWN;
+  e.key.keysym.sym = SDLK_q;
+  SDL_PushEvent(&e);
+
+  const auto ev = sink->poll();
+  ASSERT_EQ(ev.size(), 4u);
+  EXPECT_EQ(ev[0].quality, "default");
+  // 0.3 degree per pixel; 1e-12 covers double rounding of the products.
+  EXPECT_NEAR(ev[1].orbit_dx, 15 * 0.3, 1e-12);
+  EXPECT_NEAR(ev[1].orbit_dy, -4 * 0.3, 1e-12);
+  EXPECT_NEAR(ev[2].zoom, 0.81, 1e-12);  // two notches in
+  EXPECT_TRUE(ev[3].quit);
+  EXPECT_TRUE(sink->poll().empty());
+}
+
+TEST_F(WindowSinkXvfb, PresentTime1024) {
+  for (const char* driver : {"", "software"}) {
+    if (*driver) setenv("SDL_RENDER_DRIVER", driver, 1);
+    auto sink = makeWindowSink(1024, 1024, "tessera timing");
+    Image8 frame(1024, 1024);
+    for (size_t i = 0; i < frame.px.size(); ++i) frame.px[i] = (uint8_t)(i * 7 / 5);
+    for (size_t i = 3; i < frame.px.size(); i += 4) frame.px[i] = 255;
+    std::vector<double> ms;
+    for (int i = 0; i < 12; ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      sink->present(frame, i, "fps 10.0 latency 120 ms render 50 composite 8 display 6");
+      ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      sink->poll();
+    }
+    std::sort(ms.begin(), ms.end());
+    std::printf("present 1024x1024 (renderer %s): median %.2f ms, min %.2f ms, max %.2f ms\n",
+                *driver ? driver : "default", ms[ms.size() / 2], ms.front(), ms.back());
+    // Not a timing test: a loose bound that only catches a pathological slowdown.
+    EXPECT_LT(ms[ms.size() / 2], 1000.0);
+    sink.reset();
+    unsetenv("SDL_RENDER_DRIVER");
+  }
+}
+
+}  // namespace
+}  // namespace tessera::display
