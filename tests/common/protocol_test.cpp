@@ -270,7 +270,10 @@ TEST(Protocol, PiecePixelCountMustMatchActiveArea) {
       std::invalid_argument);
   // A peer that lies: claims a larger active rect than its pixels cover.
   Bytes m = encode(p, 1, Codec::None);
-  putLE(m, kHeaderSize + 8 + 16 + 12, 10, 4);  // active.h 9 -> 10
+  // Piece payload: epoch, renderer, brick (u32 each), region (4 x i32), active x, y, w, h.
+  const size_t active_h = kHeaderSize + 12 + 16 + 12;
+  ASSERT_EQ(uint8_t(m[active_h]), 9);
+  putLE(m, active_h, 10, 4);  // active.h 9 -> 10
   reseal(m);
   auto r = decodePiece(m);
   ASSERT_FALSE(r);
