@@ -9,7 +9,7 @@ int main(int argc, char** argv) {
   using namespace tessera;
   auto log = setupLogging("master");
   CLI::App app{"Tessera master: drives frames through the render farm"};
-  std::string scene_path, codec = "lzo", format = "rgba8", base;
+  std::string scene_path, codec = "lzo", format = "rgba16f", base;
   master::MasterOptions opt;
   app.add_option("scene", scene_path, "scene file (default: the built-in scene)")->envname("TESSERA_SCENE");
   app.add_option("--renderers", opt.renderers, "renderers to wait for")->envname("TESSERA_RENDERERS")->check(CLI::Range(1, 1024));
@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
   app.add_option("--frames", opt.frames, "frames to render (-1: the scene's orbit; 0: interactive)")->envname("TESSERA_FRAMES");
   app.add_option("--window", opt.window, "frames in flight")->envname("TESSERA_IN_FLIGHT")->check(CLI::Range(1, 64));
   app.add_option("--codec", codec, "none | lzo | lz4 | zstd")->envname("TESSERA_CODEC");
-  app.add_option("--format", format, "pixel format of pieces: rgba8 | rgba16f | rgba32f");
+  app.add_option("--format", format, "pixel format of pieces: rgba16f (default, within 1/255) | rgba8 | rgba32f")->envname("TESSERA_FORMAT");
   app.add_option("--metrics", opt.metrics_path, "JSON-lines metrics file")->envname("TESSERA_METRICS");
   app.add_option("--endpoints", base, "endpoint base (ipc://DIR | tcp://HOST:PORT)")->envname("TESSERA_ENDPOINTS");
   app.add_option("--heartbeat-timeout", opt.heartbeat_timeout_s, "seconds of silence before a stage counts as lost");

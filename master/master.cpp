@@ -69,6 +69,8 @@ class Master {
       }
       metrics_.flushOlderThan(Clock::now() - std::chrono::milliseconds(500));
     }
+    // Stats travel apart from FrameDone: give the last frames' reports a moment to land.
+    for (auto t = Clock::now(); metrics_.pending() > 0 && msSince(t) < 1000;) pollControl(20);
     metrics_.flushAll();
     shutdown(stop && *stop ? "stopped" : "all frames done");
     return 0;

@@ -21,7 +21,9 @@ struct MasterOptions {
   int frames = -1;          // -1: the scene's orbit frames; 0: interactive (until the display quits)
   int window = 3;           // frames in flight
   Codec codec = Codec::Lzo;
-  proto::PixelFormat format = proto::PixelFormat::RGBA8;
+  // rgba16f: rgba8 pieces round twice before the final rounding (up to 1.5 levels),
+  // which breaks the 1/255 sort-last contract; half floats keep it (see README).
+  proto::PixelFormat format = proto::PixelFormat::RGBA16F;
   bool balance = true;      // re-split compositor regions by active pixels every frame
   std::string metrics_path; // JSON lines; "" = none
   double heartbeat_timeout_s = 3.0;

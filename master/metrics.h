@@ -26,6 +26,7 @@ class Metrics {
   void flushOlderThan(std::chrono::steady_clock::time_point t);
   void flushAll();
   uint64_t framesDone() const { return frames_done_; }
+  size_t pending() const { return frames_.size(); }  // frames whose line is not written yet
 
   // The JSON object of one frame (exposed for tests).
   static nlohmann::json summarize(const std::vector<proto::StageStats>& renderers,

@@ -52,3 +52,29 @@ INSTANTIATE_TEST_SUITE_P(Shapes, FarmMatchesOneProcess,
 
 }  // namespace
 }  // namespace tessera::test
+
+namespace tessera::test {
+namespace {
+
+// rgba8 pieces (the smallest on the wire) round each brick's colour and alpha before
+// compositing and once more at the end: |error| < 1.5 levels, so 2/255 is the bound
+// this mode can promise (the default rgba16f keeps the 1/255 contract, above).
+TEST(FarmPixelFormats, Rgba8PiecesStayWithinTwoLevels) {
+  FarmDir dir("rgba8");
+  auto scene = dir.writeScene(4);
+  auto run = dir.runFarm(scene, 4, 1, 2, 120, "--env TESSERA_FORMAT=rgba8");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(readPng(dir.frame(k).string()), dir.reference(scene, k)), 2);
+}
+
+TEST(FarmPixelFormats, Rgba32fPiecesKeepTheContract) {
+  FarmDir dir("rgba32f");
+  auto scene = dir.writeScene(4);
+  auto run = dir.runFarm(scene, 4, 2, 2, 120, "--env TESSERA_FORMAT=rgba32f --env TESSERA_CODEC=lz4");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  // 1/255: float pieces, one rounding at the end.
+  for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(readPng(dir.frame(k).string()), dir.reference(scene, k)), 1);
+}
+
+}  // namespace
+}  // namespace tessera::test
