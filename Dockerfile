@@ -5,7 +5,7 @@ ENV DEBIAN_FRONTEND=noninteractive
 WORKDIR /opt/tessera/src
 # Packages first, in their own layer, so a source edit does not reinstall them.
 COPY setup.sh ./
-RUN ./setup.sh && rm -rf /var/lib/apt/lists/*
+RUN TESSERA_MINIMAL=1 ./setup.sh deps && rm -rf /var/lib/apt/lists/*
 COPY . .
 # TESSERA_NATIVE=OFF: -march=native would tie the image to the CPU of the build host.
 RUN cmake -S . -B /opt/tessera/build -G Ninja -DCMAKE_BUILD_TYPE=Release -DTESSERA_NATIVE=OFF \

@@ -1,7 +1,12 @@
 #!/usr/bin/env bash
-# Installs every Debian 12 package Tessera's build, tests and benchmarks need.
-# Idempotent; run as root (or with sudo available).
+# Sets up Tessera on Debian 12: installs every package the build, tests and benchmarks
+# need (idempotent; as root, or with sudo), configures and builds into build/, then:
+#   ./setup.sh          set up and build only
+#   ./setup.sh run      ... and run the farm (compose.yaml) on the built-in default scene
+#   ./setup.sh test     ... and run every test (ctest, fuzzers for a bounded time, compose check)
+# TESSERA_MINIMAL=1 installs only what building and running need (the Docker image).
 set -euo pipefail
+cd "$(dirname "$0")"
 SUDO=""
 [ "$(id -u)" -eq 0 ] || SUDO="sudo"
 PKGS=(
@@ -10,12 +15,35 @@ PKGS=(
   libosmesa6-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev
   libpng-dev libsdl2-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  gnuplot-nox xvfb x11-apps imagemagick clang
-  docker-compose
 )
+# Tests, fuzzing, benchmarks' plots, the window test under Xvfb, compose validation.
+[ "${TESSERA_MINIMAL:-0}" = 1 ] || PKGS+=(gnuplot-nox xvfb x11-apps imagemagick clang docker-compose procps)
 missing=()
 for p in "${PKGS[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
 if [ ${#missing[@]} -gt 0 ]; then
   $SUDO apt-get update -q
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
+
+mode=${1:-build}
+[ "$mode" = deps ] && exit 0
+BUILD=${BUILD:-build}
+werror=OFF
+[ "${CI:-}" = true ] || [ "$mode" = test ] && werror=ON
+cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release -DTESSERA_WERROR=$werror >/dev/null
+cmake --build "$BUILD" -j"$(nproc)"
+
+case "$mode" in
+  build) echo "built: $BUILD/bin" ;;
+  run)
+    shift || true
+    echo "running the farm on the built-in scene; frames go to out/ (a window opens if DISPLAY is set)"
+    exec "$BUILD/bin/tessera-up" compose.yaml "$@"
+    ;;
+  test)
+    docker-compose -f compose.yaml config -q
+    tests/fuzz/run.sh "${TESSERA_FUZZ_SECONDS:-15}"
+    cd "$BUILD" && ctest --output-on-failure -j2 --timeout 600
+    ;;
+  *) echo "usage: $0 [build|run|test|deps]" >&2; exit 2 ;;
+esac
