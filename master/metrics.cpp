@@ -10,7 +10,7 @@
 
 namespace tessera::master {
 
-Metrics::Metrics(const std::string& path) {
+Metrics::Metrics(const std::string& path) : start_(std::chrono::steady_clock::now()) {
   if (path.empty()) return;
   auto dir = std::filesystem::path(path).parent_path();
   if (!dir.empty()) std::filesystem::create_directories(dir);
@@ -99,16 +99,13 @@ nlohmann::json Metrics::summarize(const std::vector<proto::StageStats>& renderer
 }
 
 void Metrics::write(uint64_t frame, Frame& f) {
-  auto now = std::chrono::steady_clock::now();
-  if (frames_done_ == 0) first_done_ = now;
   ++frames_done_;
   auto j = summarize(f.r, f.c, f.d, f.latency_ms);
   j["frame"] = frame;
   j["epoch"] = f.epoch;
   j["master_dropped"] = f.master_dropped;
-  double interval = std::chrono::duration<double, std::milli>(now - last_done_).count();
-  j["interval_ms"] = frames_done_ > 1 ? interval : 0.0;
-  last_done_ = now;
+  // When FrameDone arrived, from the first frame's: throughput = frames / span.
+  j["done_ms"] = std::chrono::duration<double, std::milli>(f.done_at - start_).count();
   spdlog::info("frame={} latency_ms={:.1f} render_ms={:.1f} composite_ms={:.1f} display_ms={:.1f} bytes_raw={} "
                "bytes_encoded={} render_imbalance={:.2f} composite_imbalance={:.2f}",
                frame, f.latency_ms, j["render_ms_max"].get<double>(), j["composite_ms_max"].get<double>(),

@@ -49,7 +49,7 @@ class Metrics {
   std::ofstream out_;
   std::map<uint64_t, Frame> frames_;
   uint64_t frames_done_ = 0;
-  std::chrono::steady_clock::time_point first_done_{}, last_done_{};
+  std::chrono::steady_clock::time_point start_;
 };
 
 }  // namespace tessera::master
