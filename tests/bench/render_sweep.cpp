@@ -1,0 +1,257 @@
+// tessera-sweep: speed against error of the CPU ray caster over step size, early-termination
+// threshold and empty-space skipping, on the built-in generator scenes. Every configuration
+// is judged against the reference render (double precision, step L0/16), which is cached as
+// raw float in the output folder. Writes sweep.csv, PNG plots (gnuplot) and a markdown table.
+// A benchmark, not a timed test: exits 2 only when a counting invariant breaks.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/image_io.h"
+#include "common/scene.h"
+#include "render_sweep_report.h"
+#include "renderer/raycaster.h"
+
+namespace {
+
+using namespace tessera;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+// The transfer function and camera come from a shipped scene file with this generator if
+// there is one, else from the built-in default scene; the volume size is always ours.
+Scene sceneFor(const std::string& generator, int size, const std::string& scenes_dir) {
+  if (!scenes_dir.empty() && fs::is_directory(scenes_dir)) {
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(scenes_dir))
+      if (e.path().extension() == ".yaml" || e.path().extension() == ".yml") files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    for (const auto& f : files) {
+      Scene s;
+      try {
+        s = loadScene(f.string());
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "tessera-sweep: skipping %s: %s\n", f.c_str(), e.what());
+        continue;
+      }
+      auto* g = std::get_if<GeneratorSpec>(&s.volume);
+      if (g && g->name == generator) {
+        g->size = size;
+        return s;
+      }
+    }
+  }
+  Scene s = defaultScene();
+  s.volume = GeneratorSpec{generator, size, 1, {1, 1, 1}};
+  return s;
+}
+
+// Cache key: anything that changes the reference image changes the file name.
+std::string referenceKey(const std::string& name, const Scene& s, int w, int h) {
+  std::ostringstream o;
+  const auto& g = std::get<GeneratorSpec>(s.volume);
+  o << g.name << g.size << g.seed << g.spacing[0] << g.spacing[1] << g.spacing[2];
+  for (const auto& p : s.tf.points()) o << p.s << p.r << p.g << p.b << p.a;
+  const Camera& c = s.camera;
+  o << c.eye.x << c.eye.y << c.eye.z << c.target.x << c.target.y << c.target.z << c.up.x << c.up.y << c.up.z << c.fov
+    << c.orthographic << c.height;
+  uint64_t hash = 1469598103934665603ull;  // FNV-1a
+  for (char ch : o.str()) hash = (hash ^ (unsigned char)ch) * 1099511628211ull;
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "ref-%s-%d-%dx%d-%016llx.f32", name.c_str(), g.size, w, h, (unsigned long long)hash);
+  return buf;
+}
+
+// Reads what writeRawF32 wrote; false if missing or not this size.
+bool readRawF32(const std::string& path, int w, int h, ImageF& img) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[8];
+  uint32_t dims[2];
+  if (!in.read(magic, 8) || std::memcmp(magic, "TSRAWF32", 8) != 0) return false;
+  if (!in.read(reinterpret_cast<char*>(dims), 8) || dims[0] != uint32_t(w) || dims[1] != uint32_t(h)) return false;
+  img = ImageF(w, h);  // little-endian host, like every machine the farm runs on
+  return bool(in.read(reinterpret_cast<char*>(img.px.data()), std::streamsize(img.px.size() * sizeof(float))));
+}
+
+void parseImage(const std::string& s, int& w, int& h) {
+  char x = 0, rest = 0;
+  if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &rest) != 3 || (x != 'x' && x != 'X') || w < 1 || h < 1 ||
+      w > 16384 || h > 16384)
+    throw std::invalid_argument("--image: expected WxH, got '" + s + "'");
+}
+
+std::string clockText(double ms) {
+  const long s = long(ms / 1000 + 0.5);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%ld:%02ld", s / 60, s % 60);
+  return buf;
+}
+
+struct Config {
+  double step_l0, et;
+  bool skip;
+};
+
+int run(int argc, char** argv) {
+  CLI::App app{"tessera-sweep: ray-caster speed vs error over step, early termination and skipping"};
+  int size = 256, repeat = 3, threads = 0, w = 1024, h = 1024;
+  std::string image = "1024x1024", out_dir = "bench-out", scenes_dir = TESSERA_SOURCE_DIR "/scenes";
+  std::vector<std::string> names{"hollow-shell", "marschner-lobb", "noise-cloud"};
+  bool no_plot = false;
+  app.add_option("--size", size, "generated volume edge in voxels")->capture_default_str()->check(CLI::Range(2, 2048));
+  app.add_option("--image", image, "image size WxH")->capture_default_str();
+  app.add_option("--repeat", repeat, "renders per configuration; the best wall time counts")
+      ->capture_default_str()->check(CLI::Range(1, 100));
+  app.add_option("--threads", threads, "ray-casting threads (0: all cores)")->check(CLI::NonNegativeNumber);
+  app.add_option("--out", out_dir, "output folder (CSV, plots, cached references)")->capture_default_str();
+  app.add_option("--scenes", names, "generator scenes to sweep")->capture_default_str();
+  app.add_option("--scenes-dir", scenes_dir, "shipped scene files (transfer function, camera)")->capture_default_str();
+  app.add_flag("--no-plot", no_plot, "do not run gnuplot");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "tessera-sweep: %s (see --help)\n", e.what());
+    return 1;
+  }
+  parseImage(image, w, h);
+  fs::create_directories(out_dir);
+
+  const double kDefaultEt = namedQuality("default").early_termination;
+  std::vector<Config> configs;
+  for (double step : {0.5, 1.0, 2.0, 4.0})
+    for (double et : {0.95, 0.99, kDefaultEt, 2.0})
+      for (bool skip : {false, true}) configs.push_back({step, et, skip});  // off first: on is compared to it
+  const size_t total = configs.size() * names.size();
+
+  std::vector<bench::SweepRow> rows;
+  int violations = 0;
+  auto violation = [&](const std::string& what) {
+    std::fprintf(stderr, "tessera-sweep: INVARIANT BROKEN: %s\n", what.c_str());
+    ++violations;
+  };
+  double sweep_ms = 0;
+  size_t done = 0;
+  for (const std::string& name : names) {
+    const Scene scene = sceneFor(name, size, scenes_dir);
+    const Camera cam = scene.camera;
+    auto t_gen = Clock::now();
+    auto vol = std::make_shared<const Volume>(loadVolume(scene));
+    const renderer::Raycaster rc(vol, scene.tf);
+    std::fprintf(stderr, "[%s] %d^3 volume (tf/camera from %s) ready in %.0f ms\n", name.c_str(), size,
+                 scene.path.empty() ? "the default scene" : scene.path.c_str(), msSince(t_gen));
+
+    const std::string ref_path = out_dir + "/" + referenceKey(name, scene, w, h);
+    ImageF ref;
+    if (readRawF32(ref_path, w, h, ref)) {
+      std::fprintf(stderr, "[%s] reference from cache %s\n", name.c_str(), ref_path.c_str());
+    } else {
+      std::fprintf(stderr, "[%s] rendering the reference (double, step L0/16) at %dx%d...\n", name.c_str(), w, h);
+      renderer::RenderOptions ropt;
+      ropt.quality = namedQuality("reference");
+      ropt.threads = threads;
+      const auto t0 = Clock::now();
+      ref = rc.render(cam, w, h, renderer::wholeVolume(*vol), ropt);
+      writeRawF32(ref_path, ref);
+      std::fprintf(stderr, "[%s] reference took %s, cached as %s\n", name.c_str(), clockText(msSince(t0)).c_str(),
+                   ref_path.c_str());
+    }
+
+    ImageF no_skip_img;
+    uint64_t grid_total = 0;  // samples on the ray grid of the current step, however spent
+    for (const Config& c : configs) {
+      renderer::RenderOptions opt;
+      opt.threads = threads;
+      opt.quality.name = "custom";
+      opt.quality.step = c.step_l0 * kL0;
+      opt.quality.early_termination = c.et;
+      opt.quality.skip_empty = c.skip;
+      std::vector<double> times;
+      ImageF img;
+      renderer::RenderStats st;
+      const auto t_cfg = Clock::now();
+      for (int r = 0; r < repeat; ++r) {
+        st = {};
+        const auto t0 = Clock::now();
+        img = rc.render(cam, w, h, renderer::wholeVolume(*vol), opt, &st);
+        times.push_back(msSince(t0));
+      }
+      sweep_ms += msSince(t_cfg);
+      std::sort(times.begin(), times.end());
+
+      bench::SweepRow row;
+      row.scene = name;
+      row.size = size;
+      row.width = w;
+      row.height = h;
+      row.step_l0 = c.step_l0;
+      row.et = c.et;
+      row.skip = c.skip;
+      row.is_default = c.step_l0 == 1.0 && c.et == kDefaultEt && c.skip;
+      row.ms_best = times.front();
+      row.ms_median = times[times.size() / 2];
+      row.samples = st.samples;
+      row.skipped = st.samples_skipped;
+      row.terminated = st.samples_terminated;
+      const ImageError e = compare(img, ref);
+      row.max_abs = e.max_abs;
+      row.rmse = e.rmse;
+      row.psnr = e.psnr;
+      const std::string id = name + " step " + std::to_string(c.step_l0) + " ET " + bench::etLabel(c.et) + " skip " +
+                             (c.skip ? "on" : "off");
+      if (std::isnan(e.psnr) || std::isnan(e.max_abs)) violation(id + ": non-finite image");
+      if (!c.skip && row.skipped != 0) violation(id + ": samples skipped with skipping off");
+      if (c.et > 1 && row.terminated != 0) violation(id + ": samples terminated with early termination off");
+      if (row.samples == 0) violation(id + ": no samples taken");
+      const uint64_t grid = row.samples + row.skipped + row.terminated;
+      if (c.et == 0.95 && !c.skip) grid_total = grid;  // first config of each step
+      else if (grid != grid_total)
+        std::fprintf(stderr, "tessera-sweep: note: %s: %llu grid samples, %llu with skipping off at ET 0.95\n",
+                     id.c_str(), (unsigned long long)grid, (unsigned long long)grid_total);
+      if (c.skip) row.skip_vs_noskip = compare(img, no_skip_img).max_abs;
+      else no_skip_img = std::move(img);
+      rows.push_back(row);
+
+      ++done;
+      const double eta = sweep_ms / double(done) * double(total - done);
+      std::fprintf(stderr, "[%zu/%zu] %-14s step %-3g ET %-9s skip %-3s %8.1f ms %7.1f Msamples PSNR %6.2f dB  ETA %s\n",
+                   done, total, name.c_str(), c.step_l0, bench::etLabel(c.et).c_str(), c.skip ? "on" : "off",
+                   row.ms_best, double(row.samples) / 1e6, row.psnr, clockText(eta).c_str());
+    }
+  }
+
+  bench::writeCsv(out_dir + "/sweep.csv", rows);
+  std::fprintf(stderr, "wrote %s/sweep.csv\n", out_dir.c_str());
+  if (!no_plot && bench::plot(out_dir, rows, names))
+    std::fprintf(stderr, "wrote %s/render-sweep.png and %s/render-sweep-speedup.png\n", out_dir.c_str(),
+                 out_dir.c_str());
+  std::printf("%s\n%s", bench::markdownTable(rows).c_str(), bench::defaultSummary(rows).c_str());
+  if (violations) {
+    std::fprintf(stderr, "tessera-sweep: %d invariant(s) broken\n", violations);
+    return 2;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tessera-sweep: error: %s\n", e.what());
+    return 1;
+  }
+}
