@@ -20,6 +20,7 @@ namespace tessera::renderer {
 namespace {
 
 constexpr int kLanes = 8;
+constexpr int64_t kMinRun = 32;
 // Skipped samples must lie this far (voxels) inside an empty node: float positions differ
 // from the exact ones by < 1e-3 voxel for volumes up to 2048^3, so they stay inside.
 constexpr double kSkipMargin = 1.0 / 64;
@@ -30,11 +31,11 @@ constexpr int64_t kMaxSamples = int64_t{1} << 24;
 struct Consts {
   float u0[3], du[3], umax[3];
   int imax[3];
-  int stride_y, stride_z;  // linear index strides
-  int off_y, off_z;        // offset of the +1 corner in y and z (0 on one-voxel axes)
-  const uint16_t* vol;     // quantized; a 32-bit read at i holds voxels i and i+1
+  int nb_x, nb_xy;         // bricks per row / per slice
+  const uint16_t* vol;     // bricked (VolumeAccel); a 32-bit read at i holds voxels i and i+1
   const float* rgba;
   const int32_t* nonzero;
+  int first_nz, last_nz;  // TfTable::firstNonzero/lastNonzero
 };
 
 // Table position of a scalar in quantized units [0, 65535].
@@ -53,16 +54,25 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, __m128& acc,
     i[a] = _mm256_min_epi32(_mm256_cvttps_epi32(u), _mm256_set1_epi32(c.imax[a]));
     f[a] = _mm256_sub_ps(u, _mm256_cvtepi32_ps(i[a]));
   }
-  const __m256i idx = _mm256_add_epi32(
-      i[0], _mm256_add_epi32(_mm256_mullo_epi32(i[1], _mm256_set1_epi32(c.stride_y)),
-                             _mm256_mullo_epi32(i[2], _mm256_set1_epi32(c.stride_z))));
+  // Brick of the lower corner and position inside it; all eight corners are in that brick.
+  const __m256i seven = _mm256_set1_epi32(7);
+  const __m256i brick = _mm256_add_epi32(
+      _mm256_srli_epi32(i[0], 3),
+      _mm256_add_epi32(_mm256_mullo_epi32(_mm256_srli_epi32(i[1], 3), _mm256_set1_epi32(c.nb_x)),
+                       _mm256_mullo_epi32(_mm256_srli_epi32(i[2], 3), _mm256_set1_epi32(c.nb_xy))));
+  const __m256i local = _mm256_add_epi32(
+      _mm256_and_si256(i[0], seven),
+      _mm256_add_epi32(_mm256_mullo_epi32(_mm256_and_si256(i[1], seven), _mm256_set1_epi32(VolumeAccel::kEdge)),
+                       _mm256_mullo_epi32(_mm256_and_si256(i[2], seven),
+                                          _mm256_set1_epi32(VolumeAccel::kEdge * VolumeAccel::kEdge))));
+  const __m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(brick, _mm256_set1_epi32(VolumeAccel::kBrickSize)), local);
   // Four 32-bit gathers (scale 2 on uint16 data) fetch the eight corners as x pairs.
-  const int* p = reinterpret_cast<const int*>(c.vol);
+  constexpr int oy = VolumeAccel::kEdge, oz = VolumeAccel::kEdge * VolumeAccel::kEdge;
   const auto* b = c.vol;
-  const __m256i g00 = _mm256_i32gather_epi32(p, idx, 2);
-  const __m256i g10 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b + c.off_y), idx, 2);
-  const __m256i g01 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b + c.off_z), idx, 2);
-  const __m256i g11 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b + c.off_y + c.off_z), idx, 2);
+  const __m256i g00 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b), idx, 2);
+  const __m256i g10 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b + oy), idx, 2);
+  const __m256i g01 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b + oz), idx, 2);
+  const __m256i g11 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b + oy + oz), idx, 2);
   const __m256i low = _mm256_set1_epi32(0xFFFF);
   auto lerpx = [&](__m256i g) {
     const __m256 v0 = _mm256_cvtepi32_ps(_mm256_and_si256(g, low));
@@ -75,8 +85,11 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, __m128& acc,
   ft = _mm256_min_ps(_mm256_max_ps(ft, _mm256_setzero_ps()), _mm256_set1_ps((float)(TfTable::kEntries - 1)));
   const __m256i ti = _mm256_min_epi32(_mm256_cvttps_epi32(ft), _mm256_set1_epi32(TfTable::kEntries - 2));
   const __m256 w = _mm256_sub_ps(ft, _mm256_cvtepi32_ps(ti));
-  const __m256i nz = _mm256_i32gather_epi32(c.nonzero, ti, 4);
-  int mask = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(nz, _mm256_setzero_si256())));
+  // Range filter instead of a gather of c.nonzero: lanes outside [first, last] have
+  // exactly zero alpha; lanes inside with zero alpha composite as exact no-ops.
+  const __m256i out_of_range = _mm256_or_si256(_mm256_cmpgt_epi32(_mm256_set1_epi32(c.first_nz), ti),
+                                               _mm256_cmpgt_epi32(ti, _mm256_set1_epi32(c.last_nz)));
+  int mask = ~_mm256_movemask_ps(_mm256_castsi256_ps(out_of_range));
   mask &= (1 << lanes) - 1;
   if (mask == 0) return lanes;  // zero-alpha samples leave acc bit-identical
   alignas(32) int tis[kLanes];
@@ -112,8 +125,10 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4]
       i[a] = std::min((int)u, c.imax[a]);
       f[a] = u - (float)i[a];
     }
-    const uint16_t* p = c.vol + i[0] + (size_t)i[1] * c.stride_y + (size_t)i[2] * c.stride_z;
-    const int oy = c.off_y, oz = c.off_z;
+    const size_t brick = (size_t)(i[0] >> 3) + (size_t)(i[1] >> 3) * c.nb_x + (size_t)(i[2] >> 3) * c.nb_xy;
+    const uint16_t* p = c.vol + brick * VolumeAccel::kBrickSize + (i[0] & 7) +
+                        VolumeAccel::kEdge * ((i[1] & 7) + VolumeAccel::kEdge * (i[2] & 7));
+    constexpr int oy = VolumeAccel::kEdge, oz = VolumeAccel::kEdge * VolumeAccel::kEdge;
     auto lx = [&](const uint16_t* q) { return lerp((float)q[0], (float)q[1], f[0]); };
     const float s = lerp(lerp(lx(p), lx(p + oy), f[1]), lerp(lx(p + oz), lx(p + oy + oz), f[1]), f[2]);
     const float ft = std::min(std::max(s * kToTable, 0.0f), (float)(TfTable::kEntries - 1));
@@ -212,13 +227,13 @@ void castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
     c.umax[a] = (float)(v.dims[a] - 1);
     c.imax[a] = std::max(0, v.dims[a] - 2);
   }
-  c.stride_y = v.dims[0];
-  c.stride_z = v.dims[0] * v.dims[1];
-  c.off_y = v.dims[1] > 1 ? c.stride_y : 0;
-  c.off_z = v.dims[2] > 1 ? c.stride_z : 0;
-  c.vol = ctx.accel->quantized.data();
+  c.nb_x = ctx.accel->nb[0];
+  c.nb_xy = ctx.accel->nb[0] * ctx.accel->nb[1];
+  c.vol = ctx.accel->bricked.data();
   c.rgba = ctx.table->rgba();
   c.nonzero = ctx.table->nonzero();
+  c.first_nz = ctx.table->firstNonzero();
+  c.last_nz = ctx.table->lastNonzero();
   const float et = ctx.early_termination;
   const bool skip = ctx.skip && ctx.emptiness;
 
@@ -229,28 +244,60 @@ void castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
 #endif
   int64_t k = span.k_first;
   const int64_t k_end = span.k_end;
+  // Two phases per batch: the leaper (branchy, scalar) lists the runs to sample, then the
+  // packets run over that list; keeping them apart lets each loop stay tight and predictable.
+  struct Run {
+    int64_t begin, end;
+    uint64_t skipped_before_end;  // batch skip count when this run was last extended
+  };
+  constexpr int kBatch = 16;
+  Run runs[kBatch];
   std::optional<Leaper> leaper;
   if (skip) leaper.emplace(span, v, ctx.accel->hierarchy, *ctx.emptiness);
   while (k < k_end) {
-    int64_t run_end = k_end;
-    if (leaper) {
-      const int64_t next = leaper->step(k, k_end, run_end);
-      if (next > k) {
-        counts.skipped += (uint64_t)(next - k);
-        k = next;
-        continue;
+    int n = 0;
+    uint64_t batch_skipped = 0;
+    if (!leaper) {
+      runs[n++] = Run{k, k_end, 0};
+      k = k_end;
+    } else {
+      while (k < k_end && n < kBatch) {
+        int64_t run_end = k_end;
+        const int64_t next = leaper->step(k, k_end, run_end);
+        if (next > k) {
+          batch_skipped += (uint64_t)(next - k);
+          k = next;
+          continue;
+        }
+        // Whole packets up to the block exit, at least kMinRun samples: extra samples are
+        // harmless (just not skipped) and cost less than another leaper decision (measured:
+        // 32 is ~11% faster than 8 on the 256^3 hollow shell).
+        run_end = std::min(k_end, k + (std::max<int64_t>(kMinRun, run_end - k) + kLanes - 1) / kLanes * kLanes);
+        if (n > 0 && runs[n - 1].end == k) {
+          runs[n - 1].end = run_end;
+          runs[n - 1].skipped_before_end = batch_skipped;
+        } else {
+          runs[n++] = Run{k, run_end, batch_skipped};
+        }
+        k = run_end;
       }
-      // Whole packets up to the block exit (extra samples are harmless, just not skipped).
-      run_end = std::min(k_end, k + (std::max<int64_t>(1, run_end - k) + kLanes - 1) / kLanes * kLanes);
     }
-    bool done = false;
-    while (k < run_end) {
-      const int lanes = (int)std::min<int64_t>(kLanes, run_end - k);
-      const int used = packet(c, k, lanes, et, acc, done);
-      counts.taken += (uint64_t)used;
-      k += used;
+    counts.skipped += batch_skipped;
+    for (int r = 0; r < n; ++r) {
+      bool done = false;
+      for (int64_t j = runs[r].begin; j < runs[r].end;) {
+        const int lanes = (int)std::min<int64_t>(kLanes, runs[r].end - j);
+        const int used = packet(c, j, lanes, et, acc, done);
+        counts.taken += (uint64_t)used;
+        j += used;
+        if (done) {
+          // Everything after j counts as terminated, including what the leaper had passed over.
+          counts.skipped -= batch_skipped - runs[r].skipped_before_end;
+          counts.terminated += (uint64_t)(k_end - j);
+          break;
+        }
+      }
       if (done) {
-        counts.terminated += (uint64_t)(k_end - k);
         k = k_end;
         break;
       }

@@ -27,8 +27,10 @@ bool boxInterval(const VolumeGeometry& g, const Ray& r, const BrickBox& b, doubl
       if (!(o >= p_lo && o < p_hi)) return false;
       continue;
     }
-    // Division (not a reciprocal) keeps t monotone in the plane position under rounding.
-    const double t_lo = (p_lo - o) / d, t_hi = (p_hi - o) / d;
+    // (p - o) * (1/d) is monotone in p under rounding, and every box uses the same 1/d,
+    // so shared faces give identical parameters.
+    const double inv = 1.0 / d;
+    const double t_lo = (p_lo - o) * inv, t_hi = (p_hi - o) * inv;
     t_in = std::max(t_in, d > 0 ? t_lo : t_hi);
     t_out = std::min(t_out, d > 0 ? t_hi : t_lo);
   }
@@ -53,7 +55,12 @@ bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, doubl
   double w_in, w_out, b_in, b_out;
   if (!boxInterval(g, r, whole, w_in, w_out)) return false;
   if (!(w_out > 0)) return false;
-  if (!boxInterval(g, r, brick, b_in, b_out)) return false;
+  if (brick == whole) {
+    b_in = w_in;
+    b_out = w_out;
+  } else if (!boxInterval(g, r, brick, b_in, b_out)) {
+    return false;
+  }
   span.t0 = std::max(w_in, 0.0);
   b_in = std::max(b_in, span.t0);
   b_out = std::min(b_out, w_out);

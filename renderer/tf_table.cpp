@@ -15,7 +15,10 @@ TfTable::TfTable(const TransferFunction& tf, double step) : entries_(kEntries), 
     const double a = correctOpacity(c[3], step);
     entries_[j] = Entry{{(float)(a * c[0]), (float)(a * c[1]), (float)(a * c[2]), (float)a}};
   }
-  for (int j = 0; j + 1 < kEntries; ++j) nonzero_[j] = (entries_[j].v[3] > 0 || entries_[j + 1].v[3] > 0) ? 1 : 0;
+  for (int j = 0; j + 1 < kEntries; ++j) {
+    nonzero_[j] = (entries_[j].v[3] > 0 || entries_[j + 1].v[3] > 0) ? 1 : 0;
+    if (nonzero_[j]) first_nonzero_ = std::min(first_nonzero_, j), last_nonzero_ = j;
+  }
 }
 
 void TfTable::lookup(float s, float out[4]) const {

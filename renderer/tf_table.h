@@ -20,6 +20,10 @@ class TfTable {
   // nonzero()[j] != 0 iff entry j or j+1 has alpha > 0: interpolating between two
   // zero-alpha entries gives exactly zero, so such samples can be passed over.
   const int32_t* nonzero() const { return nonzero_.data(); }
+  // Interpolation starting at entry j can give alpha > 0 only for j in [first, last]
+  // (first > last if the table is all zero): a cheap conservative filter for the kernels.
+  int firstNonzero() const { return first_nonzero_; }
+  int lastNonzero() const { return last_nonzero_; }
 
   // Scalar reference of the lookup the kernels do (same float operations).
   void lookup(float s, float out[4]) const;
@@ -35,6 +39,7 @@ class TfTable {
   };
   std::vector<Entry> entries_;
   std::vector<int32_t> nonzero_;
+  int first_nonzero_ = kEntries, last_nonzero_ = -1;
 };
 
 }  // namespace tessera::renderer

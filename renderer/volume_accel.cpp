@@ -4,14 +4,41 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <thread>
+#include <algorithm>
 
 namespace tessera::renderer {
 
-VolumeAccel::VolumeAccel(const Volume& v) : hierarchy(v), quantized(v.voxelCount() + 8, 0) {
+VolumeAccel::VolumeAccel(const Volume& v) : hierarchy(v), nb(hierarchy.dims(0)) {
   // Quantization error <= 0.5/65535 of the scalar: the table margin in TfTable::rangeIsEmpty
   // (2/4095) keeps empty-space decisions conservative for quantized samples.
-  const size_t n = v.voxelCount();
-  for (size_t i = 0; i < n; ++i) quantized[i] = (uint16_t)(std::fmin(std::fmax(v.values[i], 0.0f), 1.0f) * kQuantScale + 0.5f);
+  constexpr int B = MinMaxHierarchy::kBlock;
+  bricked.assign((size_t)kBrickSize * nb[0] * nb[1] * nb[2] + 8, 0);
+  auto fill = [&](int bz0, int bz1) {
+    for (int bz = bz0; bz < bz1; ++bz)
+      for (int by = 0; by < nb[1]; ++by)
+        for (int bx = 0; bx < nb[0]; ++bx) {
+          uint16_t* dst = &bricked[(size_t)kBrickSize * (bx + (size_t)nb[0] * (by + (size_t)nb[1] * bz))];
+          for (int lz = 0; lz < kEdge; ++lz) {
+            const int z = std::min(bz * B + lz, v.dims[2] - 1);
+            for (int ly = 0; ly < kEdge; ++ly) {
+              const int y = std::min(by * B + ly, v.dims[1] - 1);
+              const float* row = &v.values[v.index(0, y, z)];
+              for (int lx = 0; lx < kEdge; ++lx) {
+                const float x = row[std::min(bx * B + lx, v.dims[0] - 1)];
+                *dst++ = (uint16_t)(std::fmin(std::fmax(x, 0.0f), 1.0f) * kQuantScale + 0.5f);
+              }
+            }
+          }
+        }
+  };
+  if (nb[2] >= 4 && v.voxelCount() >= (1u << 18)) {
+    std::thread t(fill, nb[2] / 2, nb[2]);
+    fill(0, nb[2] / 2);
+    t.join();
+  } else {
+    fill(0, nb[2]);
+  }
 }
 
 std::shared_ptr<const VolumeAccel> VolumeAccel::forVolume(const std::shared_ptr<const Volume>& v) {

@@ -112,8 +112,9 @@ TEST_F(RayBox, BricksPartitionTheSampleGrid) {
 }
 
 TEST(TfTable, ErrorAgainstExactClassificationIsSmall) {
-  // The 4096-entry table interpolates the opacity-corrected premultiplied colour; measured
-  // max error for the default TF at the default step is ~1e-6; 1e-4 leaves room for other TFs.
+  // The 4096-entry table interpolates linearly between entries h = 1/4095 apart; the error
+  // peaks where a TF kink falls between entries: h * |slope change| / 4 = 2.4e-4 * 1.63 / 4
+  // = 1.0e-4 at s = 0.7 for the default TF (measured 1.0e-4). Elsewhere it is ~1e-7.
   const TransferFunction tf = defaultTf();
   const TfTable tab(tf, kL0);
   double worst = 0;
@@ -126,7 +127,7 @@ TEST(TfTable, ErrorAgainstExactClassificationIsSmall) {
     for (int ch = 0; ch < 3; ++ch) worst = std::max(worst, std::abs(out[ch] - a * c[ch]));
     worst = std::max(worst, std::abs(out[3] - a));
   }
-  EXPECT_LT(worst, 1e-4);
+  EXPECT_LT(worst, 1.1e-4);
   RecordProperty("tf_table_max_error", std::to_string(worst));
 }
 
