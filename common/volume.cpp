@@ -211,7 +211,7 @@ void noiseCloud(Volume& v, uint32_t seed) {
           }
           // Fade towards the box faces so the cloud floats in empty space; threshold gives exact zeros.
           double u = 2 * p[0] - 1, w = 2 * p[1] - 1, t = 2 * p[2] - 1;
-          double env = bump(std::sqrt(u * u + w * w + t * t), 0.35, 0.95);
+          double env = bump(std::sqrt(u * u + w * w + t * t), 0.45, 1.0);
           double s = (sum / 0.9375) * env;  // fBm of 4 octaves spans [0, 0.9375]
           v.values[v.index(x, y, z)] = (float)std::clamp((s - 0.33) / 0.4, 0.0, 1.0);
         }
