@@ -15,7 +15,8 @@ struct SweepRow {
   double et = 2;               // early-termination threshold; > 1: off
   bool skip = true;            // empty-space skipping
   bool is_default = false;     // the shipped "default" quality (step L0, ET 1-0.5/255, skip on)
-  double ms_best = 0, ms_median = 0;
+  double ms_best = 0, ms_median = 0;  // wall time
+  double cpu_ms_best = 0;             // process CPU time (all threads) of the fastest-CPU repeat
   uint64_t samples = 0, skipped = 0, terminated = 0;
   double max_abs = 0, rmse = 0, psnr = 0;  // vs the reference render
   double skip_vs_noskip = -1;  // skip-on rows: max abs difference to the same config without skipping
