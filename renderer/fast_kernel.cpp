@@ -170,17 +170,20 @@ struct Leaper {
     }
     nbx = d0[0];
     nbxy = d0[0] * d0[1];
-    dist = e.distance.data();
+    const int octant = (s.du[0] < 0 ? 1 : 0) | (s.du[1] < 0 ? 2 : 0) | (s.du[2] < 0 ? 4 : 0);
+    dist = e.octant_distance[octant].data();
   }
 
-  // Where the ray (from sample k) leaves the cube of blocks within radius r - 1 of block b,
-  // shrunk by `margin`; `inside` tells whether sample k itself is in the shrunk cube.
+  // Where the ray (from sample k) leaves the cube of r^3 blocks that starts at block b and
+  // extends forward (the ray's octant), shrunk by `margin`; `inside` tells whether sample
+  // k itself is in the shrunk cube.
   double exit(const double u[3], const int b[3], int r, double margin, bool& inside) const {
     constexpr double B = MinMaxHierarchy::kBlock;
     double e = kInf;
     inside = true;
     for (int a = 0; a < 3; ++a) {
-      const int first = b[a] - r + 1, last = b[a] + r;
+      const bool neg = du[a] < 0;
+      const int first = neg ? b[a] - r + 1 : b[a], last = neg ? b[a] + 1 : b[a] + r;
       const double lo = first <= 0 ? -kInf : first * B + margin;
       const double hi = last >= nb[a] ? kInf : last * B - margin;
       inside = inside & (u[a] >= lo) & (u[a] <= hi);

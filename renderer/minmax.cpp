@@ -10,34 +10,28 @@ namespace tessera::renderer {
 namespace {
 int blocksOnAxis(int n) { return std::max(1, (n - 2) / MinMaxHierarchy::kBlock + 1); }
 
-// Exact chessboard distance transform by two chamfer passes over the 26-neighbourhood.
-void distanceTransform(const std::array<int, 3>& d, const std::vector<uint8_t>& empty, std::vector<uint8_t>& out) {
+// Forward-octant chessboard distance: one pass from the far corner of the octant, since
+// the cube at b is empty iff b is and the seven cubes (one smaller) at its forward
+// neighbours are.
+void octantDistance(const std::array<int, 3>& d, const std::vector<uint8_t>& empty, int octant, std::vector<uint8_t>& out) {
   const int nx = d[0], ny = d[1], nz = d[2];
-  std::vector<int> dist(empty.size());
-  for (size_t i = 0; i < empty.size(); ++i) dist[i] = empty[i] ? 1 << 20 : 0;
-  auto at = [&](int x, int y, int z) -> int& { return dist[x + (size_t)nx * (y + (size_t)ny * z)]; };
-  auto pass = [&](int sgn) {
-    const int z0 = sgn > 0 ? 0 : nz - 1, y0 = sgn > 0 ? 0 : ny - 1, x0 = sgn > 0 ? 0 : nx - 1;
-    for (int z = z0; z >= 0 && z < nz; z += sgn)
-      for (int y = y0; y >= 0 && y < ny; y += sgn)
-        for (int x = x0; x >= 0 && x < nx; x += sgn) {
-          int& c = at(x, y, z);
-          if (c == 0) continue;
-          // Neighbours already visited in this scan order: the 13 "behind" the cell.
-          for (int dz = -1; dz <= 0; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-              for (int dx = -1; dx <= 1; ++dx) {
-                if (dz == 0 && (dy > 0 || (dy == 0 && dx >= 0))) continue;
-                const int X = x + sgn * dx, Y = y + sgn * dy, Z = z + sgn * dz;
-                if (X < 0 || Y < 0 || Z < 0 || X >= nx || Y >= ny || Z >= nz) continue;
-                c = std::min(c, at(X, Y, Z) + 1);
-              }
+  const int sx = (octant & 1) ? -1 : 1, sy = (octant & 2) ? -1 : 1, sz = (octant & 4) ? -1 : 1;
+  out.assign(empty.size(), 0);
+  auto idx = [&](int x, int y, int z) { return x + (size_t)nx * (y + (size_t)ny * z); };
+  for (int iz = 0; iz < nz; ++iz)
+    for (int iy = 0; iy < ny; ++iy)
+      for (int ix = 0; ix < nx; ++ix) {
+        // Visit forward neighbours first: start at the far end of every axis.
+        const int x = sx > 0 ? nx - 1 - ix : ix, y = sy > 0 ? ny - 1 - iy : iy, z = sz > 0 ? nz - 1 - iz : iz;
+        if (!empty[idx(x, y, z)]) continue;
+        int m = 254;  // beyond the grid counts as empty (positions clamp into border blocks)
+        for (int e = 1; e < 8; ++e) {
+          const int X = x + ((e & 1) ? sx : 0), Y = y + ((e & 2) ? sy : 0), Z = z + ((e & 4) ? sz : 0);
+          if (X < 0 || Y < 0 || Z < 0 || X >= nx || Y >= ny || Z >= nz) continue;
+          m = std::min<int>(m, out[idx(X, Y, Z)]);
         }
-  };
-  pass(1);
-  pass(-1);
-  out.resize(dist.size());
-  for (size_t i = 0; i < dist.size(); ++i) out[i] = (uint8_t)std::min(dist[i], 255);
+        out[idx(x, y, z)] = (uint8_t)(m + 1);
+      }
 }
 }  // namespace
 
@@ -113,7 +107,7 @@ MinMaxHierarchy::Emptiness MinMaxHierarchy::classify(const std::function<bool(fl
     e.empty[0][i] = isEmpty(l0.mn[i], l0.mx[i]) ? 1 : 0;
     e.empty_blocks += e.empty[0][i];
   }
-  distanceTransform(l0.dims, e.empty[0], e.distance);
+  for (int o = 0; o < 8; ++o) octantDistance(l0.dims, e.empty[0], o, e.octant_distance[o]);
   for (size_t l = 1; l < levels_.size(); ++l) {
     const Level& f = levels_[l - 1];
     const Level& c = levels_[l];

@@ -35,10 +35,12 @@ class MinMaxHierarchy {
   struct Emptiness {
     std::vector<std::vector<uint8_t>> empty;  // [level][node index]
     uint64_t empty_blocks = 0;                // level-0 blocks marked empty
-    // Chessboard distance (in level-0 blocks, capped at 255) from each level-0 block to the
-    // nearest non-empty one: every block within distance - 1 is empty, so a ray can leap
-    // across that cube in one step, however the cube is aligned.
-    std::vector<uint8_t> distance;
+    // Directional chessboard distance maps, one per octant of ray directions (bit a set:
+    // negative along axis a). octant_distance[o][b] = d means the d^3 cube of blocks that
+    // starts at b and extends d-1 blocks forward along every axis of octant o is empty
+    // (0: b itself is non-empty; capped at 255). A ray only moves forward, so it can leap
+    // across that cube in one step; moving away from matter the cubes grow quickly.
+    std::array<std::vector<uint8_t>, 8> octant_distance;
   };
   Emptiness classify(const std::function<bool(float lo, float hi)>& isEmpty) const;
 
