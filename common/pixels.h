@@ -1,5 +1,5 @@
 // Packing a rectangle of a float image into wire pixels (rgba8 rounded to nearest,
-// rgba16f round-to-nearest-even, rgba32f exact) and compositing wire pixels "over" a
+// rgba16f round-to-nearest-even as two byte planes, rgba32f exact) and compositing wire pixels "over" a
 // float image front to back. Pure functions; thread-safe.
 #pragma once
 #include <cstddef>

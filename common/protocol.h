@@ -36,6 +36,7 @@ inline constexpr uint16_t kTypeCount = 10;
 const char* typeName(Type t);
 
 enum class Role : uint8_t { Renderer = 1, Compositor = 2, Display = 3 };
+// RGBA16F pixels travel as two byte planes (low bytes of every half, then high bytes).
 enum class PixelFormat : uint8_t { RGBA8 = 1, RGBA16F = 2, RGBA32F = 3 };
 size_t bytesPerPixel(PixelFormat f);
 

@@ -1,0 +1,116 @@
+#include "compositor/gather.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "common/pixels.h"
+#include "compositor/over.h"
+
+namespace tessera::compositor {
+namespace {
+
+using proto::FrameParams;
+using proto::Piece;
+
+FrameParams params(uint64_t frame, int bricks, uint32_t epoch = 0) {
+  FrameParams p;
+  p.frame = frame;
+  p.epoch = epoch;
+  p.width = 8;
+  p.height = 4;
+  p.format = proto::PixelFormat::RGBA32F;
+  for (int b = 0; b < bricks; ++b) p.bricks.push_back({(uint32_t)b, {}});
+  for (int b = 0; b < bricks; ++b) p.order.push_back(bricks - 1 - b);  // back bricks first in index order
+  p.regions = {{0, {0, 0, 8, 4}, ""}};
+  return p;
+}
+
+// A piece whose single pixel at (b, 0) has alpha 0.5 and colour b/10 (exact in float).
+Piece piece(uint64_t frame, uint32_t brick, uint32_t epoch = 0) {
+  Piece p;
+  p.frame = frame;
+  p.epoch = epoch;
+  p.renderer = brick;
+  p.brick = brick;
+  p.region = {0, 0, 8, 4};
+  p.active = {0, 0, 8, 4};
+  p.format = proto::PixelFormat::RGBA32F;
+  ImageF img(8, 4);
+  for (int x = 0; x < 8; ++x) img.at(x, 0)[0] = 0.1f * (brick + 1), img.at(x, 0)[3] = 0.5f;
+  p.pixels = packPixels(img, p.active, p.format);
+  return p;
+}
+
+TEST(Gather, FrameIsReadyOnlyWithParamsAndEveryBrick) {
+  Gather g(0);
+  EXPECT_EQ(g.addPiece(piece(0, 0)), "");
+  EXPECT_FALSE(g.pop());  // no parameters yet: pieces may arrive first
+  EXPECT_EQ(g.addParams(params(0, 2)), "");
+  EXPECT_FALSE(g.pop());
+  EXPECT_EQ(g.addPiece(piece(0, 1)), "");
+  auto r = g.pop();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->pieces.size(), 2u);
+  ASSERT_TRUE(r->region);
+  EXPECT_EQ(*r->region, (Rect{0, 0, 8, 4}));
+}
+
+TEST(Gather, RejectsDuplicatesStrangersAndStaleEpochs) {
+  Gather g(0);
+  g.addParams(params(0, 2, 1));
+  EXPECT_EQ(g.addPiece(piece(0, 0, 1)), "");
+  EXPECT_NE(g.addPiece(piece(0, 0, 1)), "") << "duplicate brick";
+  EXPECT_NE(g.addPiece(piece(0, 5, 1)), "") << "brick out of range";
+  EXPECT_NE(g.addPiece(piece(0, 1, 0)), "") << "older epoch";
+  Piece wrong_region = piece(0, 1, 1);
+  wrong_region.region = {0, 0, 4, 4};
+  wrong_region.active = {0, 0, 4, 4};
+  wrong_region.pixels.resize(4 * 4 * 16);
+  EXPECT_NE(g.addPiece(wrong_region), "") << "cut for another region";
+  EXPECT_FALSE(g.pop());
+}
+
+TEST(Gather, NewEpochReissuesFramesInFlight) {
+  Gather g(0);
+  g.addParams(params(0, 2, 0));
+  g.addPiece(piece(0, 0, 0));
+  // Membership changed: frame 0 comes again with one brick under epoch 1.
+  EXPECT_EQ(g.addParams(params(0, 1, 1)), "");
+  EXPECT_FALSE(g.pop()) << "the old epoch's piece must not complete the new frame";
+  EXPECT_EQ(g.addPiece(piece(0, 0, 1)), "");
+  auto r = g.pop();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->params.epoch, 1u);
+}
+
+// Compositing follows the master's visibility order, never arrival order: every arrival
+// permutation gives the same, exactly known image.
+TEST(Gather, ResultIsIndependentOfArrivalOrder) {
+  std::vector<uint32_t> arrival = {0, 1, 2};
+  std::vector<uint8_t> first;
+  do {
+    Gather g(0);
+    g.addParams(params(3, 3));
+    for (uint32_t b : arrival) ASSERT_EQ(g.addPiece(piece(3, b)), "");
+    auto r = g.pop();
+    ASSERT_TRUE(r);
+    ImageF scratch;
+    Image8 out(8, 4);
+    compositeRegion(*r->region, r->params.order, r->pieces, scratch, out);
+    // Order 2,1,0 (front to back): c = .3*1 + .5*.2 + .25*.1 = .425; a = 1 - .5^3 = .875.
+    EXPECT_EQ(out.at(0, 0)[0], (uint8_t)std::lround(0.425 * 255));
+    EXPECT_EQ(out.at(0, 0)[3], (uint8_t)std::lround(0.875 * 255));
+    if (first.empty()) first = out.px;
+    EXPECT_EQ(out.px, first);
+  } while (std::next_permutation(arrival.begin(), arrival.end()));
+}
+
+TEST(Gather, PendingFramesAreBounded) {
+  Gather g(0);
+  for (uint64_t f = 0; f < 3 * Gather::kMaxPending; ++f) g.addPiece(piece(f, 0));
+  EXPECT_LE(g.pending(), Gather::kMaxPending);
+}
+
+}  // namespace
+}  // namespace tessera::compositor
