@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "balance.h"
+#include "interaction.h"
 #include "common/log.h"
 #include "common/transport.h"
 #include "metrics.h"
@@ -274,26 +275,12 @@ class Master {
   }
 
   void onInput(const proto::Input& in) {
-    if (!std::isfinite(in.orbit_dx) || !std::isfinite(in.orbit_dy) || !std::isfinite(in.zoom) || in.zoom <= 0)
-      return drops_.drop(~0u, "Input with non-finite or non-positive values");
-    Camera c = base_camera_;
-    c = c.orbited(c.up, -in.orbit_dx);
-    Vec3 right = normalize(cross(c.target - c.eye, c.up));
-    Camera tilted = c.orbited(right, -in.orbit_dy);
     try {
-      tilted.validate();  // refuse to tilt onto the pole, where up is parallel to the view
-      c = tilted;
-    } catch (const std::exception&) {
+      base_camera_ = applyInput(base_camera_, in);
+      if (!in.quality.empty()) quality_ = namedQuality(in.quality);
+    } catch (const std::invalid_argument& e) {
+      drops_.drop(~0u, e.what());
     }
-    c.eye = c.target + (c.eye - c.target) * std::clamp(in.zoom, 0.2, 5.0);
-    if (!in.quality.empty()) {
-      try {
-        quality_ = namedQuality(in.quality);
-      } catch (const std::exception& e) {
-        drops_.drop(~0u, e.what());
-      }
-    }
-    base_camera_ = c;
   }
 
   void sendTo(const std::string& identity, std::vector<std::byte>&& bytes) {

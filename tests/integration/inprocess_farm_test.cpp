@@ -15,6 +15,7 @@
 #include "compositor/stage.h"
 #include "display/stage.h"
 #include "farm_util.h"
+#include "master/interaction.h"
 #include "master/master.h"
 #include "renderer/raycaster.h"
 #include "renderer/stage.h"
@@ -87,6 +88,63 @@ TEST(InProcessFarm, LostRendererIsDetectedAndItsWorkReassigned) {
   for (std::string line; std::getline(metrics, line);)
     max_epoch = std::max(max_epoch, nlohmann::json::parse(line)["epoch"].get<uint32_t>());
   EXPECT_GE(max_epoch, 1u);
+}
+
+// Interactive mode: no frame is rendered again while the inputs stay the same; an Input
+// from the display moves the camera and yields exactly one new, correct frame.
+TEST(InProcessFarm, InteractiveFramesFollowInputAndIdleFramesAreNotRendered) {
+  FarmDir dir("interactive");
+  Scene scene = smallScene(1);
+  Endpoints ep = makeEndpoints("inproc://farm-interactive");
+  zmq::context_t ctx;
+  std::atomic<bool> stop{false};
+  master::MasterOptions mo;
+  mo.scene = scene;
+  mo.endpoints = ep;
+  mo.frames = 0;  // interactive
+  renderer::StageOptions ro{scene, ep, 1};
+  compositor::StageOptions co{ep, ""};
+  display::StageOptions dopt{ep, (dir.path() / "out").string(), "off", std::nullopt};
+  std::vector<std::future<int>> stages;
+  stages.push_back(std::async(std::launch::async, [&] { return master::run(mo, ctx, &stop); }));
+  stages.push_back(std::async(std::launch::async, [&] { return renderer::runStage(ro, ctx, &stop); }));
+  stages.push_back(std::async(std::launch::async, [&] { return compositor::runStage(co, ctx, &stop); }));
+  stages.push_back(std::async(std::launch::async, [&] { return display::runStage(dopt, ctx, &stop); }));
+  auto waitFor = [&](int k, std::chrono::milliseconds limit) {
+    auto end = std::chrono::steady_clock::now() + limit;
+    while (!fs::exists(dir.frame(k)) && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(10ms);
+    return fs::exists(dir.frame(k));
+  };
+  EXPECT_TRUE(waitFor(0, 30s)) << "first frame missing";
+  EXPECT_FALSE(waitFor(1, 500ms)) << "a frame was rendered although nothing changed";
+
+  proto::Input in;
+  in.orbit_dx = 40;
+  in.zoom = 0.8;
+  {
+    zmq::socket_t user(ctx, zmq::socket_type::dealer);
+    user.set(zmq::sockopt::linger, 1000);
+    user.connect(ep.masterControl());
+    auto bytes = proto::encode(in, 0);
+    user.send(zmq::buffer(bytes.data(), bytes.size()), zmq::send_flags::none);
+  }
+  EXPECT_TRUE(waitFor(1, 30s)) << "no frame after the input";
+  EXPECT_FALSE(waitFor(2, 500ms)) << "more than one frame for one input";
+  stop = true;
+  for (auto& f : stages) {
+    ASSERT_EQ(f.wait_for(30s), std::future_status::ready);
+    EXPECT_EQ(f.get(), 0);
+  }
+  auto volume = std::make_shared<Volume>(loadVolume(scene));
+  renderer::Raycaster caster(volume, scene.tf);
+  renderer::RenderOptions opt;
+  opt.quality = scene.quality;
+  Camera moved = master::applyInput(scene.camera, in);
+  Image8 ref = toRGBA8(caster.render(moved, scene.width, scene.height, renderer::wholeVolume(*volume), opt));
+  Image8 before = readPng(dir.frame(0).string()), after = readPng(dir.frame(1).string());
+  // 1/255: the sort-last contract.
+  EXPECT_LE(maxAbsDiff(after, ref), 1);
+  EXPECT_GT(maxAbsDiff(after, before), 16) << "the camera did not move";
 }
 
 }  // namespace

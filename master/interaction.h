@@ -1,0 +1,13 @@
+// Interactive camera control: how the display's drag/wheel input moves the camera.
+#pragma once
+#include "common/camera.h"
+#include "common/protocol.h"
+
+namespace tessera::master {
+
+// Orbits the eye about the target (dx about `up`, dy about the camera's right axis,
+// refusing to tilt onto the pole) and scales its distance by zoom (clamped to 0.2..5).
+// Throws std::invalid_argument for non-finite values or zoom <= 0.
+Camera applyInput(const Camera& cam, const proto::Input& in);
+
+}  // namespace tessera::master
