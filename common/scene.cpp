@@ -276,6 +276,7 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
   p.checkKeys(root, "", {"volume", "transfer_function", "camera", "image", "quality", "orbit"});
   Scene s;
   s.path = name_for_errors;
+  s.quality = namedQuality("default");
   s.volume = p.volume(p.require(root, "", "volume"));
   s.tf = p.transferFunction(p.require(root, "", "transfer_function"));
   s.camera = p.camera(p.require(root, "", "camera"));

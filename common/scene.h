@@ -15,7 +15,7 @@ namespace tessera {
 struct Quality {
   std::string name = "default";    // reference | default | fast | custom
   double step = 1.0 / 256;         // world units along the ray
-  double early_termination = 0.99; // stop when accumulated alpha >= this; > 1 disables
+  double early_termination = 1.0 - 0.5 / 255;  // stop when accumulated alpha >= this; > 1 disables
   bool skip_empty = true;
   bool reference = false;          // double precision, no skipping, no early termination
   bool operator==(const Quality&) const = default;

@@ -1,0 +1,87 @@
+// PNG and raw float files written to a temporary folder and read back.
+#include "common/image_io.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+using namespace tessera;
+namespace fs = std::filesystem;
+
+namespace {
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    path = fs::temp_directory_path() / ("tessera_image_io_" + std::to_string(getpid()));
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+  std::string file(const std::string& n) const { return (path / n).string(); }
+};
+}  // namespace
+
+TEST(ImageIo, OpaquePngRoundTripIsExact) {
+  TempDir t;
+  Image8 img(5, 3);
+  for (size_t i = 0; i < img.px.size(); ++i) img.px[i] = (i % 4 == 3) ? 255 : (uint8_t)(i * 37);
+  writePng(t.file("a.png"), img);
+  EXPECT_EQ(readPng(t.file("a.png")), img);
+}
+
+TEST(ImageIo, TranslucentPngRoundTripWithinOneLevel) {
+  // Tolerance 1/255: un-premultiplying then premultiplying again rounds twice.
+  TempDir t;
+  Image8 img(16, 16);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) {
+      uint8_t a = (uint8_t)(x * 16 + y), c = (uint8_t)(a * ((x + y) % 5) / 4);
+      uint8_t* p = img.at(x, y);
+      p[0] = c, p[1] = a, p[2] = 0, p[3] = a;
+    }
+  writePng(t.file("b.png"), img);
+  Image8 back = readPng(t.file("b.png"));
+  ASSERT_EQ(back.width, 16);
+  for (size_t i = 0; i < img.px.size(); ++i) EXPECT_LE(std::abs(back.px[i] - img.px[i]), 1) << "byte " << i;
+}
+
+TEST(ImageIo, BackgroundMakesOpaque) {
+  TempDir t;
+  ImageF img(2, 1);
+  img.px = {0, 0, 0, 0, 0.25f, 0.25f, 0.25f, 0.5f};
+  writePng(t.file("c.png"), img, std::array<double, 3>{1.0, 0.0, 0.5});
+  Image8 back = readPng(t.file("c.png"));
+  // transparent -> background; 0.25 + 0.5 * bg, rounded.
+  const uint8_t want[8] = {255, 0, 128, 255, 191, 64, 128, 255};
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(back.px[i], want[i]) << "byte " << i;
+}
+
+TEST(ImageIo, RawF32Layout) {
+  TempDir t;
+  ImageF img(3, 2);
+  img.px[5] = 0.75f;
+  writeRawF32(t.file("d.raw"), img);
+  std::ifstream in(t.file("d.raw"), std::ios::binary);
+  std::vector<char> bytes((std::istreambuf_iterator<char>(in)), {});
+  ASSERT_EQ(bytes.size(), 16u + 3 * 2 * 16);
+  EXPECT_EQ(std::string(bytes.data(), 8), "TSRAWF32");
+  EXPECT_EQ(bytes[8], 3);
+  EXPECT_EQ(bytes[12], 2);
+  float v;
+  std::memcpy(&v, &bytes[16 + 5 * 4], 4);
+  EXPECT_EQ(v, 0.75f);
+}
+
+TEST(ImageIo, ErrorsNameTheFile) {
+  TempDir t;
+  try {
+    readPng(t.file("missing.png"));
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("missing.png"), std::string::npos) << e.what();
+  }
+  std::ofstream(t.file("junk.png")) << "not a png at all";
+  EXPECT_THROW(readPng(t.file("junk.png")), std::runtime_error);
+}

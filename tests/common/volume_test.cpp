@@ -1,0 +1,155 @@
+// Raw volume loading (all three types, error messages) and the procedural generators.
+#include "common/volume.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+using namespace tessera;
+namespace fs = std::filesystem;
+
+namespace {
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    path = fs::temp_directory_path() / ("tessera_volume_" + std::to_string(getpid()));
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+  std::string write(const std::string& name, const void* data, size_t n) const {
+    std::string f = (path / name).string();
+    std::ofstream(f, std::ios::binary).write(static_cast<const char*>(data), (std::streamsize)n);
+    return f;
+  }
+};
+
+std::string errorOf(const RawVolumeSpec& s) {
+  try {
+    loadRawVolume(s);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+}  // namespace
+
+TEST(Volume, HalfExtent) {
+  Volume v;
+  v.dims = {10, 20, 40};
+  v.spacing = {1, 1, 0.5};
+  Vec3 h = v.halfExtent();  // extents 10, 20, 20 -> largest is 1
+  EXPECT_DOUBLE_EQ(h.x, 0.25);
+  EXPECT_DOUBLE_EQ(h.y, 0.5);
+  EXPECT_DOUBLE_EQ(h.z, 0.5);
+  EXPECT_DOUBLE_EQ(v.boxMin().y, -0.5);
+}
+
+TEST(Volume, LoadUInt8LayoutAndNormalisation) {
+  TempDir t;
+  uint8_t data[2 * 3 * 4];
+  for (int i = 0; i < 24; ++i) data[i] = (uint8_t)(i * 10);
+  RawVolumeSpec s{t.write("a.raw", data, sizeof data), {2, 3, 4}, VoxelType::UInt8, {1, 1, 1}, false, {0, 255}};
+  Volume v = loadRawVolume(s);
+  EXPECT_EQ(v.dims, (std::array<int, 3>{2, 3, 4}));
+  EXPECT_FLOAT_EQ(v.at(1, 2, 3), 230.0f / 255);  // x fastest: 1 + 2*(2 + 3*3) = 23
+  EXPECT_FLOAT_EQ(v.at(1, 0, 0), 10.0f / 255);
+  s.has_range = true;
+  s.range = {10, 110};
+  v = loadRawVolume(s);
+  EXPECT_FLOAT_EQ(v.at(0, 0, 0), 0.0f);  // below the range clamps
+  EXPECT_FLOAT_EQ(v.at(0, 1, 0), 0.1f);  // 20 -> (20-10)/100
+  EXPECT_FLOAT_EQ(v.at(1, 2, 3), 1.0f);
+}
+
+TEST(Volume, LoadUInt16LittleEndian) {
+  TempDir t;
+  const uint8_t bytes[4] = {0xff, 0xff, 0x00, 0x01};  // 65535 and 256
+  RawVolumeSpec s{t.write("b.raw", bytes, 4), {2, 1, 1}, VoxelType::UInt16, {1, 1, 1}, false, {0, 0}};
+  Volume v = loadRawVolume(s);
+  EXPECT_FLOAT_EQ(v.values[0], 1.0f);
+  EXPECT_FLOAT_EQ(v.values[1], 256.0f / 65535);
+  s.has_range = true;
+  s.range = {0, 512};
+  EXPECT_FLOAT_EQ(loadRawVolume(s).values[1], 0.5f);
+}
+
+TEST(Volume, LoadFloat32DefaultRangeIsDataMinMax) {
+  TempDir t;
+  const float f[4] = {-2.0f, 0.0f, 6.0f, 4.0f};
+  RawVolumeSpec s{t.write("c.raw", f, sizeof f), {4, 1, 1}, VoxelType::Float32, {1, 1, 1}, false, {0, 0}};
+  Volume v = loadRawVolume(s);
+  EXPECT_FLOAT_EQ(v.values[0], 0.0f);
+  EXPECT_FLOAT_EQ(v.values[1], 0.25f);
+  EXPECT_FLOAT_EQ(v.values[2], 1.0f);
+  EXPECT_FLOAT_EQ(v.values[3], 0.75f);
+}
+
+TEST(Volume, ErrorsAreSpecific) {
+  TempDir t;
+  uint8_t data[10] = {};
+  RawVolumeSpec s{t.write("d.raw", data, 10), {2, 2, 2}, VoxelType::UInt16, {1, 1, 1}, false, {0, 0}};
+  std::string e = errorOf(s);
+  EXPECT_NE(e.find("d.raw"), std::string::npos) << e;
+  EXPECT_NE(e.find("10 bytes"), std::string::npos) << e;  // the file's size
+  EXPECT_NE(e.find("16 bytes"), std::string::npos) << e;  // what dims x type need
+  s.file = (t.path / "nope.raw").string();
+  EXPECT_NE(errorOf(s).find("not found"), std::string::npos);
+
+  float f[2 * 3 * 2] = {};
+  f[1 + 2 * (2 + 3 * 1)] = NAN;  // voxel (1, 2, 1), linear 11
+  RawVolumeSpec n{t.write("e.raw", f, sizeof f), {2, 3, 2}, VoxelType::Float32, {1, 1, 1}, false, {0, 0}};
+  e = errorOf(n);
+  EXPECT_NE(e.find("(1, 2, 1)"), std::string::npos) << e;
+  EXPECT_NE(e.find("linear index 11"), std::string::npos) << e;
+
+  RawVolumeSpec r{t.write("f.raw", data, 8), {2, 2, 2}, VoxelType::UInt8, {1, 1, 1}, true, {5, 5}};
+  EXPECT_NE(errorOf(r).find("range"), std::string::npos);
+}
+
+TEST(Volume, GeneratorsAreDeterministicAndNormalised) {
+  for (const char* name : {"hollow-shell", "marschner-lobb", "noise-cloud"}) {
+    GeneratorSpec g{name, 24, 3, {1, 1, 1}};
+    Volume a = generateVolume(g), b = generateVolume(g);
+    ASSERT_EQ(a.voxelCount(), 24u * 24 * 24) << name;
+    EXPECT_EQ(a.values, b.values) << name;
+    for (float x : a.values) ASSERT_TRUE(x >= 0.0f && x <= 1.0f) << name << " value " << x;
+  }
+  GeneratorSpec c{"noise-cloud", 24, 3, {1, 1, 1}};
+  Volume c3 = generateVolume(c);
+  c.seed = 4;
+  EXPECT_NE(generateVolume(c).values, c3.values);  // the seed matters
+  size_t zeros = 0;
+  for (float x : c3.values) zeros += x == 0.0f;
+  EXPECT_GT(zeros, c3.voxelCount() / 3);  // substantial empty space, exactly 0
+}
+
+TEST(Volume, HollowShellShape) {
+  Volume v = generateVolume({"hollow-shell", 64, 1, {1, 1, 1}});
+  EXPECT_EQ(v.at(0, 0, 0), 0.0f);     // outside: exactly empty
+  EXPECT_EQ(v.at(32, 32, 32), 1.0f);  // solid core
+  EXPECT_EQ(v.at(32, 32, 16), 0.0f);  // between core and shell: exactly empty
+  float shell = 0;
+  for (int x = 32; x < 64; ++x) shell = std::max(shell, v.at(x, 32, 32));
+  EXPECT_FLOAT_EQ(shell, 1.0f);       // core is on this line too
+  float rim = 0;
+  for (int x = 48; x < 64; ++x) rim = std::max(rim, v.at(x, 32, 32));
+  EXPECT_FLOAT_EQ(rim, 0.5f);         // the shell plateau
+}
+
+TEST(Volume, MarschnerLobbMatchesFormula) {
+  Volume v = generateVolume({"marschner-lobb", 16, 1, {1, 1, 1}});
+  // Voxel (8,8,8) sits at (1/16, 1/16, 1/16) in [-1,1]^3.
+  double u = 1.0 / 16, r = std::sqrt(2 * u * u), pi = std::acos(-1.0);
+  double want = (1 - std::sin(pi * u / 2) + 0.25 * (1 + std::cos(2 * pi * 6 * std::cos(pi * r / 2)))) / 2.5;
+  EXPECT_NEAR(v.at(8, 8, 8), want, 1e-6);  // float storage
+}
+
+TEST(Volume, GeneratorRejectsBadSpecs) {
+  EXPECT_THROW(generateVolume({"teapot", 16, 1, {1, 1, 1}}), std::invalid_argument);
+  EXPECT_THROW(generateVolume({"hollow-shell", 1, 1, {1, 1, 1}}), std::invalid_argument);
+  EXPECT_THROW(generateVolume({"hollow-shell", 8, 1, {1, 0, 1}}), std::invalid_argument);
+}
