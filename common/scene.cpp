@@ -199,12 +199,18 @@ TransferFunction Parser::transferFunction(const YAML::Node& n) const {
     fail("transfer_function", "expected a non-empty list of [s, r, g, b, a], got " + describe(n));
   std::vector<TfPoint> pts;
   for (size_t i = 0; i < n.size(); ++i) {
-    auto v = numbers(n[i], "transfer_function[" + std::to_string(i) + "]", 5);
+    const std::string path = "transfer_function[" + std::to_string(i) + "]";
+    auto v = numbers(n[i], path, 5);
+    for (size_t k = 0; k < 5; ++k)
+      if (v[k] < 0 || v[k] > 1)
+        fail(path + "[" + std::to_string(k) + "]", "must be in [0, 1], got " + describe(n[i][k]));
+    if (i > 0 && v[0] < pts.back().s)
+      fail(path, "scalar " + describe(n[i][0]) + " is less than the previous point's; points must be sorted");
     pts.push_back({v[0], v[1], v[2], v[3], v[4]});
   }
   try {
     return TransferFunction(std::move(pts));
-  } catch (const std::invalid_argument& e) {
+  } catch (const std::invalid_argument& e) {  // unreachable after the checks above; kept as a guard
     fail("transfer_function", e.what());
   }
 }
@@ -222,7 +228,7 @@ Camera Parser::camera(const YAML::Node& n) const {
   try {
     c.validate();
   } catch (const std::invalid_argument& e) {
-    fail("camera", e.what());
+    fail("", e.what());  // its message already starts with "camera: "
   }
   return c;
 }

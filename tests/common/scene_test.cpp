@@ -131,11 +131,16 @@ TEST(Scene, BadSizesAndValues) {
   EXPECT_ERROR("volume: {file: a.raw, dims: [4, 0, 4], type: uint8}\n", "volume.dims[1]: must be in 1..");
   EXPECT_ERROR("volume: {file: a.raw, dims: [4, -1, 4], type: uint8}\n", "volume.dims[1]");
   EXPECT_ERROR(edit("size: 16}", "size: 16}, spacing: [1, 0, 1]"), "volume.spacing[1]: spacing must be > 0");
-  EXPECT_ERROR(edit("eye: [0, 0, 2.5]", "eye: [0, 0, 0]"), "camera: camera: eye equals target");
+  EXPECT_ERROR(edit("eye: [0, 0, 2.5]", "eye: [0, 0, 0]"), "s.yaml: camera: eye equals target");
   EXPECT_ERROR(edit("up: [0, 1, 0]", "up: [0, 0, 3]"), "parallel");
   EXPECT_ERROR(edit("fov: 30", "fov: 180"), "fov must be in (0, 180)");
-  EXPECT_ERROR(edit("[1.0, 1, 1, 1, 0.5]", "[-0.5, 1, 1, 1, 0.5]"), "transfer_function: ");
-  EXPECT_ERROR(edit("[1.0, 1, 1, 1, 0.5]", "[1.0, 1, 1, 1, 1.5]"), "must be in [0, 1]");
+  EXPECT_ERROR(edit("[1.0, 1, 1, 1, 0.5]", "[-0.5, 1, 1, 1, 0.5]"), "transfer_function[1][0]: must be in [0, 1], got '-0.5'");
+  EXPECT_ERROR(edit("[1.0, 1, 1, 1, 0.5]", "[1.0, 1, 1, 1, 1.5]"), "transfer_function[1][4]: must be in [0, 1]");
+  EXPECT_ERROR(edit("[0.0, 0, 0, 0, 0]", "[0.5, 0, 0, 0, 0]\n  - [0.2, 0, 0, 0, 0]"), "transfer_function[1]: scalar '0.2' is less");
+  std::string empty_tf = kGood;
+  empty_tf.replace(empty_tf.find("transfer_function"), empty_tf.find("camera") - empty_tf.find("transfer_function"),
+                   "transfer_function: []\n");
+  EXPECT_ERROR(empty_tf, "transfer_function: expected a non-empty list");
   EXPECT_ERROR(std::string(kGood) + "orbit: {frames: 0}\n", "orbit.frames: must be in 1..");
 }
 
