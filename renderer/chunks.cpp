@@ -83,10 +83,11 @@ Rect screenRect(const Box& box, const ViewProjection& vp) {
   // in GL's transform and MSAA sample positions anywhere inside a pixel.
   const double x0 = (xmin + 1) * 0.5 * vp.width, x1 = (xmax + 1) * 0.5 * vp.width;
   const double y0 = (1 - ymax) * 0.5 * vp.height, y1 = (1 - ymin) * 0.5 * vp.height;
-  const double lim = 1e9;
-  const double rx0 = std::floor(std::clamp(x0, -lim, lim)) - 1, rx1 = std::ceil(std::clamp(x1, -lim, lim)) + 1;
-  const double ry0 = std::floor(std::clamp(y0, -lim, lim)) - 1, ry1 = std::ceil(std::clamp(y1, -lim, lim)) + 1;
-  const Rect r{(int)rx0, (int)ry0, (int)(rx1 - rx0), (int)(ry1 - ry0)};
+  // Clamped to just outside the image before converting, so huge coordinates cannot overflow.
+  auto cl = [](double v, int n) { return (int)std::clamp(v, -1.0, n + 1.0); };
+  const int rx0 = cl(std::floor(x0) - 1, vp.width), rx1 = cl(std::ceil(x1) + 1, vp.width);
+  const int ry0 = cl(std::floor(y0) - 1, vp.height), ry1 = cl(std::ceil(y1) + 1, vp.height);
+  const Rect r{rx0, ry0, rx1 - rx0, ry1 - ry0};
   return intersect(r, whole);
 }
 
