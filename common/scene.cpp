@@ -142,6 +142,8 @@ class Parser {
   Camera camera(const YAML::Node& n) const;
   Quality quality(const YAML::Node& n) const;
   Orbit orbit(const YAML::Node& n) const;
+  MeshSpec mesh(const YAML::Node& n, bool has_volume) const;
+  Antialiasing antialiasing(const YAML::Node& n) const;
 
   std::string file_, base_;
 };
@@ -267,6 +269,47 @@ Orbit Parser::orbit(const YAML::Node& n) const {
   return o;
 }
 
+MeshSpec Parser::mesh(const YAML::Node& n, bool has_volume) const {
+  MeshSpec m;
+  if (n.IsScalar()) {
+    std::filesystem::path p(n.Scalar());
+    m.file = (p.is_relative() ? std::filesystem::path(base_) / p : p).lexically_normal().string();
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(m.file, ec)) fail("mesh", "file not found: " + m.file);
+    return m;
+  }
+  checkKeys(n, "mesh", {"isosurface"});
+  YAML::Node iso = require(n, "mesh", "isosurface");
+  checkKeys(iso, "mesh.isosurface", {"of", "level"});
+  if (string(require(iso, "mesh.isosurface", "of"), "mesh.isosurface.of") != "volume")
+    fail("mesh.isosurface.of", "expected 'volume'");
+  if (!has_volume) fail("mesh.isosurface", "needs the scene's volume: key");
+  if (iso["level"]) m.level = number(iso["level"], "mesh.isosurface.level");
+  return m;
+}
+
+Antialiasing Parser::antialiasing(const YAML::Node& n) const {
+  checkKeys(n, "antialiasing", {"method", "samples", "sigma"});
+  Antialiasing a;
+  a.method = string(require(n, "antialiasing", "method"), "antialiasing.method");
+  if (a.method != "none" && a.method != "msaa" && a.method != "ssaa" && a.method != "fft")
+    fail("antialiasing.method", "expected none, msaa, ssaa or fft, got '" + a.method + "'");
+  if (a.method == "msaa") a.samples = 4;
+  if (a.method == "ssaa") a.samples = 2;
+  if (n["samples"]) {
+    if (a.method == "msaa") a.samples = (int)integer(n["samples"], "antialiasing.samples", 1, 4);
+    else if (a.method == "ssaa") a.samples = (int)integer(n["samples"], "antialiasing.samples", 1, 8);
+    else fail("antialiasing.samples", "only valid with method msaa or ssaa");
+    if (a.method == "msaa" && a.samples == 3) fail("antialiasing.samples", "msaa takes 1, 2 or 4 samples");
+  }
+  if (n["sigma"]) {
+    if (a.method != "fft") fail("antialiasing.sigma", "only valid with method fft");
+    a.sigma = number(n["sigma"], "antialiasing.sigma");
+    if (!(a.sigma > 0 && a.sigma <= 64)) fail("antialiasing.sigma", "must be in (0, 64] pixels");
+  }
+  return a;
+}
+
 }  // namespace
 
 Scene parseScene(const std::string& yaml_text, const std::string& base_dir, const std::string& name_for_errors) {
@@ -278,13 +321,22 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
     p.fail("", "YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
   }
   if (!root.IsMap()) p.fail("", "expected a map of scene keys at the top level");
-  if (root["mesh"]) p.fail("mesh", "mesh scenes are not supported yet");
-  p.checkKeys(root, "", {"volume", "transfer_function", "camera", "image", "quality", "orbit"});
+  p.checkKeys(root, "",
+              {"volume", "transfer_function", "camera", "image", "quality", "orbit", "mesh", "light", "antialiasing"});
   Scene s;
   s.path = name_for_errors;
   s.quality = namedQuality("default");
-  s.volume = p.volume(p.require(root, "", "volume"));
-  s.tf = p.transferFunction(p.require(root, "", "transfer_function"));
+  // A mesh scene needs a volume only for its isosurface, and a transfer function not at all.
+  const bool is_mesh = (bool)root["mesh"];
+  s.has_volume = !is_mesh || (bool)root["volume"];
+  if (s.has_volume) s.volume = p.volume(p.require(root, "", "volume"));
+  if (is_mesh) s.mesh = p.mesh(root["mesh"], s.has_volume);
+  if (!is_mesh || root["transfer_function"]) s.tf = p.transferFunction(p.require(root, "", "transfer_function"));
+  if (root["light"]) {
+    s.light = p.vec3(root["light"], "light");
+    if (!(length(s.light) > 0)) p.fail("light", "must be non-zero (leave it out for a headlight)");
+  }
+  if (root["antialiasing"]) s.antialiasing = p.antialiasing(root["antialiasing"]);
   s.camera = p.camera(p.require(root, "", "camera"));
   if (root["image"]) {
     YAML::Node im = root["image"];

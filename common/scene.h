@@ -29,9 +29,29 @@ struct Orbit {
   Camera at(const Camera& base, int frame) const;  // frame k rotated by k*360/frames degrees
 };
 
+// `mesh:` (geometry scenes, drawn by the OSMesa backend): a .ply/.obj file (path resolved
+// against the scene's folder; fitted to the unit box) or the isosurface of the scene's volume.
+struct MeshSpec {
+  std::string file;         // empty for an isosurface
+  double level = 0.5;       // isosurface level, normalised scalar
+  bool operator==(const MeshSpec&) const = default;
+};
+// Anti-aliasing of geometry: none | msaa (samples 2 or 4) | ssaa (k x k, samples = k) | fft
+// (Gaussian low-pass of the final image, sigma in pixels).
+struct Antialiasing {
+  std::string method = "none";
+  int samples = 1;
+  double sigma = 0.6;
+  bool operator==(const Antialiasing&) const = default;
+};
+
 struct Scene {
   std::string path;  // file it was loaded from ("" for built-in)
   std::variant<RawVolumeSpec, GeneratorSpec> volume;
+  bool has_volume = true;           // false for a mesh scene without `volume:`
+  std::optional<MeshSpec> mesh;     // set: a geometry scene
+  Vec3 light{0, 0, 0};              // world direction towards the light; zero: headlight
+  Antialiasing antialiasing;
   TransferFunction tf;
   Camera camera;
   int width = 512, height = 512;

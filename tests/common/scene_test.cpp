@@ -99,7 +99,7 @@ TEST(Scene, UnknownKeysNameTheirPath) {
   EXPECT_ERROR(edit("fov: 30", "fov: 30, fvo: 20"), "camera.fvo: unknown key");
   EXPECT_ERROR(edit("size: 16", "size: 16, sede: 2"), "volume.generator.sede: unknown key");
   EXPECT_ERROR(std::string(kGood) + "orbit: {frames: 4, axes: [0, 1, 0]}\n", "orbit.axes: unknown key");
-  EXPECT_ERROR(std::string(kGood) + "mesh: bunny.ply\n", "mesh scenes are not supported yet");
+  EXPECT_ERROR(std::string(kGood) + "mesh: bunny.ply\n", "mesh: file not found");
 }
 
 TEST(Scene, MissingKeys) {

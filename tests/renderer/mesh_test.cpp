@@ -13,6 +13,7 @@
 #include "renderer/chunks.h"
 #include "renderer/marching_cubes.h"
 #include "renderer/mesh.h"
+#include "renderer/mesh_scene.h"
 
 namespace tessera::renderer {
 namespace {
@@ -263,6 +264,57 @@ TEST(ChunksTest, ScreenRectContainsEveryProjectedPoint) {
   const ViewProjection vp = makeViewProjection(inside, 64, 48, scene);
   EXPECT_EQ(screenRect(Box{{-0.1, -0.1, -0.1}, {0.1, 0.1, 0.1}}, vp), (Rect{0, 0, 64, 48}));
   EXPECT_TRUE(screenRect(Box{{-0.1, -0.1, 0.2}, {0.1, 0.1, 0.4}}, vp).empty());
+}
+
+}  // namespace
+}  // namespace tessera::renderer
+
+namespace tessera::renderer {
+namespace {
+
+TEST(MeshSceneTest, ShippedScenesLoadTheirGeometry) {
+  const Scene iso = loadScene(std::string(TESSERA_SOURCE_DIR) + "/scenes/isosurface.yaml");
+  ASSERT_TRUE(iso.mesh.has_value());
+  EXPECT_TRUE(iso.mesh->file.empty());
+  EXPECT_EQ(iso.antialiasing.method, "msaa");
+  EXPECT_EQ(sceneRenderOptions(iso).samples, 4);
+  const Scene tetra = loadScene(std::string(TESSERA_SOURCE_DIR) + "/scenes/tetra.yaml");
+  EXPECT_FALSE(tetra.has_volume);
+  const SceneGeometry g = loadSceneGeometry(tetra, 2);
+  EXPECT_EQ(g.mesh.triangleCount(), 4u);
+  EXPECT_EQ(g.chunks.size(), 2u);
+  const Box b = bounds(g.mesh);
+  EXPECT_NEAR(std::max({b.hi.x - b.lo.x, b.hi.y - b.lo.y, b.hi.z - b.lo.z}), 1.0, 1e-6);  // fitted
+  EXPECT_EQ(sceneRenderOptions(tetra).supersample, 3);
+}
+
+TEST(MeshSceneTest, BadMeshKeysAreErrorsNamingTheKey) {
+  const std::string cam = "camera: {eye: [0, 0, 2.5], target: [0, 0, 0]}\n";
+  const std::string vol = "volume: {generator: {name: hollow-shell, size: 8}}\n";
+  auto err = [&](const std::string& yaml, const char* fragment) {
+    try {
+      parseScene(yaml, std::string(TESSERA_SOURCE_DIR) + "/scenes", "s.yaml");
+      ADD_FAILURE() << "no error for " << yaml;
+    } catch (const SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+  };
+  err(cam + "mesh: nope.ply\n", "s.yaml: mesh: file not found");
+  err(cam + "mesh: {isosurface: {of: volume}}\n", "mesh.isosurface: needs the scene's volume");
+  err(cam + vol + "mesh: {isosurface: {of: vol}}\n", "mesh.isosurface.of: expected 'volume'");
+  err(cam + vol + "mesh: {isosurface: {of: volume, levle: 1}}\n", "mesh.isosurface.levle: unknown key");
+  err(cam + "mesh: data/tetra.ply\nantialiasing: {method: blur}\n", "antialiasing.method: expected none");
+  err(cam + "mesh: data/tetra.ply\nantialiasing: {method: msaa, samples: 3}\n", "antialiasing.samples");
+  err(cam + "mesh: data/tetra.ply\nantialiasing: {method: none, sigma: 1}\n", "antialiasing.sigma: only valid");
+  err(cam + "mesh: data/tetra.ply\nlight: [0, 0, 0]\n", "light: must be non-zero");
+  err(cam + "image: [8, 8]\n", "volume: missing required key");  // not a mesh scene: volume needed
+  Scene s = parseScene(cam + vol + "mesh: {isosurface: {of: volume, level: 7}}\n", ".", "s.yaml");
+  try {
+    loadSceneGeometry(s);
+    ADD_FAILURE() << "no error for an empty isosurface";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("no surface at level 7"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
