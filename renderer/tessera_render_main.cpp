@@ -14,6 +14,7 @@
 #include "common/bricks.h"
 #include "common/image_io.h"
 #include "common/scene.h"
+#include "renderer/mesh_render_tool.h"
 #include "renderer/raycaster.h"
 
 namespace {
@@ -87,6 +88,14 @@ int run(int argc, char** argv) {
   app.add_option("--repeat", repeat, "render N times and report the fastest (for measurements)")->check(CLI::Range(1, 1000));
   app.add_option("--raw", raw, "also write premultiplied RGBA32F");
   app.add_option("--background", background, "composite over r,g,b in [0,1] instead of writing alpha");
+  // Mesh scenes (OSMesa): tiles, anti-aliasing overrides and the anti-aliasing sweep.
+  std::string tiles = "1x1", aa;
+  int aa_samples = 0;
+  bool aa_sweep = false;
+  app.add_option("--tiles", tiles, "mesh scenes: render as CxR tiles and assemble (bit-identical to 1x1)");
+  app.add_option("--aa", aa, "mesh scenes: none | msaa | ssaa | fft (default: the scene's)");
+  app.add_option("--aa-samples", aa_samples, "mesh scenes: MSAA samples (1,2,4) or SSAA factor")->check(CLI::Range(1, 8));
+  app.add_flag("--aa-sweep", aa_sweep, "mesh scenes: CSV of every anti-aliasing method's time and error vs 16x SSAA");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -101,6 +110,22 @@ int run(int argc, char** argv) {
   if (!background.empty()) bg = parseBackground(background);
   int w = scene.width, h = scene.height;
   if (!size.empty()) parseSize(size, w, h);
+  if (scene.mesh) {
+    renderer::MeshToolOptions mo;
+    mo.out = out;
+    mo.width = w;
+    mo.height = h;
+    mo.frame = frame;
+    parseSize(tiles, mo.tile_cols, mo.tile_rows);
+    mo.repeat = repeat;
+    mo.stats = print_stats;
+    mo.compare_reference = compare_ref;
+    mo.aa_sweep = aa_sweep;
+    mo.aa = aa;
+    mo.aa_samples = aa_samples;
+    mo.background = bg;
+    return renderer::renderMeshScene(scene, mo);
+  }
   renderer::RenderOptions opt;
   opt.quality = quality_name.empty() ? scene.quality : namedQuality(quality_name);
   if (no_skip) opt.quality.skip_empty = false;
