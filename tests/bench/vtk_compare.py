@@ -294,6 +294,11 @@ def main():
     print(f"  VTK (median frame of each round)           {summary(col('vtk_cpu'))}")
     print(f"  Tessera, empty-space skipping              {summary(col('skip_cpu'))}")
     print(f"  Tessera, --no-skip                         {summary(col('noskip_cpu'))}")
+    cr_skip = [x["vtk_cpu"] / x["skip_cpu"] for x in rows]
+    cr_noskip = [x["vtk_cpu"] / x["noskip_cpu"] for x in rows]
+    print(f"  VTK / Tessera skip    (per round)  min {min(cr_skip):.2f}  median {statistics.median(cr_skip):.2f}")
+    print(f"  VTK / Tessera no-skip (per round)  min {min(cr_noskip):.2f}  median "
+          f"{statistics.median(cr_noskip):.2f}")
     print(f"  1-minute load average during rounds        {summary(col('load'))}")
     print(f"  tessera command: {cmd_skip}\n  tessera command: {cmd_noskip}")
     print(f"\nimages: {vtk_png} vs {tes_png}")
