@@ -51,7 +51,10 @@ Scene sceneFor(const std::string& generator, int size, const std::string& scenes
       try {
         s = loadScene(f.string());
       } catch (const std::exception& e) {
-        std::fprintf(stderr, "tessera-sweep: skipping %s: %s\n", f.c_str(), e.what());
+        static std::vector<fs::path> reported;  // say it once, not once per scene
+        if (std::find(reported.begin(), reported.end(), f) == reported.end())
+          std::fprintf(stderr, "tessera-sweep: not a volume scene we can use, skipped: %s\n", e.what());
+        reported.push_back(f);
         continue;
       }
       auto* g = std::get_if<GeneratorSpec>(&s.volume);
@@ -124,6 +127,7 @@ int run(int argc, char** argv) {
   std::string image = "1024x1024", out_dir = "bench-out", scenes_dir = TESSERA_SOURCE_DIR "/scenes";
   std::vector<std::string> names{"hollow-shell", "marschner-lobb", "noise-cloud"};
   bool no_plot = false;
+  std::string replot;
   app.add_option("--size", size, "generated volume edge in voxels")->capture_default_str()->check(CLI::Range(2, 2048));
   app.add_option("--image", image, "image size WxH")->capture_default_str();
   app.add_option("--repeat", repeat, "renders per configuration; the best wall time counts")
@@ -133,6 +137,7 @@ int run(int argc, char** argv) {
   app.add_option("--scenes", names, "generator scenes to sweep")->capture_default_str();
   app.add_option("--scenes-dir", scenes_dir, "shipped scene files (transfer function, camera)")->capture_default_str();
   app.add_flag("--no-plot", no_plot, "do not run gnuplot");
+  app.add_option("--replot", replot, "render nothing: re-plot and re-print this sweep.csv into --out");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -143,6 +148,15 @@ int run(int argc, char** argv) {
   }
   parseImage(image, w, h);
   fs::create_directories(out_dir);
+  if (!replot.empty()) {
+    const auto rows = bench::readCsv(replot);
+    std::vector<std::string> seen;
+    for (const auto& r : rows)
+      if (std::find(seen.begin(), seen.end(), r.scene) == seen.end()) seen.push_back(r.scene);
+    if (!no_plot) bench::plot(out_dir, rows, seen);
+    std::printf("%s\n%s", bench::markdownTable(rows).c_str(), bench::defaultSummary(rows).c_str());
+    return 0;
+  }
 
   const double kDefaultEt = namedQuality("default").early_termination;
   std::vector<Config> configs;

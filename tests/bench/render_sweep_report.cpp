@@ -33,7 +33,7 @@ int stepIndex(double step_l0) { return step_l0 < 0.75 ? 0 : step_l0 < 1.5 ? 1 : 
 
 std::string etLabel(double et) {
   if (et > 1) return "off";
-  if (std::abs(et - (1.0 - 0.5 / 255)) < 1e-9) return "1-0.5/255";
+  if (std::abs(et - (1.0 - 0.5 / 255)) < 1e-6) return "1-0.5/255";  // CSV keeps 6 digits
   return fmt("%g", et);
 }
 
@@ -53,6 +53,45 @@ void writeCsv(const std::string& path, const std::vector<SweepRow>& rows) {
         << r.terminated << ',' << fmt("%.2f", skippedPercent(r)) << ',' << num(r.max_abs) << ',' << num(r.rmse)
         << ',' << num(r.psnr) << ',' << (r.skip ? num(r.skip_vs_noskip) : "") << '\n';
   if (!out) throw std::runtime_error(path + ": write failed");
+}
+
+std::vector<SweepRow> readCsv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open");
+  std::string line;
+  std::getline(in, line);  // header
+  std::vector<SweepRow> rows;
+  for (int n = 2; std::getline(in, line); ++n) {
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
+    if (f.size() < 19) throw std::runtime_error(path + ":" + std::to_string(n) + ": expected 20 columns");
+    SweepRow r;
+    try {
+      r.scene = f[0];
+      r.size = std::stoi(f[1]);
+      r.width = std::stoi(f[2]);
+      r.height = std::stoi(f[3]);
+      r.step_l0 = std::stod(f[4]);
+      r.et = std::stod(f[5]);
+      r.skip = f[7] == "1";
+      r.is_default = f[8] == "1";
+      r.ms_best = std::stod(f[9]);
+      r.ms_median = std::stod(f[10]);
+      r.cpu_ms_best = std::stod(f[11]);
+      r.samples = std::stoull(f[12]);
+      r.skipped = std::stoull(f[13]);
+      r.terminated = std::stoull(f[14]);
+      r.max_abs = std::stod(f[16]);
+      r.rmse = std::stod(f[17]);
+      r.psnr = std::stod(f[18]);  // stod reads "inf"
+      if (f.size() > 19 && !f[19].empty()) r.skip_vs_noskip = std::stod(f[19]);
+    } catch (const std::exception&) {
+      throw std::runtime_error(path + ":" + std::to_string(n) + ": bad number");
+    }
+    rows.push_back(r);
+  }
+  return rows;
 }
 
 std::string markdownTable(const std::vector<SweepRow>& rows) {
@@ -98,7 +137,8 @@ bool plot(const std::string& dir, const std::vector<SweepRow>& rows, const std::
           << stepIndex(r.step_l0) << ' ' << int(r.is_default) << '\n';
   }
   {
-    // speedup.dat: one line per (step, ET); one column per scene: ms(skip off) / ms(skip on).
+    // speedup.dat: one line per (step, ET); one column per scene: CPU ms(skip off) / CPU ms(skip
+    // on). CPU time, because wall time on a shared machine swings by 2x between neighbours.
     auto out = openOut(dir + "/speedup.dat");
     std::map<std::pair<double, double>, std::map<std::string, std::pair<double, double>>> by_config;
     std::vector<std::pair<double, double>> order;
@@ -106,7 +146,7 @@ bool plot(const std::string& dir, const std::vector<SweepRow>& rows, const std::
       const auto key = std::make_pair(r.step_l0, r.et);
       if (!by_config.count(key)) order.push_back(key);
       auto& ms = by_config[key][r.scene];
-      (r.skip ? ms.second : ms.first) = r.ms_best;
+      (r.skip ? ms.second : ms.first) = r.cpu_ms_best;
     }
     out << "# config";
     for (const auto& s : scenes) out << ' ' << s;
@@ -130,7 +170,7 @@ bool plot(const std::string& dir, const std::vector<SweepRow>& rows, const std::
       << "set multiplot layout 1," << scenes.size() << " title 'Run time vs error against the reference ("
       << what << "); colour: skipping, shape: step, circle: default quality'\n"
       << "set logscale x\nset grid\nset xlabel 'run time per frame (ms, log)'\nset ylabel 'PSNR vs reference (dB)'\n"
-      << "set key below maxrows 3 font ',8'\n"
+      << "set key below maxrows 3 font ',8'\nset bmargin 9\nset xlabel offset 0,0.3\n"
       << "steps = '0.5 1 2 4'\n";
     for (size_t i = 0; i < scenes.size(); ++i) {
       g << "set title '" << scenes[i] << "'\n"
@@ -146,11 +186,11 @@ bool plot(const std::string& dir, const std::vector<SweepRow>& rows, const std::
     g << "unset multiplot\n"
       << "set terminal pngcairo size 1200,560 font 'Sans,10'\n"
       << "set output '" << dir << "/render-sweep-speedup.png'\n"
-      << "unset logscale x\nset title 'Empty-space skipping: speedup = ms(skip off) / ms(skip on), same run ("
+      << "unset logscale x\nset bmargin\nset title 'Empty-space skipping: speedup = CPU ms(skip off) / CPU ms(skip on), same run ("
       << what << ")'\n"
       << "set style data histograms\nset style histogram clustered gap 1\nset style fill solid 0.8 border -1\n"
       << "set xtics rotate by -45 font ',8'\nset xlabel 'step, early termination'\nset ylabel 'speedup (x)'\n"
-      << "set yrange [0:*]\nset key top right\n"
+      << "set yrange [0:*]\nset key inside top right\n"
       << "set arrow from graph 0, first 1 to graph 1, first 1 nohead dt 2 lc 'gray'\n"
       << "plot ";
     for (size_t i = 0; i < scenes.size(); ++i)

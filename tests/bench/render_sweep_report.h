@@ -27,6 +27,8 @@ std::string etLabel(double et);  // "0.95", "1-0.5/255", "off"
 double skippedPercent(const SweepRow& r);
 
 void writeCsv(const std::string& path, const std::vector<SweepRow>& rows);
+// Reads what writeCsv wrote (for --replot); throws std::runtime_error naming the line.
+std::vector<SweepRow> readCsv(const std::string& path);
 // Markdown table for the README (one line per row) followed by a summary of the default quality.
 std::string markdownTable(const std::vector<SweepRow>& rows);
 std::string defaultSummary(const std::vector<SweepRow>& rows);
