@@ -58,7 +58,8 @@ Scene sceneFor(const std::string& generator, int size, const std::string& scenes
         continue;
       }
       auto* g = std::get_if<GeneratorSpec>(&s.volume);
-      if (g && g->name == generator) {
+      // Geometry scenes (an isosurface of a generated volume) carry no transfer function.
+      if (g && g->name == generator && !s.mesh && !s.tf.points().empty()) {
         g->size = size;
         return s;
       }
