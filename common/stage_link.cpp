@@ -55,6 +55,7 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
       continue;
     }
     rank_ = w->rank;
+    last_heard_ = Clock::now();
     break;
   }
   heartbeat_ = std::thread([this] {
@@ -65,6 +66,18 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
       for (int i = 0; i < 5 && !quit_; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
   });
+  return true;
+}
+
+bool StageLink::recvSub(zmq::message_t& m) {
+  if (!sub_.recv(m, zmq::recv_flags::dontwait)) return false;
+  last_heard_ = Clock::now();
+  return true;
+}
+
+bool StageLink::masterLost() const {
+  if (std::chrono::duration<double>(Clock::now() - last_heard_).count() < kMasterSilenceS) return false;
+  spdlog::error("master lost: nothing from {} for {:.0f} s", ep_.masterPub(), kMasterSilenceS);
   return true;
 }
 

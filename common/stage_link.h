@@ -4,6 +4,7 @@
 // Hello and waits for the Welcome that carries this stage's rank.
 #pragma once
 #include <atomic>
+#include <chrono>
 #include <string>
 #include <thread>
 
@@ -25,6 +26,12 @@ class StageLink {
   bool join(const std::atomic<bool>* stop, double timeout_s = 120);
   uint32_t rank() const { return rank_; }
   zmq::socket_t& sub() { return sub_; }
+  // Non-blocking receive from the master's PUB; notes that the master is alive.
+  bool recvSub(zmq::message_t& m);
+  // The master probes every 250 ms: this long without a word means it is gone, and a stage
+  // left alone (outside the launcher) exits instead of waiting forever.
+  bool masterLost() const;
+  static constexpr double kMasterSilenceS = 10.0;
   void report(std::vector<std::byte>&& msg);  // to the master, from the owning thread
 
  private:
@@ -35,6 +42,7 @@ class StageLink {
   zmq::socket_t sub_, ctl_;
   uint32_t rank_ = 0;
   std::atomic<bool> quit_{false};
+  std::chrono::steady_clock::time_point last_heard_ = std::chrono::steady_clock::now();
   std::thread heartbeat_;
 };
 

@@ -37,6 +37,7 @@ class Stage {
     while (!(stop && *stop)) {
       pollFor(items, 2, std::chrono::milliseconds(100));
       if ((items[0].revents & ZMQ_POLLIN) && !readParams()) return 0;
+      if (link_.masterLost()) return 1;
       if (items[1].revents & ZMQ_POLLIN) readPieces();
       for (auto& why : gather_.takeLateDrops()) drops_.drop(~0u, why);
       while (auto ready = gather_.pop()) composite(*ready);
@@ -49,7 +50,7 @@ class Stage {
   bool readParams() {
     for (int i = 0; i < 256; ++i) {
       zmq::message_t m;
-      if (!link_.sub().recv(m, zmq::recv_flags::dontwait)) break;
+      if (!link_.recvSub(m)) break;
       auto h = proto::decodeHeader(view(m));
       if (!h) {
         drops_.drop(~0u, h.error());

@@ -36,6 +36,7 @@ class Stage {
     while (!(stop && *stop)) {
       pollFor(items, 2, std::chrono::milliseconds(20));
       if (items[0].revents & ZMQ_POLLIN) readParams();
+      if (link_.masterLost()) return 1;
       if (items[1].revents & ZMQ_POLLIN) readStrips();
       presentReady();
       if (sink_ && pollInput()) return 0;
@@ -55,7 +56,7 @@ class Stage {
   void readParams() {
     for (int i = 0; i < 256; ++i) {
       zmq::message_t m;
-      if (!link_.sub().recv(m, zmq::recv_flags::dontwait)) break;
+      if (!link_.recvSub(m)) break;
       auto h = proto::decodeHeader(view(m));
       if (!h) {
         drops_.drop(~0u, h.error());

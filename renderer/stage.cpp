@@ -46,7 +46,7 @@ class Stage {
       // Drain first, so frames superseded by a newer epoch are skipped, not rendered.
       while (true) {
         zmq::message_t m;
-        if (!link_.sub().recv(m, zmq::recv_flags::dontwait)) break;
+        if (!link_.recvSub(m)) break;
         auto h = proto::decodeHeader(view(m));
         if (!h) {
           drops_.drop(~0u, h.error());
@@ -63,6 +63,7 @@ class Stage {
         epoch_ = std::max(epoch_, p->epoch);
         queue.push_back(std::move(*p));
       }
+      if (link_.masterLost()) return 1;
       for (const auto& p : queue)
         if (p.epoch == epoch_) renderFrame(p);
     }
