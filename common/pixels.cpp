@@ -93,38 +93,49 @@ std::vector<std::byte> packPixels(const ImageF& img, const Rect& r, proto::Pixel
   return out;
 }
 
-// One source pixel (premultiplied RGBA) goes under the destination pixel.
-static inline void under(float* d, const float* s) {
-  const float t = 1.0f - d[3];
-  for (int c = 0; c < 4; ++c) d[c] += t * s[c];
+void compositeUnderRow(float* d, int dst_x, std::span<const std::byte> src, const Rect& src_rect, int row,
+                       proto::PixelFormat f) {
+  const auto* b = reinterpret_cast<const uint8_t*>(src.data());
+  const size_t values = (size_t)src_rect.area() * 4, first = (size_t)row * src_rect.w * 4;
+  d += 4 * (size_t)(src_rect.x - dst_x);
+  const int w = src_rect.w;
+  // One loop per format so each stays simple enough for the vectorizer.
+  if (f == proto::PixelFormat::RGBA8) {
+    const uint8_t* s = b + first;
+    for (int x = 0; x < w; ++x, d += 4, s += 4) {
+      const float t = (1.0f - d[3]) * (1.0f / 255.0f);
+      for (int c = 0; c < 4; ++c) d[c] += t * s[c];
+    }
+  } else if (f == proto::PixelFormat::RGBA16F) {
+    const uint8_t *lo = b + first, *hi = b + values + first;
+    for (int x = 0; x < w; ++x, d += 4, lo += 4, hi += 4) {
+      float px[4];
+#if defined(__F16C__)
+      uint32_t l, h;
+      std::memcpy(&l, lo, 4);
+      std::memcpy(&h, hi, 4);
+      _mm_storeu_ps(px, _mm_cvtph_ps(_mm_unpacklo_epi8(_mm_cvtsi32_si128((int)l), _mm_cvtsi32_si128((int)h))));
+#else
+      for (int c = 0; c < 4; ++c) px[c] = halfToFloat((uint16_t)(lo[c] | hi[c] << 8));
+#endif
+      const float t = 1.0f - d[3];
+      for (int c = 0; c < 4; ++c) d[c] += t * px[c];
+    }
+  } else {
+    const uint8_t* s = b + 4 * first;
+    for (int x = 0; x < w; ++x, d += 4, s += 16) {
+      float px[4];
+      std::memcpy(px, s, 16);
+      const float t = 1.0f - d[3];
+      for (int c = 0; c < 4; ++c) d[c] += t * px[c];
+    }
+  }
 }
 
 void compositeUnder(ImageF& dst, const Rect& dst_rect, std::span<const std::byte> src, const Rect& src_rect,
                     proto::PixelFormat f) {
-  const auto* b = reinterpret_cast<const uint8_t*>(src.data());
-  const size_t values = (size_t)src_rect.area() * 4;
-  size_t i = 0;  // index of the current value in the piece
-  float px[4];
-  for (int y = 0; y < src_rect.h; ++y) {
-    float* d = dst.at(src_rect.x - dst_rect.x, src_rect.y - dst_rect.y + y);
-    for (int x = 0; x < src_rect.w; ++x, d += 4, i += 4) {
-      if (f == proto::PixelFormat::RGBA8) {
-        for (int c = 0; c < 4; ++c) px[c] = b[i + c] * (1.0f / 255.0f);
-      } else if (f == proto::PixelFormat::RGBA16F) {
-        const uint8_t *lo = b + i, *hi = b + values + i;
-#if defined(__F16C__)
-        __m128i l = _mm_cvtsi32_si128((int)(lo[0] | lo[1] << 8 | lo[2] << 16 | (uint32_t)lo[3] << 24));
-        __m128i h = _mm_cvtsi32_si128((int)(hi[0] | hi[1] << 8 | hi[2] << 16 | (uint32_t)hi[3] << 24));
-        _mm_storeu_ps(px, _mm_cvtph_ps(_mm_unpacklo_epi8(l, h)));
-#else
-        for (int c = 0; c < 4; ++c) px[c] = halfToFloat((uint16_t)(lo[c] | hi[c] << 8));
-#endif
-      } else {
-        std::memcpy(px, b + 4 * i, 16);
-      }
-      under(d, px);
-    }
-  }
+  for (int y = 0; y < src_rect.h; ++y)
+    compositeUnderRow(dst.at(0, src_rect.y - dst_rect.y + y), dst_rect.x, src, src_rect, y, f);
 }
 
 }  // namespace tessera

@@ -17,6 +17,11 @@ std::vector<std::byte> packPixels(const ImageF& img, const Rect& r, proto::Pixel
 void compositeUnder(ImageF& dst, const Rect& dst_rect, std::span<const std::byte> src, const Rect& src_rect,
                     proto::PixelFormat f);
 
+// The same for one row: `row` (0-based) of the piece goes under `dst_row`, which holds a
+// row of the image starting at screen x = dst_x. Lets a compositor work row by row in cache.
+void compositeUnderRow(float* dst_row, int dst_x, std::span<const std::byte> src, const Rect& src_rect, int row,
+                       proto::PixelFormat f);
+
 uint16_t floatToHalf(float f);
 float halfToFloat(uint16_t h);
 

@@ -7,10 +7,10 @@
 
 namespace tessera::compositor {
 
-// Composites `pieces` (indexed by brick) in `order` into a float buffer of `region`'s
-// size, then quantizes it into `out` (full image size) at the region's place.
+// Composites `pieces` (indexed by brick) in `order`, row by row in a cache-resident float
+// row, and quantizes each row once into `out` (full image size) at the region's place.
 // Returns the number of pixels with alpha > 0 in the region.
 uint64_t compositeRegion(const Rect& region, const std::vector<int>& order, const std::vector<proto::Piece>& pieces,
-                         ImageF& scratch, Image8& out);
+                         std::vector<float>& row, Image8& out);
 
 }  // namespace tessera::compositor

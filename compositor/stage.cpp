@@ -100,7 +100,7 @@ class Stage {
     const Rect& reg = *r.region;
     if (frame_.width != r.params.width || frame_.height != r.params.height)
       frame_ = Image8(r.params.width, r.params.height);
-    st.active_pixels = compositeRegion(reg, r.params.order, r.pieces, scratch_, frame_);
+    st.active_pixels = compositeRegion(reg, r.params.order, r.pieces, row_, frame_);
     st.work_ms = msSince(t0);
     for (const auto& p : r.pieces) {
       st.bytes_raw += p.pixels.size();
@@ -139,7 +139,7 @@ class Stage {
   zmq::socket_t pull_, display_;
   std::string display_endpoint_;
   Gather gather_;
-  ImageF scratch_;
+  std::vector<float> row_;
   Image8 frame_;
   double decode_ms_ = 0;
   uint64_t bytes_in_ = 0;

@@ -157,9 +157,9 @@ void BM_CompositeRegionTwoPieces(benchmark::State& state, proto::PixelFormat f) 
   pieces[0].pixels = packPixels(front(), kFull, f);
   pieces[1].pixels = packPixels(back(), kFull, f);
   const std::vector<int> order{0, 1};
-  ImageF scratch;
+  std::vector<float> row;
   Image8 out(kSide, kSide);
-  for (auto _ : state) benchmark::DoNotOptimize(compositor::compositeRegion(kFull, order, pieces, scratch, out));
+  for (auto _ : state) benchmark::DoNotOptimize(compositor::compositeRegion(kFull, order, pieces, row, out));
   state.SetItemsProcessed(int64_t(state.iterations()) * kSide * kSide);
   state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(2 * pieces[0].pixels.size()));
 }

@@ -95,9 +95,9 @@ TEST(Gather, ResultIsIndependentOfArrivalOrder) {
     for (uint32_t b : arrival) ASSERT_EQ(g.addPiece(piece(3, b)), "");
     auto r = g.pop();
     ASSERT_TRUE(r);
-    ImageF scratch;
+    std::vector<float> row;
     Image8 out(8, 4);
-    compositeRegion(*r->region, r->params.order, r->pieces, scratch, out);
+    compositeRegion(*r->region, r->params.order, r->pieces, row, out);
     // Order 2,1,0 (front to back): c = .3*1 + .5*.2 + .25*.1 = .425; a = 1 - .5^3 = .875.
     EXPECT_EQ(out.at(0, 0)[0], (uint8_t)std::lround(0.425 * 255));
     EXPECT_EQ(out.at(0, 0)[3], (uint8_t)std::lround(0.875 * 255));
