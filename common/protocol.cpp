@@ -111,6 +111,7 @@ const char* typeName(Type t) {
     case Type::Input: return "Input";
     case Type::Stats: return "Stats";
     case Type::Shutdown: return "Shutdown";
+    case Type::Framebuffer: return "Framebuffer";
   }
   return "unknown";
 }
@@ -235,6 +236,11 @@ std::vector<std::byte> encode(const StageStats& m, uint32_t sender) {
     w.u64(m.active_pixels);
     detail::writeRect(w, m.active);
     w.u64(m.dropped);
+    w.u32(static_cast<uint32_t>(m.tile_ms.size()));
+    for (double t : m.tile_ms) w.f64(t);
+    w.u64(m.chunks_drawn);
+    w.u64(m.chunks_total);
+    w.u64(m.triangles);
   });
 }
 Result<StageStats> decodeStageStats(std::span<const std::byte> msg) {
@@ -250,6 +256,11 @@ Result<StageStats> decodeStageStats(std::span<const std::byte> msg) {
     m.active = detail::readRect(r, "active");
     detail::checkSaneRect(r, m.active, "active");
     m.dropped = r.u64("dropped");
+    m.tile_ms.resize(r.count("tile_ms", 1u << 20, 8));
+    for (double& t : m.tile_ms) t = detail::readFinite(r, "tile_ms");
+    m.chunks_drawn = r.u64("chunks_drawn");
+    m.chunks_total = r.u64("chunks_total");
+    m.triangles = r.u64("triangles");
   });
 }
 

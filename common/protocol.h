@@ -30,9 +30,9 @@ inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
 enum class Type : uint16_t {
-  Hello = 1, Welcome, FrameParams, Piece, Strips, FrameDone, Heartbeat, Input, Stats, Shutdown
+  Hello = 1, Welcome, FrameParams, Piece, Strips, FrameDone, Heartbeat, Input, Stats, Shutdown, Framebuffer
 };
-inline constexpr uint16_t kTypeCount = 10;
+inline constexpr uint16_t kTypeCount = 11;
 const char* typeName(Type t);
 
 enum class Role : uint8_t { Renderer = 1, Compositor = 2, Display = 3 };
@@ -72,6 +72,12 @@ struct BrickAssignment {
   uint32_t renderer = 0; BrickBox brick;
   bool operator==(const BrickAssignment&) const = default;
 };
+// Sort-first: one screen tile drawn by `renderer`, routed by `compositor`.
+struct TileAssignment {
+  uint32_t renderer = 0, compositor = 0;
+  Rect tile;
+  bool operator==(const TileAssignment&) const = default;
+};
 struct CompositorRegion {
   uint32_t compositor = 0; Rect region; std::string endpoint;
   bool operator==(const CompositorRegion&) const = default;
@@ -86,7 +92,8 @@ struct FrameParams {                                                       // ma
   PixelFormat format = PixelFormat::RGBA8;   // of pieces
   std::vector<BrickAssignment> bricks;       // one per renderer that has work
   std::vector<int> order;                    // brick indices (into `bricks`) front to back
-  std::vector<CompositorRegion> regions;     // tile the image, disjoint
+  std::vector<CompositorRegion> regions;     // sort-last: tile the image; sort-first: each router's tiles' bounds
+  std::vector<TileAssignment> tiles;         // sort-first (geometry) frames; empty for sort-last
   std::string display_endpoint;
   bool operator==(const FrameParams&) const = default;
 };
@@ -114,12 +121,27 @@ struct Strips {                                // compositor -> display
   bool operator==(const Strips&) const = default;
 };
 
+// Sort-first: a renderer's tiles packed left to right, top to bottom in one rgba8
+// framebuffer, each tile row preceded by its two-pixel strip header (strips.h).
+struct Framebuffer {                           // renderer -> compositor (router)
+  uint64_t frame = 0;
+  uint32_t epoch = 0, renderer = 0;
+  int width = 0, height = 0;
+  std::vector<std::byte> pixels;               // width*height*4, raw (decoded)
+  double render_ms = 0;
+  bool operator==(const Framebuffer&) const = default;
+};
+
 struct StageStats {                            // renderer/compositor -> master, per frame
   Role role = Role::Renderer; uint32_t rank = 0; uint64_t frame = 0;
   double work_ms = 0, encode_ms = 0;
   uint64_t bytes_raw = 0, bytes_encoded = 0, active_pixels = 0;
   Rect active;                                 // renderer: active region of its brick image
   uint64_t dropped = 0;                        // messages dropped so far (cumulative)
+  // Sort-first renderers: ms per assigned tile (in FrameParams::tiles order), chunk-tile
+  // pairs drawn, the mesh's chunk count and the triangles drawn.
+  std::vector<double> tile_ms;
+  uint64_t chunks_drawn = 0, chunks_total = 0, triangles = 0;
   bool operator==(const StageStats&) const = default;
 };
 
@@ -145,6 +167,7 @@ std::vector<std::byte> encode(const Shutdown&, uint32_t sender);
 std::vector<std::byte> encode(const FrameParams&, uint32_t sender);
 std::vector<std::byte> encode(const Piece&, uint32_t sender, Codec codec);
 std::vector<std::byte> encode(const Strips&, uint32_t sender, Codec codec);
+std::vector<std::byte> encode(const Framebuffer&, uint32_t sender, Codec codec);
 std::vector<std::byte> encode(const StageStats&, uint32_t sender);
 std::vector<std::byte> encode(const FrameDone&, uint32_t sender);
 std::vector<std::byte> encode(const Input&, uint32_t sender);
@@ -158,6 +181,7 @@ Result<Shutdown> decodeShutdown(std::span<const std::byte> msg);
 Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg);
 Result<Piece> decodePiece(std::span<const std::byte> msg);     // checks active within region, pixel count
 Result<Strips> decodeStrips(std::span<const std::byte> msg);
+Result<Framebuffer> decodeFramebuffer(std::span<const std::byte> msg);
 Result<StageStats> decodeStageStats(std::span<const std::byte> msg);
 Result<FrameDone> decodeFrameDone(std::span<const std::byte> msg);
 Result<Input> decodeInput(std::span<const std::byte> msg);

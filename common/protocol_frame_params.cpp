@@ -108,6 +108,20 @@ void readOrder(ByteReader& r, FrameParams& m) {
   }
 }
 
+void readTiles(ByteReader& r, FrameParams& m) {
+  const uint32_t n = r.count("tiles", 1u << 20, 8 + 16);
+  m.tiles.resize(n);
+  const Rect image{0, 0, m.width, m.height};
+  for (uint32_t i = 0; i < n && r.ok(); ++i) {
+    TileAssignment& t = m.tiles[i];
+    t.renderer = r.u32("tiles.renderer");
+    t.compositor = r.u32("tiles.compositor");
+    t.tile = detail::readRect(r, "tiles.tile");
+    if (r.ok() && (t.tile.empty() || intersect(t.tile, image) != t.tile))
+      r.fail("tile " + std::to_string(i) + " " + detail::rectText(t.tile) + " empty or outside image " + detail::rectText(image));
+  }
+}
+
 void readRegions(ByteReader& r, FrameParams& m) {
   const uint32_t n = r.count("regions", kMaxRegions, 4 + 16 + 4);
   m.regions.resize(n);
@@ -151,6 +165,12 @@ std::vector<std::byte> encode(const FrameParams& m, uint32_t sender) {
       w.str(c.endpoint);
     }
     w.str(m.display_endpoint);
+    w.u32(static_cast<uint32_t>(m.tiles.size()));
+    for (const TileAssignment& t : m.tiles) {
+      w.u32(t.renderer);
+      w.u32(t.compositor);
+      detail::writeRect(w, t.tile);
+    }
   });
 }
 
@@ -177,6 +197,7 @@ Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
         readOrder(r, m);
         readRegions(r, m);
         m.display_endpoint = r.str("display_endpoint");
+        readTiles(r, m);
       });
 }
 

@@ -134,4 +134,50 @@ Result<Strips> decodeStrips(std::span<const std::byte> msg) {
   return m;
 }
 
+std::vector<std::byte> encode(const Framebuffer& m, uint32_t sender, Codec codec) {
+  if (m.width < 0 || m.height < 0 || m.pixels.size() != (size_t)m.width * m.height * 4)
+    throw std::invalid_argument("encode Framebuffer: " + std::to_string(m.pixels.size()) + " bytes for " +
+                                std::to_string(m.width) + "x" + std::to_string(m.height));
+  auto msg = detail::beginMessage();
+  ByteWriter w(msg);
+  w.u32(m.epoch);
+  w.u32(m.renderer);
+  w.i32(m.width);
+  w.i32(m.height);
+  w.f64(m.render_ms);
+  appendPixels(msg, Type::Framebuffer, m.frame, sender, codec, m.pixels);
+  return msg;
+}
+
+Result<Framebuffer> decodeFramebuffer(std::span<const std::byte> msg) {
+  using R = Result<Framebuffer>;
+  auto o = detail::openMessage(msg, Type::Framebuffer, true);
+  if (!o) return R::fail(o.error());
+  ByteReader r(o->payload);
+  Framebuffer m;
+  m.frame = o->header.frame;
+  m.epoch = r.u32("epoch");
+  m.renderer = r.u32("renderer");
+  m.width = r.i32("width");
+  m.height = r.i32("height");
+  m.render_ms = detail::readFinite(r, "render_ms");
+  // A framebuffer packs tiles of at most the image's size side by side: twice the largest
+  // image edge bounds it generously.
+  if (r.ok() && (m.width < 0 || m.height < 0 || m.width > 2 * detail::kMaxDimension || m.height > 2 * detail::kMaxDimension))
+    r.fail("size " + std::to_string(m.width) + "x" + std::to_string(m.height) + " out of range");
+  if (!r.ok()) return R::fail("Framebuffer: " + r.error());
+  auto bytes = pixelBytes(o->header, r);
+  if (!bytes) return R::fail("Framebuffer: " + bytes.error());
+  const size_t want = (size_t)m.width * m.height * 4;
+  if (*bytes != want)
+    return R::fail("Framebuffer: " + std::to_string(*bytes) + " pixel bytes for " + std::to_string(m.width) + "x" +
+                   std::to_string(m.height));
+  if (!plausibleRawSize(o->header.codec, r.rest(), want))
+    return R::fail("Framebuffer: " + std::to_string(r.remaining()) + " bytes cannot hold " + std::to_string(want));
+  m.pixels.resize(want);
+  auto d = decompressInto(o->header.codec, r.rest(), m.pixels);
+  if (!d) return R::fail("Framebuffer: pixels: " + d.error());
+  return m;
+}
+
 }  // namespace tessera::proto

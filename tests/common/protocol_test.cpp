@@ -27,7 +27,21 @@ FrameParams sampleParams() {
   p.order = {2, 0, 1};
   p.regions = {{0, {0, 0, 640, 240}, "ipc:///tmp/c0"}, {1, {0, 240, 640, 240}, "tcp://127.0.0.1:5601"}};
   p.display_endpoint = "ipc:///tmp/display";
+  p.tiles = {{0, 1, {0, 0, 320, 240}}, {1, 0, {320, 0, 320, 1}}};
   return p;
+}
+
+Framebuffer sampleFramebuffer() {
+  Framebuffer f;
+  f.frame = 5;
+  f.epoch = 2;
+  f.renderer = 1;
+  f.width = 13;
+  f.height = 7;
+  f.pixels.resize(13 * 7 * 4);
+  for (size_t i = 0; i < f.pixels.size(); ++i) f.pixels[i] = std::byte(uint8_t(i % 11 == 0 ? i : 0));
+  f.render_ms = 2.5;
+  return f;
 }
 
 Piece samplePiece(PixelFormat f) {
@@ -114,7 +128,7 @@ TEST(Protocol, EveryStructuredMessageRoundTrips) {
   expectRoundTrip(Shutdown{"master exiting"}, encode(Shutdown{"master exiting"}, 11), decodeShutdown, Type::Shutdown);
   FrameParams fp = sampleParams();
   expectRoundTrip(fp, encode(fp, 11), decodeFrameParams, Type::FrameParams);
-  StageStats st{Role::Compositor, 2, 99, 4.5, 1.25, 4000000, 700000, 12345, {1, 2, 300, 400}, 6};
+  StageStats st{Role::Compositor, 2, 99, 4.5, 1.25, 4000000, 700000, 12345, {1, 2, 300, 400}, 6, {1.5, 0.25}, 7, 3, 99};
   expectRoundTrip(st, encode(st, 11), decodeStageStats, Type::Stats);
   FrameDone fd{1000, 16.5, 2.25, 888888, 3, 1};
   expectRoundTrip(fd, encode(fd, 11), decodeFrameDone, Type::FrameDone);
@@ -138,6 +152,8 @@ TEST(Protocol, PixelMessagesRoundTripWithEveryCodecAndFormat) {
     expectRoundTrip(empty, encode(empty, 11, codec), decodePiece, Type::Piece);
     Strips s = sampleStrips();
     expectRoundTrip(s, encode(s, 11, codec), decodeStrips, Type::Strips);
+    Framebuffer fb = sampleFramebuffer();
+    expectRoundTrip(fb, encode(fb, 11, codec), decodeFramebuffer, Type::Framebuffer);
     // Compression does something: the stream is 70% zeros.
     if (codec != Codec::None) {
       EXPECT_LT(encode(s, 11, codec).size(), s.stream.size()) << codecName(codec);
@@ -161,12 +177,26 @@ TEST(Protocol, TruncatedAtEveryLengthFails) {
   expectTruncationsFail(encode(sampleParams(), 1), decodeFrameParams);
   expectTruncationsFail(encode(samplePiece(PixelFormat::RGBA8), 1, Codec::Lzo), decodePiece);
   expectTruncationsFail(encode(sampleStrips(), 1, Codec::Zstd), decodeStrips);
+  expectTruncationsFail(encode(sampleFramebuffer(), 1, Codec::Lz4), decodeFramebuffer);
   expectTruncationsFail(encode(Input{1, 2, 3, "fast"}, 1), decodeInput);
 }
 
+TEST(Protocol, FramebufferAndTilesAreValidated) {
+  Framebuffer fb = sampleFramebuffer();
+  fb.pixels.pop_back();
+  EXPECT_THROW(encode(fb, 1, Codec::None), std::invalid_argument);
+  FrameParams p = sampleParams();
+  p.tiles[1].tile = {630, 0, 20, 10};  // sticks out of the 640-wide image
+  auto r = decodeFrameParams(encode(p, 1));
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("tile 1"), std::string::npos) << r.error();
+}
+
 TEST(Protocol, TruncatedPayloadWithResealedHeaderFailsOnTheField) {
-  Bytes m = encode(sampleParams(), 1);
-  m.resize(m.size() - 10);  // cuts into display_endpoint
+  FrameParams p = sampleParams();
+  p.tiles.clear();  // display_endpoint is then followed only by the 4-byte tile count
+  Bytes m = encode(p, 1);
+  m.resize(m.size() - 14);  // cuts into display_endpoint
   putLE(m, 24, m.size() - kHeaderSize, 4);  // raw_size == encoded_size for codec none
   reseal(m);
   auto r = decodeFrameParams(m);

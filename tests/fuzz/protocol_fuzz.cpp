@@ -123,6 +123,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   check<FrameParams>(msg, decodeFrameParams, [&](const FrameParams& v) { return encode(v, sender); });
   check<Piece>(msg, decodePiece, [&](const Piece& v) { return encode(v, sender, codec); });
   check<Strips>(msg, decodeStrips, [&](const Strips& v) { return encode(v, sender, codec); });
+  check<Framebuffer>(msg, decodeFramebuffer, [&](const Framebuffer& v) { return encode(v, sender, codec); });
   check<StageStats>(msg, decodeStageStats, [&](const StageStats& v) { return encode(v, sender); });
   check<FrameDone>(msg, decodeFrameDone, [&](const FrameDone& v) { return encode(v, sender); });
   check<Input>(msg, decodeInput, [&](const Input& v) { return encode(v, sender); });
