@@ -1,0 +1,81 @@
+// Context creation, extra entry points and program building for the GLSL volume backend.
+#include "renderer/gl_volume_context.h"
+
+#include <stdexcept>
+#include <string>
+
+#include "renderer/gl_functions.h"
+
+namespace tessera::renderer::glv {
+
+#define TESSERA_GLV_DEFINE(type, name) type name = nullptr;
+TESSERA_GLV_FUNCTIONS(TESSERA_GLV_DEFINE)
+#undef TESSERA_GLV_DEFINE
+
+OSMesaContext createCoreContext(int major, int minor) {
+  const int attrs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 0, OSMESA_STENCIL_BITS, 0,
+                       OSMESA_ACCUM_BITS, 0, OSMESA_PROFILE, OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, major,
+                       OSMESA_CONTEXT_MINOR_VERSION, minor, 0};
+  OSMesaContext ctx = OSMesaCreateContextAttribs(attrs, nullptr);
+  if (!ctx)
+    throw std::runtime_error("OSMesa: cannot create an OpenGL " + std::to_string(major) + "." + std::to_string(minor) +
+                             " core profile context (volume backend needs 4.5)");
+  return ctx;
+}
+
+void loadVolumeGlFunctions() {
+  gl::loadGlFunctions();
+  static bool loaded = false;
+  if (loaded) return;
+#define TESSERA_GLV_LOAD(type, name)                                                            \
+  name = reinterpret_cast<type>(OSMesaGetProcAddress("gl" #name));                              \
+  if (!name) throw std::runtime_error("OSMesa: OpenGL entry point gl" #name " is not available");
+  TESSERA_GLV_FUNCTIONS(TESSERA_GLV_LOAD)
+#undef TESSERA_GLV_LOAD
+  loaded = true;
+}
+
+namespace {
+unsigned compile(GLenum kind, const char* src) {
+  const unsigned s = gl::CreateShader(kind);
+  gl::ShaderSource(s, 1, &src, nullptr);
+  gl::CompileShader(s);
+  GLint ok = 0;
+  gl::GetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[2048] = {};
+    gl::GetShaderInfoLog(s, sizeof log, nullptr, log);
+    gl::DeleteShader(s);
+    throw std::runtime_error(std::string("OSMesa: volume shader compilation failed: ") + log);
+  }
+  return s;
+}
+}  // namespace
+
+unsigned buildProgram(const char* vertex_src, const char* fragment_src) {
+  const unsigned vs = compile(GL_VERTEX_SHADER, vertex_src);
+  unsigned fs = 0;
+  try {
+    fs = compile(GL_FRAGMENT_SHADER, fragment_src);
+  } catch (...) {
+    gl::DeleteShader(vs);
+    throw;
+  }
+  const unsigned p = gl::CreateProgram();
+  gl::AttachShader(p, vs);
+  gl::AttachShader(p, fs);
+  gl::LinkProgram(p);
+  gl::DeleteShader(vs);
+  gl::DeleteShader(fs);
+  GLint ok = 0;
+  gl::GetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[2048] = {};
+    gl::GetProgramInfoLog(p, sizeof log, nullptr, log);
+    gl::DeleteProgram(p);
+    throw std::runtime_error(std::string("OSMesa: volume shader program failed to link: ") + log);
+  }
+  return p;
+}
+
+}  // namespace tessera::renderer::glv
