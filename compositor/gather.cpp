@@ -6,6 +6,7 @@ namespace tessera::compositor {
 
 std::string Gather::check(const proto::FrameParams& p, const proto::Piece& piece) const {
   if (piece.epoch != p.epoch) return "piece epoch differs from FrameParams";
+  if (!p.tiles.empty()) return "sort-last piece for a sort-first frame";
   if (piece.brick >= p.bricks.size())
     return "piece for brick " + std::to_string(piece.brick) + " of " + std::to_string(p.bricks.size());
   if (p.bricks[piece.brick].renderer != piece.renderer) return "piece from a renderer not assigned that brick";
@@ -13,6 +14,20 @@ std::string Gather::check(const proto::FrameParams& p, const proto::Piece& piece
   for (const auto& reg : p.regions)
     if (reg.compositor == rank_ && reg.region != piece.region) return "piece cut for another region";
   return "";
+}
+
+std::string Gather::check(const proto::FrameParams& p, const proto::Framebuffer& fb) const {
+  if (fb.epoch != p.epoch) return "framebuffer epoch differs from FrameParams";
+  if (!routedRenderers(p).count(fb.renderer))
+    return "framebuffer from renderer " + std::to_string(fb.renderer) + " whose tiles are not routed here";
+  return "";
+}
+
+std::set<uint32_t> Gather::routedRenderers(const proto::FrameParams& p) const {
+  std::set<uint32_t> r;
+  for (const auto& t : p.tiles)
+    if (t.compositor == rank_) r.insert(t.renderer);
+  return r;
 }
 
 std::vector<std::string> Gather::takeLateDrops() { return std::exchange(late_drops_, {}); }
@@ -27,6 +42,7 @@ std::string Gather::addParams(proto::FrameParams p) {
         continue;
       }
       std::erase_if(it->second.pieces, [&](const auto& kv) { return kv.second.epoch < epoch_; });
+      std::erase_if(it->second.framebuffers, [&](const auto& kv) { return kv.second.epoch < epoch_; });
       ++it;
     }
     if (p.frame < next_expected_) next_expected_ = p.frame;  // frames in flight are issued again
@@ -34,42 +50,64 @@ std::string Gather::addParams(proto::FrameParams p) {
   if (p.frame < next_expected_) return "FrameParams for a finished frame";
   Frame& f = frames_[p.frame];
   f.params = std::move(p);
-  for (auto it = f.pieces.begin(); it != f.pieces.end();) {  // pieces that came first
-    std::string why = check(*f.params, it->second);
-    if (why.empty()) {
-      ++it;
-      continue;
+  auto recheck = [&](auto& parts) {  // parts that came before their parameters
+    for (auto it = parts.begin(); it != parts.end();) {
+      std::string why = check(*f.params, it->second);
+      if (why.empty()) {
+        ++it;
+        continue;
+      }
+      late_drops_.push_back(why);
+      it = parts.erase(it);
     }
-    late_drops_.push_back(why);
-    it = f.pieces.erase(it);
+  };
+  recheck(f.pieces);
+  recheck(f.framebuffers);
+  while (frames_.size() > kMaxPending) frames_.erase(frames_.begin());
+  return "";
+}
+
+template <class Part>
+std::string Gather::add(Part part, uint32_t key, std::map<uint32_t, Part> Frame::*parts, const char* what) {
+  if (part.epoch < epoch_) return std::string(what) + " of an older epoch";
+  if (part.frame < next_expected_ && part.epoch == epoch_) return std::string(what) + " for a finished frame";
+  Frame& f = frames_[part.frame];
+  if (f.params) {
+    std::string why = check(*f.params, part);
+    if (!why.empty()) return why;
   }
+  if ((f.*parts).count(key)) return std::string("duplicate ") + what + " " + std::to_string(key);
+  (f.*parts).emplace(key, std::move(part));
   while (frames_.size() > kMaxPending) frames_.erase(frames_.begin());
   return "";
 }
 
 std::string Gather::addPiece(proto::Piece piece) {
-  if (piece.epoch < epoch_) return "piece of an older epoch";
-  if (piece.frame < next_expected_ && piece.epoch == epoch_) return "piece for a finished frame";
-  Frame& f = frames_[piece.frame];
-  if (f.params) {
-    std::string why = check(*f.params, piece);
-    if (!why.empty()) return why;
-  }
-  if (f.pieces.count(piece.brick)) return "duplicate piece for brick " + std::to_string(piece.brick);
-  f.pieces.emplace(piece.brick, std::move(piece));
-  while (frames_.size() > kMaxPending) frames_.erase(frames_.begin());
-  return "";
+  uint32_t key = piece.brick;
+  return add(std::move(piece), key, &Frame::pieces, "piece");
+}
+
+std::string Gather::addFramebuffer(proto::Framebuffer fb) {
+  uint32_t key = fb.renderer;
+  return add(std::move(fb), key, &Frame::framebuffers, "framebuffer");
 }
 
 std::optional<Gather::Ready> Gather::pop() {
   for (auto it = frames_.begin(); it != frames_.end(); ++it) {
     Frame& f = it->second;
-    if (!f.params || f.pieces.size() != f.params->bricks.size()) continue;
+    if (!f.params) continue;
+    const bool sort_first = !f.params->tiles.empty();
+    if (sort_first ? f.framebuffers.size() != routedRenderers(*f.params).size()
+                   : f.pieces.size() != f.params->bricks.size())
+      continue;
     Ready r;
     r.params = std::move(*f.params);
     for (const auto& reg : r.params.regions)
       if (reg.compositor == rank_) r.region = reg.region;
+    for (const auto& t : r.params.tiles)
+      if (t.compositor == rank_) r.tiles.push_back(t.tile);
     for (auto& [brick, piece] : f.pieces) r.pieces.push_back(std::move(piece));
+    for (auto& [renderer, fb] : f.framebuffers) r.framebuffers.push_back(std::move(fb));
     next_expected_ = it->first + 1;
     frames_.erase(frames_.begin(), std::next(it));  // older incomplete frames can never finish now
     return r;

@@ -1,6 +1,7 @@
 #include "stage.h"
 
 #include <chrono>
+#include <cstring>
 #include <map>
 
 #include "common/log.h"
@@ -73,16 +74,25 @@ class Stage {
       zmq::message_t m;
       if (!pull_.recv(m, zmq::recv_flags::dontwait)) break;
       auto t0 = Clock::now();
-      auto piece = proto::decodePiece(view(m));
+      auto h = proto::decodeHeader(view(m));
+      if (!h) {
+        drops_.drop(~0u, h.error());
+        continue;
+      }
+      std::string why;
+      if (h->type == proto::Type::Framebuffer) {
+        auto fb = proto::decodeFramebuffer(view(m));
+        why = fb ? gather_.addFramebuffer(std::move(*fb)) : fb.error();
+      } else {
+        auto piece = proto::decodePiece(view(m));
+        why = piece ? gather_.addPiece(std::move(*piece)) : piece.error();
+      }
       decode_ms_ += msSince(t0);
-      if (!piece) {
-        auto h = proto::decodeHeader(view(m));
-        drops_.drop(h ? h->sender : ~0u, piece.error());
+      if (!why.empty()) {
+        drops_.drop(h->sender, why);
         continue;
       }
       bytes_in_ += m.size();
-      uint32_t sender = piece->renderer;
-      if (auto why = gather_.addPiece(std::move(*piece)); !why.empty()) drops_.drop(sender, why);
     }
   }
 
@@ -100,7 +110,8 @@ class Stage {
     const Rect& reg = *r.region;
     if (frame_.width != r.params.width || frame_.height != r.params.height)
       frame_ = Image8(r.params.width, r.params.height);
-    st.active_pixels = compositeRegion(reg, r.params.order, r.pieces, row_, frame_);
+    if (r.tiles.empty()) st.active_pixels = compositeRegion(reg, r.params.order, r.pieces, row_, frame_);
+    else route(r.framebuffers, st);
     st.work_ms = msSince(t0);
     for (const auto& p : r.pieces) {
       st.bytes_raw += p.pixels.size();
@@ -111,7 +122,14 @@ class Stage {
     s.frame = r.params.frame;
     s.epoch = r.params.epoch;
     s.compositor = link_.rank();
-    s.stream = encodeStrips(frame_, reg, 0);
+    if (r.tiles.empty()) {
+      s.stream = encodeStrips(frame_, reg, 0);
+    } else {
+      for (const Rect& t : r.tiles) {
+        auto part = encodeStrips(frame_, t, 0);
+        s.stream.insert(s.stream.end(), part.begin(), part.end());
+      }
+    }
     s.composite_ms = st.work_ms;
     s.active_pixels = st.active_pixels;
     for (const auto& p : r.pieces) s.render_ms = std::max(s.render_ms, p.render_ms);
@@ -121,6 +139,17 @@ class Stage {
     sendBytes(display(r.params.display_endpoint), std::move(bytes));
     st.dropped = drops_.total();
     link_.report(proto::encode(st, link_.rank()));
+  }
+
+  // Sort-first: strips find their place from their headers alone (Lightning-2 style).
+  void route(const std::vector<proto::Framebuffer>& fbs, proto::StageStats& st) {
+    for (const auto& fb : fbs) {
+      Image8 img(fb.width, fb.height);
+      std::memcpy(img.px.data(), fb.pixels.data(), fb.pixels.size());
+      RouteStats rs = routeFramebuffer(img, frame_, 0);
+      if (rs.strips_rejected) drops_.drop(fb.renderer, std::to_string(rs.strips_rejected) + " strips rejected");
+      st.active_pixels += (uint64_t)rs.strips_written;
+    }
   }
 
   zmq::socket_t& display(const std::string& endpoint) {

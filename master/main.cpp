@@ -21,8 +21,13 @@ int main(int argc, char** argv) {
   app.add_option("--metrics", opt.metrics_path, "JSON-lines metrics file")->envname("TESSERA_METRICS");
   app.add_option("--endpoints", base, "endpoint base (ipc://DIR | tcp://HOST:PORT)")->envname("TESSERA_ENDPOINTS");
   app.add_option("--heartbeat-timeout", opt.heartbeat_timeout_s, "seconds of silence before a stage counts as lost");
-  bool no_balance = false;
-  app.add_flag("--no-balance", no_balance, "equal compositor regions instead of balancing active pixels");
+  std::string tiling = "balanced";
+  app.add_option("--tiling", tiling,
+                 "balanced: re-split work every frame from the last frame's measurements (sort-last: compositor "
+                 "regions by active pixels; sort-first: tiles by render cost); static: equal splits")
+      ->check(CLI::IsMember({"balanced", "static"}));
+  app.add_option("--tiles-per-renderer", opt.tiles_per_renderer, "sort-first: tiles per renderer")
+      ->check(CLI::Range(1, 64));
   CLI11_PARSE(app, argc, argv);
   try {
     opt.scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
@@ -32,7 +37,7 @@ int main(int argc, char** argv) {
                  : format == "rgba16f" ? proto::PixelFormat::RGBA16F
                  : format == "rgba32f" ? proto::PixelFormat::RGBA32F
                                        : throw std::invalid_argument("--format: expected rgba8, rgba16f or rgba32f");
-    opt.balance = !no_balance;
+    opt.balance = tiling == "balanced";
     zmq::context_t ctx(1);
     return master::run(opt, ctx, &installStopSignals());
   } catch (const std::exception& e) {

@@ -9,6 +9,7 @@
 
 #include "balance.h"
 #include "interaction.h"
+#include "tiling.h"
 #include "common/log.h"
 #include "common/transport.h"
 #include "metrics.h"
@@ -52,7 +53,8 @@ class Master {
     spdlog::info("master listening pub={} control={} renderers={} compositors={} frames={} window={}",
                  opt_.endpoints.masterPub(), opt_.endpoints.masterControl(), opt_.renderers, opt_.compositors,
                  total_frames_ == 0 ? std::string("interactive") : std::to_string(total_frames_), opt_.window);
-    volume_ = std::make_shared<Volume>(loadVolume(opt_.scene));
+    // Sort-first (geometry) scenes need no volume here: renderers own the mesh.
+    if (!sortFirst()) volume_ = std::make_shared<Volume>(loadVolume(opt_.scene));
   }
 
   int run(const std::atomic<bool>* stop) {
@@ -146,8 +148,43 @@ class Master {
     for (const auto& [key, m] : members_)
       if (m.role == Role::Compositor && m.alive) compositors_.push_back(&m);
     int n = std::max<int>(1, (int)renderer_ranks_.size());
-    tree_ = splitBricks(*volume_, n, &opt_.scene.tf);
+    if (!sortFirst()) tree_ = splitBricks(*volume_, n, &opt_.scene.tf);
     started_ = true;
+  }
+
+  bool sortFirst() const { return opt_.scene.mesh.has_value(); }
+
+  // Sort-first: tiles for this frame (balanced from the last fully reported frame's
+  // per-tile costs, or static equal tiles) dealt to renderers; renderer i's tiles are
+  // routed by compositor i mod M, so each renderer sends one framebuffer.
+  void assignTiles(proto::FrameParams& p) {
+    const int r = (int)renderer_ranks_.size(), m = (int)compositors_.size();
+    auto tiles = opt_.balance ? balancedTiles(width(), height(), r * opt_.tiles_per_renderer, cost_)
+                              : equalTiles(width(), height(), r * opt_.tiles_per_renderer);
+    std::map<uint32_t, Rect> bounds;  // compositor -> bounds of its tiles
+    for (size_t i = 0; i < tiles.size(); ++i) {
+      int renderer = (int)(i % r);
+      const Member* c = compositors_[renderer % m];
+      p.tiles.push_back({renderer_ranks_[renderer], c->rank, tiles[i]});
+      bounds[c->rank] = unite(bounds[c->rank], tiles[i]);
+    }
+    for (const Member* c : compositors_)
+      if (bounds.count(c->rank)) p.regions.push_back({c->rank, bounds[c->rank], c->endpoint});
+  }
+
+  // A renderer's per-tile times, in FrameParams::tiles order; a frame's costs replace the
+  // model once every renderer has reported.
+  void tileCosts(const proto::StageStats& s) {
+    auto it = inflight_tiles_.find(s.frame);
+    if (it == inflight_tiles_.end()) return;
+    auto& [reports, grid, tiles] = it->second;
+    size_t k = 0;
+    for (const auto& t : tiles)
+      if (t.renderer == s.rank && k < s.tile_ms.size()) grid.add(t.tile, s.tile_ms[k++]);
+    if (++reports >= (int)renderer_ranks_.size()) {
+      cost_ = grid;
+      inflight_tiles_.erase(inflight_tiles_.begin(), std::next(it));
+    }
   }
 
   std::vector<Rect> regions() const {
@@ -187,14 +224,19 @@ class Master {
     p.height = height();
     p.codec = opt_.codec;
     p.format = opt_.format;
-    for (size_t i = 0; i < tree_.bricks.size(); ++i) p.bricks.push_back({renderer_ranks_[i], tree_.bricks[i]});
-    p.order = tree_.visibilityOrder(*volume_, cam);
-    auto bands = regions();
-    for (size_t i = 0; i < bands.size(); ++i)
-      p.regions.push_back({compositors_[i]->rank, bands[i], compositors_[i]->endpoint});
+    if (sortFirst()) {
+      assignTiles(p);
+      inflight_tiles_[frame] = {0, CostGrid(width(), height()), p.tiles};
+    } else {
+      for (size_t i = 0; i < tree_.bricks.size(); ++i) p.bricks.push_back({renderer_ranks_[i], tree_.bricks[i]});
+      p.order = tree_.visibilityOrder(*volume_, cam);
+      auto bands = regions();
+      for (size_t i = 0; i < bands.size(); ++i)
+        p.regions.push_back({compositors_[i]->rank, bands[i], compositors_[i]->endpoint});
+    }
     p.display_endpoint = opt_.endpoints.display();
     inflight_[frame] = {Clock::now(), cam};
-    metrics_.issued(frame, epoch_, (int)p.bricks.size(), (int)p.regions.size());
+    metrics_.issued(frame, epoch_, (int)renderer_ranks_.size(), (int)p.regions.size());
     sendBytes(pub_, proto::encode(p, kMasterRank));
   }
 
@@ -247,6 +289,7 @@ class Master {
           latest_active_frame_ = s->frame + 1;
           last_active_.push_back(s->active);
         }
+        if (s->role == Role::Renderer && sortFirst()) tileCosts(*s);
         return metrics_.stats(*s);
       }
       case proto::Type::FrameDone: {
@@ -311,6 +354,13 @@ class Master {
   std::vector<uint32_t> renderer_ranks_;
   std::vector<const Member*> compositors_;
   BrickTree tree_;
+  CostGrid cost_{1, 1};
+  struct TileReports {
+    int reports = 0;
+    CostGrid grid{1, 1};
+    std::vector<proto::TileAssignment> tiles;
+  };
+  std::map<uint64_t, TileReports> inflight_tiles_;
   bool started_ = false;
   uint32_t epoch_ = 0;
   uint64_t next_frame_ = 0;

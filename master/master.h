@@ -24,7 +24,8 @@ struct MasterOptions {
   // rgba16f: rgba8 pieces round twice before the final rounding (up to 1.5 levels),
   // which breaks the 1/255 sort-last contract; half floats keep it (see README).
   proto::PixelFormat format = proto::PixelFormat::RGBA16F;
-  bool balance = true;      // re-split compositor regions by active pixels every frame
+  bool balance = true;      // sort-last: compositor regions by active pixels; sort-first: tiles by cost
+  int tiles_per_renderer = 1;  // sort-first tiles = renderers x this
   std::string metrics_path; // JSON lines; "" = none
   double heartbeat_timeout_s = 3.0;
   double start_timeout_s = 60.0;

@@ -90,6 +90,15 @@ nlohmann::json Metrics::summarize(const std::vector<proto::StageStats>& renderer
   j["latency_ms"] = latency_ms;
   stage(renderers, j, "render");
   stage(compositors, j, "composite");
+  // Sort-first: chunk-tile pairs drawn per chunk (WireGL's overlap factor) and triangles.
+  double drawn = 0, chunks = 0, triangles = 0;
+  for (const auto& s : renderers) {
+    drawn += (double)s.chunks_drawn;
+    chunks = std::max(chunks, (double)s.chunks_total);
+    triangles += (double)s.triangles;
+  }
+  j["overlap_factor"] = chunks > 0 ? drawn / chunks : 0.0;
+  j["triangles"] = triangles;
   j["display_ms"] = done.display_ms;
   j["route_ms"] = done.route_ms;
   j["display_bytes_encoded"] = done.bytes_encoded;

@@ -11,6 +11,7 @@
 #include "common/stage_link.h"
 #include "common/transport.h"
 #include "raycaster.h"
+#include "tile_render.h"
 
 namespace tessera::renderer {
 namespace {
@@ -30,8 +31,14 @@ struct RenderKey {
 class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
-      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Renderer),
-        volume_(std::make_shared<Volume>(loadVolume(opt.scene))), caster_(volume_, opt.scene.tf) {}
+      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Renderer) {
+    if (opt.scene.mesh) {
+      tiles_ = std::make_unique<TileRenderer>(opt.scene);
+    } else {
+      volume_ = std::make_shared<Volume>(loadVolume(opt.scene));
+      caster_ = std::make_unique<Raycaster>(volume_, opt.scene.tf);
+    }
+  }
 
   int run(const std::atomic<bool>* stop) {
     if (!link_.join(stop)) {
@@ -76,6 +83,8 @@ class Stage {
     st.role = proto::Role::Renderer;
     st.rank = link_.rank();
     st.frame = p.frame;
+    if (!p.tiles.empty()) return renderTiles(p, st);
+    if (!caster_) return drops_.drop(~0u, "sort-last FrameParams for a geometry scene");
     for (uint32_t b = 0; b < p.bricks.size(); ++b) {
       if (p.bricks[b].renderer != link_.rank()) continue;
       auto t0 = Clock::now();
@@ -87,6 +96,25 @@ class Stage {
       for (const auto& region : p.regions) sendPiece(p, b, region, c, st);
       st.encode_ms += msSince(t1);
     }
+    st.dropped = drops_.total();
+    link_.report(proto::encode(st, link_.rank()));
+  }
+
+  void renderTiles(const proto::FrameParams& p, proto::StageStats& st) {
+    if (!tiles_) return drops_.drop(~0u, "sort-first FrameParams for a volume scene");
+    auto outputs = tiles_->render(p, link_.rank(), st);
+    auto t0 = Clock::now();
+    for (auto& o : outputs) {
+      const std::string* endpoint = nullptr;
+      for (const auto& r : p.regions)
+        if (r.compositor == o.compositor) endpoint = &r.endpoint;
+      if (!endpoint) continue;
+      auto bytes = proto::encode(o.framebuffer, link_.rank(), p.codec);
+      st.bytes_raw += o.framebuffer.pixels.size();
+      st.bytes_encoded += bytes.size();
+      sendBytes(socketFor(*endpoint), std::move(bytes));
+    }
+    st.encode_ms = msSince(t0);
     st.dropped = drops_.total();
     link_.report(proto::encode(st, link_.rank()));
   }
@@ -106,7 +134,7 @@ class Stage {
     ro.threads = opt_.threads;
     RenderStats rs;
     Cached c{key, {}, {}};
-    c.image = caster_.render(p.camera, p.width, p.height, brick, ro, &rs, &c.active);
+    c.image = caster_->render(p.camera, p.width, p.height, brick, ro, &rs, &c.active);
     spdlog::debug("frame={} brick={},{},{} samples={} skipped={} ms={:.1f}", p.frame, brick.lo[0], brick.lo[1],
                   brick.lo[2], rs.samples, rs.samples_skipped, rs.ms);
     if (cache_.size() >= 2) cache_.pop_front();  // a renderer may own two bricks after a failure
@@ -147,7 +175,8 @@ class Stage {
   zmq::context_t& ctx_;
   StageLink link_;
   std::shared_ptr<Volume> volume_;
-  Raycaster caster_;
+  std::unique_ptr<Raycaster> caster_;     // volume scenes (sort-last)
+  std::unique_ptr<TileRenderer> tiles_;   // geometry scenes (sort-first)
   std::deque<Cached> cache_;
   std::map<std::string, zmq::socket_t> pushes_;
   uint32_t epoch_ = 0;
