@@ -220,7 +220,7 @@ struct Leaper {
 
 }  // namespace
 
-void castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleCounts& counts) {
+bool castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleCounts& counts) {
   const Volume& v = *ctx.volume;
   if (span.k_end >= kMaxSamples) throw std::invalid_argument("castFast: more than 2^24 samples on one ray (step too small)");
   Consts c;
@@ -247,6 +247,7 @@ void castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
 #endif
   int64_t k = span.k_first;
   const int64_t k_end = span.k_end;
+  bool terminated = false;
   // Two phases per batch: the leaper (branchy, scalar) lists the runs to sample, then the
   // packets run over that list; keeping them apart lets each loop stay tight and predictable.
   struct Run {
@@ -302,6 +303,7 @@ void castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
       }
       if (done) {
         k = k_end;
+        terminated = true;
         break;
       }
     }
@@ -311,6 +313,7 @@ void castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
 #else
   for (int i = 0; i < 4; ++i) out[i] = acc[i];
 #endif
+  return terminated;
 }
 
 }  // namespace tessera::renderer

@@ -26,8 +26,9 @@ struct FastContext {
   float early_termination = 2.0f;                        // > 1: never
 };
 
-// Samples span.k_first..k_end-1; out receives premultiplied RGBA.
-void castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);
+// Samples span.k_first..k_end-1; out receives premultiplied RGBA. Returns true if the ray
+// was terminated early (its opacity reached early_termination).
+bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);
 
 // Double precision, exact transfer function, no skipping, no early termination.
 void castReference(const Volume& v, const TransferFunction& tf, double step, const RaySpan& span,

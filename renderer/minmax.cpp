@@ -103,10 +103,18 @@ MinMaxHierarchy::Emptiness MinMaxHierarchy::classify(const std::function<bool(fl
   e.empty.resize(levels_.size());
   const Level& l0 = levels_[0];
   e.empty[0].resize(l0.mn.size());
-  for (size_t i = 0; i < l0.mn.size(); ++i) {
-    e.empty[0][i] = isEmpty(l0.mn[i], l0.mx[i]) ? 1 : 0;
-    e.empty_blocks += e.empty[0][i];
-  }
+  std::array<int, 3> lo = l0.dims, hi{0, 0, 0};
+  for (int z = 0; z < l0.dims[2]; ++z)
+    for (int y = 0; y < l0.dims[1]; ++y)
+      for (int x = 0; x < l0.dims[0]; ++x) {
+        const size_t i = index(0, x, y, z);
+        e.empty[0][i] = isEmpty(l0.mn[i], l0.mx[i]) ? 1 : 0;
+        e.empty_blocks += e.empty[0][i];
+        if (e.empty[0][i]) continue;
+        const int b[3] = {x, y, z};
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], b[a]), hi[a] = std::max(hi[a], b[a] + 1);
+      }
+  if (hi[0] > 0) e.nonempty_lo = lo, e.nonempty_hi = hi;
   for (int o = 0; o < 8; ++o) octantDistance(l0.dims, e.empty[0], o, e.octant_distance[o]);
   for (size_t l = 1; l < levels_.size(); ++l) {
     const Level& f = levels_[l - 1];

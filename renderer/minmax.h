@@ -41,6 +41,10 @@ class MinMaxHierarchy {
     // (0: b itself is non-empty; capped at 255). A ray only moves forward, so it can leap
     // across that cube in one step; moving away from matter the cubes grow quickly.
     std::array<std::vector<uint8_t>, 8> octant_distance;
+    // Bounding box of the non-empty level-0 blocks, [lo, hi) in block indices; lo == hi
+    // on every axis when every block is empty.
+    std::array<int, 3> nonempty_lo{0, 0, 0}, nonempty_hi{0, 0, 0};
+    bool allEmpty() const { return nonempty_lo[0] >= nonempty_hi[0]; }
   };
   Emptiness classify(const std::function<bool(float lo, float hi)>& isEmpty) const;
 

@@ -50,9 +50,12 @@ int64_t firstAtOrAfter(double t0, double t, double step) {
 }
 }  // namespace
 
-bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span) {
+namespace {
+// Whole-volume entry (t0) and the brick's k range; false if the brick has no samples.
+bool brickRange(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span,
+                double& w_out) {
   const BrickBox whole{{0, 0, 0}, g.n};
-  double w_in, w_out, b_in, b_out;
+  double w_in, b_in, b_out;
   if (!boxInterval(g, r, whole, w_in, w_out)) return false;
   if (!(w_out > 0)) return false;
   if (brick == whole) {
@@ -67,12 +70,45 @@ bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, doubl
   if (!(b_in < b_out)) return false;
   span.k_first = firstAtOrAfter(span.t0, b_in, step);
   span.k_end = firstAtOrAfter(span.t0, b_out, step);
-  if (span.k_end <= span.k_first) return false;
+  return span.k_end > span.k_first;
+}
+
+void samplePositions(const VolumeGeometry& g, const Ray& r, double step, RaySpan& span) {
   const double tb = span.t0 + 0.5 * step;
   for (int a = 0; a < 3; ++a) {
     span.u0[a] = (r.origin[a] + tb * r.dir[a] + g.half[a]) / g.cell[a] - 0.5;
     span.du[a] = r.dir[a] * step / g.cell[a];
   }
+}
+}  // namespace
+
+bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span) {
+  double w_out;
+  if (!brickRange(g, r, brick, step, span, w_out)) return false;
+  samplePositions(g, r, step, span);
+  return true;
+}
+
+bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, const BrickBox& clip, double step,
+                    RaySpan& span, int64_t& before, int64_t& after) {
+  before = after = 0;
+  double w_out;
+  if (!brickRange(g, r, brick, step, span, w_out)) return false;
+  const int64_t k_first = span.k_first, k_end = span.k_end;
+  before = k_end - k_first;
+  if (clip != brick) {
+    double c_in, c_out;
+    if (!boxInterval(g, r, clip, c_in, c_out)) return false;
+    c_in = std::max(c_in, span.t0);
+    c_out = std::min(c_out, w_out);
+    if (!(c_in < c_out)) return false;
+    span.k_first = std::max(span.k_first, firstAtOrAfter(span.t0, c_in, step));
+    span.k_end = std::min(span.k_end, firstAtOrAfter(span.t0, c_out, step));
+    if (span.k_end <= span.k_first) return false;
+  }
+  before = span.k_first - k_first;
+  after = k_end - span.k_end;
+  samplePositions(g, r, step, span);
   return true;
 }
 

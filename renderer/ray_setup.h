@@ -42,4 +42,11 @@ bool boxInterval(const VolumeGeometry& g, const Ray& r, const BrickBox& b, doubl
 // Computes the span of `brick` on the global grid of `step`. Returns false if empty.
 bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span);
 
+// The same span cut to `clip` (a box inside `brick`, e.g. the part of the volume that can
+// be non-empty): the sample grid is unchanged, only k_first/k_end narrow. `before` and
+// `after` receive how many of the brick's samples lie before / after the clipped span
+// (all of them in `before` if it is empty).
+bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, const BrickBox& clip, double step,
+                    RaySpan& span, int64_t& before, int64_t& after);
+
 }  // namespace tessera::renderer

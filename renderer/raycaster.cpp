@@ -35,6 +35,7 @@ struct Raycaster::Impl {
   TransferFunction tf;
   std::shared_ptr<const VolumeAccel> accel;
   MinMaxHierarchy::Emptiness emptiness;
+  Brick nonempty;  // voxel box holding every sample that can be non-empty (lo == hi: none)
 };
 
 Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf) : impl_(std::make_unique<Impl>()) {
@@ -54,6 +55,17 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf) 
   impl_->accel = VolumeAccel::forVolume(impl_->volume);
   const TransferFunction& f = impl_->tf;
   impl_->emptiness = impl_->accel->hierarchy.classify([&f](float lo, float hi) { return TfTable::rangeIsEmpty(f, lo, hi); });
+  // Block b holds the samples at voxel coordinates [8b, 8b+8) (clamped at the border); the
+  // cell box [8b, 8b+9) holds them with half a voxel to spare, far above the kernel's float
+  // error (< 1e-3 voxel), so samples outside it have exactly zero opacity.
+  const auto& e = impl_->emptiness;
+  Brick& box = impl_->nonempty;
+  box = Brick{{0, 0, 0}, {0, 0, 0}};
+  if (!e.allEmpty())
+    for (int a = 0; a < 3; ++a) {
+      box.lo[a] = e.nonempty_lo[a] * MinMaxHierarchy::kBlock;
+      box.hi[a] = std::min(v.dims[a], e.nonempty_hi[a] * MinMaxHierarchy::kBlock + 1);
+    }
 }
 
 Raycaster::~Raycaster() = default;
@@ -112,6 +124,18 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
     fast.early_termination = (float)std::min(q.early_termination, 2.0);
   }
 
+  // With skipping, rays are cut to the box that can be non-empty (same sample grid, so the
+  // image is unchanged); samples outside it count as skipped.
+  const bool clipping = !q.reference && q.skip_empty;
+  Brick clip = brick;
+  if (clipping) {
+    const Brick& ne = impl_->nonempty;
+    for (int a = 0; a < 3; ++a) {
+      clip.lo[a] = std::max(brick.lo[a], ne.lo[a]);
+      clip.hi[a] = std::max(clip.lo[a], std::min(brick.hi[a], ne.hi[a]));
+    }
+  }
+
   const int tiles_x = (fp.w + kTile - 1) / kTile, tiles_y = (fp.h + kTile - 1) / kTile;
   const int tile_count = fp.empty() ? 0 : tiles_x * tiles_y;
   std::atomic<int> next{0};
@@ -130,14 +154,23 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
         for (int py = ty; py < ey; ++py)
           for (int px = tx; px < ex; ++px) {
             RaySpan span;
-            if (!raySpan(geom, gen.pixelRay(px, py), brick, q.step, span)) continue;
+            int64_t before = 0, after = 0;  // samples cut off by the clip box
+            if (clipping) {
+              const bool hit = raySpanClipped(geom, gen.pixelRay(px, py), brick, clip, q.step, span, before, after);
+              counts.skipped += (uint64_t)before;
+              if (!hit) continue;
+            } else if (!raySpan(geom, gen.pixelRay(px, py), brick, q.step, span)) {
+              continue;
+            }
             float* o = img.at(px, py);
             if (q.reference) {
               double d[4];
               castReference(v, impl_->tf, q.step, span, d, counts);
               for (int c = 0; c < 4; ++c) o[c] = (float)d[c];
             } else {
-              castFast(fast, span, o, counts);
+              // Samples cut off after a terminated ray count as terminated, as without the clip.
+              const bool terminated = castFast(fast, span, o, counts);
+              (terminated ? counts.terminated : counts.skipped) += (uint64_t)after;
             }
             if (o[3] > 0) {
               ax0 = std::min(ax0, px), ax1 = std::max(ax1, px);

@@ -1,0 +1,125 @@
+// Clipping rays to the box that can be non-empty: the box bounds exactly the non-empty
+// blocks, a clipped span keeps the global sample grid, and images and sample totals are
+// the same with skipping (and so clipping) on and off.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "renderer/minmax.h"
+#include "renderer/ray_setup.h"
+#include "renderer/raycaster.h"
+#include "tests/renderer/render_test_util.h"
+
+namespace tessera::renderer {
+namespace {
+
+// Zero everywhere but a ball of radius r around c (values 0.6 inside, fading out).
+std::shared_ptr<Volume> ball(std::array<int, 3> dims, std::array<double, 3> c, double r) {
+  auto v = std::make_shared<Volume>();
+  v->dims = dims;
+  v->spacing = {1, 1, 1};
+  v->values.assign(v->voxelCount(), 0.0f);
+  for (int z = 0; z < dims[2]; ++z)
+    for (int y = 0; y < dims[1]; ++y)
+      for (int x = 0; x < dims[0]; ++x) {
+        const double d = std::hypot(x - c[0], y - c[1], z - c[2]);
+        v->values[v->index(x, y, z)] = (float)std::clamp(0.6 * (r - d) / 2, 0.0, 0.6);
+      }
+  return v;
+}
+
+// Transparent up to 0.05, like the default scene, so zero-valued blocks are empty.
+TransferFunction ballTf() {
+  return TransferFunction({{0, 0, 0, 0, 0}, {0.05, 1, 0.5, 0.2, 0}, {0.2, 1, 0.5, 0.2, 0.3}, {1, 1, 1, 1, 0.9}});
+}
+
+TEST(NonEmptyBox, BoundsExactlyTheNonEmptyBlocks) {
+  const auto v = ball({41, 33, 50}, {27, 9, 30}, 5);
+  const MinMaxHierarchy h(*v);
+  const TransferFunction tf = ballTf();
+  const auto e = h.classify([&](float lo, float hi) { return tf.maxAlpha(lo, hi) == 0; });
+  const auto d = h.dims(0);
+  std::array<int, 3> lo = d, hi{0, 0, 0};
+  for (int z = 0; z < d[2]; ++z)
+    for (int y = 0; y < d[1]; ++y)
+      for (int x = 0; x < d[0]; ++x)
+        if (!e.empty[0][h.index(0, x, y, z)]) {
+          const int b[3] = {x, y, z};
+          for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], b[a]), hi[a] = std::max(hi[a], b[a] + 1);
+        }
+  ASSERT_FALSE(e.allEmpty());
+  EXPECT_EQ(e.nonempty_lo, lo);
+  EXPECT_EQ(e.nonempty_hi, hi);
+  // The ball spans voxels ~20..34 in x: blocks 2..4 of 5, so the box is a real cut.
+  EXPECT_GT(lo[0], 0);
+  EXPECT_LT(hi[2], d[2]);
+  const auto none = h.classify([](float, float) { return true; });
+  EXPECT_TRUE(none.allEmpty());
+}
+
+TEST(NonEmptyBox, ClippedSpanKeepsTheGlobalGrid) {
+  Volume v;
+  v.dims = {16, 12, 20};
+  v.values.assign(v.voxelCount(), 0.f);
+  const VolumeGeometry g(v);
+  const BrickBox brick{{2, 0, 3}, {16, 9, 20}}, clip{{5, 2, 3}, {11, 9, 14}};
+  uint32_t seed = 5;
+  auto rnd = [&] { return (seed = seed * 1664525u + 1013904223u) / 4294967296.0; };
+  int clipped_hits = 0;
+  for (int i = 0; i < 3000; ++i) {
+    // From anywhere around the volume towards a point inside it (world half extents <= 0.5).
+    const Vec3 o{rnd() * 3 - 1.5, rnd() * 3 - 1.5, rnd() * 3 - 1.5}, p{rnd() - 0.5, rnd() - 0.5, rnd() - 0.5};
+    const Ray r{o, normalize(p - o)};
+    RaySpan full, c, only;
+    int64_t before = -1, after = -1;
+    const bool hit = raySpan(g, r, brick, 0.011, full);
+    const bool chit = raySpanClipped(g, r, brick, clip, 0.011, c, before, after);
+    const bool ohit = raySpan(g, r, clip, 0.011, only);
+    const int64_t total = hit ? full.k_end - full.k_first : 0;
+    ASSERT_EQ(chit, hit && ohit) << "ray " << i;
+    if (!chit) {
+      EXPECT_EQ(before + after, total) << "ray " << i;
+      continue;
+    }
+    ++clipped_hits;
+    // Same grid (t0, positions), samples = those of the brick that are also in the clip box.
+    ASSERT_EQ(c.t0, full.t0);
+    ASSERT_EQ(c.u0, full.u0);
+    ASSERT_EQ(c.du, full.du);
+    EXPECT_EQ(c.k_first, std::max(full.k_first, only.k_first)) << "ray " << i;
+    EXPECT_EQ(c.k_end, std::min(full.k_end, only.k_end)) << "ray " << i;
+    EXPECT_EQ(before, c.k_first - full.k_first);
+    EXPECT_EQ(after, full.k_end - c.k_end);
+  }
+  EXPECT_GT(clipped_hits, 500);  // the test exercised real clips
+}
+
+TEST(NonEmptyBox, SkippingOnAndOffGiveTheSameImageAndSampleTotal) {
+  const std::shared_ptr<const Volume> vol = ball({40, 40, 40}, {28, 12, 26}, 6);
+  const Raycaster rc(vol, ballTf());
+  RenderOptions on = test::options("default", 2), off = test::options("default", 2);
+  off.quality.skip_empty = false;
+  for (const Brick& b : {wholeVolume(*vol), Brick{{20, 0, 0}, {40, 17, 40}}, Brick{{0, 26, 0}, {40, 40, 40}}})
+    for (int frame : {0, 5, 11}) {
+      const Camera cam = Orbit{16, {0.2, 1, 0.1}}.at(test::defaultCamera(), frame);
+      RenderStats s_on, s_off;
+      Rect a_on, a_off;
+      const ImageF a = rc.render(cam, 60, 44, b, on, &s_on, &a_on);
+      const ImageF c = rc.render(cam, 60, 44, b, off, &s_off, &a_off);
+      EXPECT_TRUE(a == c) << "frame " << frame << " brick x " << b.lo[0] << ": clipping changed the image";
+      EXPECT_EQ(a_on, a_off);
+      EXPECT_EQ(s_on.samples + s_on.samples_skipped + s_on.samples_terminated,
+                s_off.samples + s_off.samples_terminated)
+          << "every grid sample is taken, skipped or terminated exactly once";
+    }
+  // A brick away from the ball is skipped whole.
+  RenderStats st;
+  const ImageF img = rc.render(test::defaultCamera(), 60, 44, Brick{{0, 26, 0}, {40, 40, 40}}, on, &st);
+  EXPECT_EQ(st.samples, 0u);
+  EXPECT_GT(st.samples_skipped, 1000u);
+  EXPECT_TRUE(activeRegion(img).empty());
+}
+
+}  // namespace
+}  // namespace tessera::renderer
