@@ -154,6 +154,7 @@ struct Leaper {
   int imax[3], nb[3];
   bool fwd[3], moving[3];
   int nbx, nbxy;
+  int64_t block_run;  // samples after which the ray has surely left any block
   const uint8_t* dist;
 
   Leaper(const RaySpan& s, const Volume& v, const MinMaxHierarchy& h, const MinMaxHierarchy::Emptiness& e) {
@@ -170,6 +171,9 @@ struct Leaper {
     }
     nbx = d0[0];
     nbxy = d0[0] * d0[1];
+    // A ray crosses a block's extent B along its fastest axis within B / max|du| samples.
+    const double fastest = std::max({std::fabs(s.du[0]), std::fabs(s.du[1]), std::fabs(s.du[2])});
+    block_run = (int64_t)std::min(1e9, std::ceil(MinMaxHierarchy::kBlock / fastest)) + 1;
     const int octant = (s.du[0] < 0 ? 1 : 0) | (s.du[1] < 0 ? 2 : 0) | (s.du[2] < 0 ? 4 : 0);
     dist = e.octant_distance[octant].data();
   }
@@ -212,8 +216,14 @@ struct Leaper {
       const int64_t next = std::min(k_end, (int64_t)e + 1);
       if (inside && next > k) return next;
     }
-    const double e = std::min(exit(u, b, 1, 0.0, inside), (double)k_end);
-    run_end = (int64_t)e + 1;
+    // Sample k must be taken; the run has to reach past k's block. Runs are at least
+    // kMinRun samples, so when a block takes fewer (coarse steps) its exact exit is moot.
+    if (block_run <= kMinRun) {
+      run_end = k + block_run;
+    } else {
+      const double e = std::min(exit(u, b, 1, 0.0, inside), (double)k_end);
+      run_end = (int64_t)e + 1;
+    }
     return k;
   }
 };
