@@ -3,7 +3,7 @@
 // (ray_setup.h), so both backends take exactly the same samples k. Sample k sits at the
 // voxel coordinate fma(k, du, u0) in float, like the CPU fast kernel; the volume is a
 // GL_LINEAR R16 texture of the same quantized values, the classification the same 4096-entry
-// table with the same interpolation. Empty-space leaps follow the CPU Leaper (directional
+// table with the same linear interpolation. Empty-space leaps follow the CPU Leaper (directional
 // chessboard distance maps over the 8^3 min-max blocks): a sample is leapt over only when
 // it lies kMargin inside an empty cube, and a sample taken in an empty block classifies to
 // exactly zero alpha, so leaping changes no bit of the image.
@@ -97,9 +97,9 @@ void main() {
     taken += 1.0;
     ++k;
     if (ti < first_nz || ti > last_nz) continue;  // exactly zero alpha: a no-op
-    float w = ft - float(ti);
-    vec4 e0 = texelFetch(table, ti, 0), e1 = texelFetch(table, ti + 1, 0);
-    vec4 pc = fma(vec4(w), e1 - e0, e0);
+    // GL_LINEAR between entries ti and ti+1 at weight fract(ft): the CPU's lerp, done by
+    // the texture unit in float.
+    vec4 pc = textureLod(table, (ft + 0.5) / (table_max + 1.0), 0.0);
     acc = fma(vec4(1.0 - acc.a), pc, acc);
     if (acc.a >= et) {
       terminated = float(k_end - k);
