@@ -42,9 +42,33 @@ struct Consts {
 constexpr float kToTable = (float)(TfTable::kEntries - 1) / VolumeAccel::kQuantScale;
 
 #ifdef TESSERA_AVX2
-// Samples k0..k0+lanes-1 and composites them into acc. Returns how many samples were
-// used; `done` is set when the accumulated alpha reached et.
-inline int packet(const Consts& c, int64_t k0, int lanes, float et, __m128& acc, bool& done) {
+// Permutations that move the lanes set in an 8-bit mask to the front (AVX2 has no
+// compress instruction): entry m lists the set lanes of m in order.
+struct CompressTable {
+  alignas(8) uint8_t lanes[256][8];
+  constexpr CompressTable() : lanes{} {
+    for (int m = 0; m < 256; ++m) {
+      int n = 0;
+      for (int l = 0; l < 8; ++l)
+        if (m & (1 << l)) lanes[m][n++] = (uint8_t)l;
+    }
+  }
+};
+constexpr CompressTable kCompress;
+
+// Classified samples of a chunk, in ray order: table index, interpolation weight and the
+// sample's offset in the chunk; only samples that may have alpha > 0 are listed.
+struct Classified {
+  static constexpr int kChunk = 64;  // samples per chunk (a multiple of kLanes)
+  alignas(32) int32_t ti[kChunk + kLanes];
+  alignas(32) float w[kChunk + kLanes];
+  alignas(32) int32_t off[kChunk + kLanes];
+};
+
+// Samples k0..k0+lanes-1 and appends those that may have alpha > 0 to `out` at position n
+// (`first_off`: offset of k0 in the chunk). Returns how many were appended. No branches on
+// the data, so consecutive packets overlap in the pipeline.
+inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off, Classified& out, int n) {
   const __m256 kf = _mm256_add_ps(_mm256_set1_ps((float)k0), _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7));
   __m256 f[3];
   __m256i i[3];
@@ -91,26 +115,40 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, __m128& acc,
                                                _mm256_cmpgt_epi32(ti, _mm256_set1_epi32(c.last_nz)));
   int mask = ~_mm256_movemask_ps(_mm256_castsi256_ps(out_of_range));
   mask &= (1 << lanes) - 1;
-  if (mask == 0) return lanes;  // zero-alpha samples leave acc bit-identical
-  alignas(32) int tis[kLanes];
-  alignas(32) float ws[kLanes];
-  _mm256_store_si256(reinterpret_cast<__m256i*>(tis), ti);
-  _mm256_store_ps(ws, w);
+  const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(kCompress.lanes[mask])));
+  const __m256i off = _mm256_add_epi32(_mm256_set1_epi32(first_off), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out.ti + n), _mm256_permutevar8x32_epi32(ti, perm));
+  _mm256_storeu_ps(out.w + n, _mm256_permutevar8x32_ps(w, perm));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out.off + n), _mm256_permutevar8x32_epi32(off, perm));
+  return __builtin_popcount((unsigned)mask);
+}
+
+// Samples [begin, end) composited front to back into acc, in chunks: all packets of a
+// chunk are classified first, then the listed samples composited in order (the same
+// operations, in the same order, as one sample at a time). Returns true if the alpha
+// reached et; `stop` is the sample after the last one used.
+inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, __m128& acc, int64_t& stop) {
+  Classified cl;
   const __m128 one = _mm_set1_ps(1.0f), etv = _mm_set1_ps(et);
-  while (mask) {
-    const int l = __builtin_ctz(mask);
-    mask &= mask - 1;
-    const float* e = c.rgba + 4 * tis[l];
-    const __m128 e0 = _mm_load_ps(e), e1 = _mm_load_ps(e + 4);
-    const __m128 pc = _mm_fmadd_ps(_mm_set1_ps(ws[l]), _mm_sub_ps(e1, e0), e0);
-    const __m128 t = _mm_sub_ps(one, _mm_shuffle_ps(acc, acc, 0xFF));
-    acc = _mm_fmadd_ps(t, pc, acc);
-    if (_mm_movemask_ps(_mm_cmpge_ps(acc, etv)) & 8) {
-      done = true;
-      return l + 1;
+  for (int64_t j = begin; j < end; j += Classified::kChunk) {
+    const int64_t chunk_end = std::min(end, j + Classified::kChunk);
+    int n = 0;
+    for (int64_t p = j; p < chunk_end; p += kLanes)
+      n += classifyPacket(c, p, (int)std::min<int64_t>(kLanes, chunk_end - p), (int)(p - j), cl, n);
+    for (int i = 0; i < n; ++i) {
+      const float* e = c.rgba + 4 * cl.ti[i];
+      const __m128 e0 = _mm_load_ps(e), e1 = _mm_load_ps(e + 4);
+      const __m128 pc = _mm_fmadd_ps(_mm_set1_ps(cl.w[i]), _mm_sub_ps(e1, e0), e0);
+      const __m128 t = _mm_sub_ps(one, _mm_shuffle_ps(acc, acc, 0xFF));
+      acc = _mm_fmadd_ps(t, pc, acc);
+      if (_mm_movemask_ps(_mm_cmpge_ps(acc, etv)) & 8) {
+        stop = j + cl.off[i] + 1;
+        return true;
+      }
     }
   }
-  return lanes;
+  stop = end;
+  return false;
 }
 #else
 // Portable version of the same arithmetic (one sample at a time).
@@ -299,19 +337,22 @@ bool castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
     counts.skipped += batch_skipped;
     for (int r = 0; r < n; ++r) {
       bool done = false;
-      for (int64_t j = runs[r].begin; j < runs[r].end;) {
-        const int lanes = (int)std::min<int64_t>(kLanes, runs[r].end - j);
-        const int used = packet(c, j, lanes, et, acc, done);
+#ifdef TESSERA_AVX2
+      int64_t j;
+      done = runPackets(c, runs[r].begin, runs[r].end, et, acc, j);
+      counts.taken += (uint64_t)(j - runs[r].begin);
+#else
+      int64_t j = runs[r].begin;
+      while (j < runs[r].end && !done) {
+        const int used = packet(c, j, (int)std::min<int64_t>(kLanes, runs[r].end - j), et, acc, done);
         counts.taken += (uint64_t)used;
         j += used;
-        if (done) {
-          // Everything after j counts as terminated, including what the leaper had passed over.
-          counts.skipped -= batch_skipped - runs[r].skipped_before_end;
-          counts.terminated += (uint64_t)(k_end - j);
-          break;
-        }
       }
+#endif
       if (done) {
+        // Everything after j counts as terminated, including what the leaper had passed over.
+        counts.skipped -= batch_skipped - runs[r].skipped_before_end;
+        counts.terminated += (uint64_t)(k_end - j);
         k = k_end;
         terminated = true;
         break;

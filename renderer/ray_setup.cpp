@@ -15,12 +15,23 @@ VolumeGeometry::VolumeGeometry(const Volume& v) : n(v.dims) {
   }
 }
 
-bool boxInterval(const VolumeGeometry& g, const Ray& r, const BrickBox& b, double& t_in, double& t_out) {
-  constexpr double kInf = std::numeric_limits<double>::infinity();
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A ray with its per-axis reciprocals computed once for all the boxes it is tested against.
+struct PreparedRay {
+  const Ray& r;
+  double inv[3];
+  explicit PreparedRay(const Ray& ray) : r(ray) {
+    for (int a = 0; a < 3; ++a) inv[a] = r.dir[a] == 0 ? 0.0 : 1.0 / r.dir[a];
+  }
+};
+
+bool interval(const VolumeGeometry& g, const PreparedRay& pr, const BrickBox& b, double& t_in, double& t_out) {
   t_in = -kInf;
   t_out = kInf;
   for (int a = 0; a < 3; ++a) {
-    const double o = r.origin[a], d = r.dir[a];
+    const double o = pr.r.origin[a], d = pr.r.dir[a];
     const double p_lo = g.plane(a, b.lo[a]), p_hi = g.plane(a, b.hi[a]);
     if (d == 0) {
       // Parallel to the slab: inside for all t or for none (half-open, like the t test).
@@ -29,20 +40,19 @@ bool boxInterval(const VolumeGeometry& g, const Ray& r, const BrickBox& b, doubl
     }
     // (p - o) * (1/d) is monotone in p under rounding, and every box uses the same 1/d,
     // so shared faces give identical parameters.
-    const double inv = 1.0 / d;
-    const double t_lo = (p_lo - o) * inv, t_hi = (p_hi - o) * inv;
+    const double t_lo = (p_lo - o) * pr.inv[a], t_hi = (p_hi - o) * pr.inv[a];
     t_in = std::max(t_in, d > 0 ? t_lo : t_hi);
     t_out = std::min(t_out, d > 0 ? t_hi : t_lo);
   }
   return t_in < t_out;
 }
 
-namespace {
 double sampleT(double t0, int64_t k, double step) { return t0 + ((double)k + 0.5) * step; }
 
-// Smallest k >= 0 with t_k >= t (the same expression every brick evaluates).
-int64_t firstAtOrAfter(double t0, double t, double step) {
-  double guess = std::ceil((t - t0) / step - 0.5);
+// Smallest k >= 0 with t_k >= t (the same expression every brick evaluates). The guess
+// may be off by one (inv_step is rounded); the two loops make the result exact.
+int64_t firstAtOrAfter(double t0, double t, double step, double inv_step) {
+  double guess = std::ceil((t - t0) * inv_step - 0.5);
   int64_t k = guess > 0 ? (int64_t)guess : 0;
   while (k > 0 && sampleT(t0, k - 1, step) >= t) --k;
   while (sampleT(t0, k, step) < t) ++k;
@@ -50,26 +60,31 @@ int64_t firstAtOrAfter(double t0, double t, double step) {
 }
 }  // namespace
 
+bool boxInterval(const VolumeGeometry& g, const Ray& r, const BrickBox& b, double& t_in, double& t_out) {
+  return interval(g, PreparedRay(r), b, t_in, t_out);
+}
+
 namespace {
 // Whole-volume entry (t0) and the brick's k range; false if the brick has no samples.
-bool brickRange(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span,
+bool brickRange(const VolumeGeometry& g, const PreparedRay& r, const BrickBox& brick, double step, RaySpan& span,
                 double& w_out) {
   const BrickBox whole{{0, 0, 0}, g.n};
   double w_in, b_in, b_out;
-  if (!boxInterval(g, r, whole, w_in, w_out)) return false;
+  if (!interval(g, r, whole, w_in, w_out)) return false;
   if (!(w_out > 0)) return false;
   if (brick == whole) {
     b_in = w_in;
     b_out = w_out;
-  } else if (!boxInterval(g, r, brick, b_in, b_out)) {
+  } else if (!interval(g, r, brick, b_in, b_out)) {
     return false;
   }
   span.t0 = std::max(w_in, 0.0);
   b_in = std::max(b_in, span.t0);
   b_out = std::min(b_out, w_out);
   if (!(b_in < b_out)) return false;
-  span.k_first = firstAtOrAfter(span.t0, b_in, step);
-  span.k_end = firstAtOrAfter(span.t0, b_out, step);
+  const double inv_step = 1.0 / step;
+  span.k_first = firstAtOrAfter(span.t0, b_in, step, inv_step);
+  span.k_end = firstAtOrAfter(span.t0, b_out, step, inv_step);
   return span.k_end > span.k_first;
 }
 
@@ -84,7 +99,7 @@ void samplePositions(const VolumeGeometry& g, const Ray& r, double step, RaySpan
 
 bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span) {
   double w_out;
-  if (!brickRange(g, r, brick, step, span, w_out)) return false;
+  if (!brickRange(g, PreparedRay(r), brick, step, span, w_out)) return false;
   samplePositions(g, r, step, span);
   return true;
 }
@@ -93,17 +108,19 @@ bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick
                     RaySpan& span, int64_t& before, int64_t& after) {
   before = after = 0;
   double w_out;
-  if (!brickRange(g, r, brick, step, span, w_out)) return false;
+  const PreparedRay pr(r);
+  if (!brickRange(g, pr, brick, step, span, w_out)) return false;
   const int64_t k_first = span.k_first, k_end = span.k_end;
   before = k_end - k_first;
   if (clip != brick) {
     double c_in, c_out;
-    if (!boxInterval(g, r, clip, c_in, c_out)) return false;
+    if (!interval(g, pr, clip, c_in, c_out)) return false;
     c_in = std::max(c_in, span.t0);
     c_out = std::min(c_out, w_out);
     if (!(c_in < c_out)) return false;
-    span.k_first = std::max(span.k_first, firstAtOrAfter(span.t0, c_in, step));
-    span.k_end = std::min(span.k_end, firstAtOrAfter(span.t0, c_out, step));
+    const double inv_step = 1.0 / step;
+    span.k_first = std::max(span.k_first, firstAtOrAfter(span.t0, c_in, step, inv_step));
+    span.k_end = std::min(span.k_end, firstAtOrAfter(span.t0, c_out, step, inv_step));
     if (span.k_end <= span.k_first) return false;
   }
   before = span.k_first - k_first;
