@@ -53,6 +53,9 @@ class Master {
     spdlog::info("master listening pub={} control={} renderers={} compositors={} frames={} window={}",
                  opt_.endpoints.masterPub(), opt_.endpoints.masterControl(), opt_.renderers, opt_.compositors,
                  total_frames_ == 0 ? std::string("interactive") : std::to_string(total_frames_), opt_.window);
+    if (sortFirst() && opt_.scene.antialiasing.method == "fft")
+      spdlog::warn("antialiasing fft is a post filter of the whole image, applied by tessera-render; the farm "
+                   "renders this scene without it (use msaa or ssaa for identical farm frames)");
     // Sort-first (geometry) scenes need no volume here: renderers own the mesh.
     if (!sortFirst()) volume_ = std::make_shared<Volume>(loadVolume(opt_.scene));
   }
