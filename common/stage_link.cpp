@@ -69,10 +69,28 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   return true;
 }
 
-bool StageLink::recvSub(zmq::message_t& m) {
-  if (!sub_.recv(m, zmq::recv_flags::dontwait)) return false;
-  last_heard_ = Clock::now();
-  return true;
+StageLink::Published StageLink::receive(DropCounter& drops, int max_messages) {
+  Published out;
+  for (int i = 0; i < max_messages; ++i) {
+    zmq::message_t m;
+    if (!sub_.recv(m, zmq::recv_flags::dontwait)) break;
+    last_heard_ = Clock::now();
+    auto h = proto::decodeHeader(view(m));
+    if (!h) {
+      drops.drop(~0u, h.error());
+      continue;
+    }
+    if (h->type == proto::Type::Shutdown) out.shutdown = true;
+    if (h->type == proto::Type::Shutdown || h->type == proto::Type::Heartbeat) continue;
+    auto p = h->type == proto::Type::FrameParams ? proto::decodeFrameParams(view(m))
+                                                 : Result<proto::FrameParams>::fail("unexpected message on SUB");
+    if (!p) {
+      drops.drop(h->sender, p.error());
+      continue;
+    }
+    out.params.push_back(std::move(*p));
+  }
+  return out;
 }
 
 bool StageLink::masterLost() const {

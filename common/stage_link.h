@@ -11,6 +11,7 @@
 #include <zmq.hpp>
 
 #include "endpoints.h"
+#include "log.h"
 #include "protocol.h"
 
 namespace tessera {
@@ -26,8 +27,13 @@ class StageLink {
   bool join(const std::atomic<bool>* stop, double timeout_s = 120);
   uint32_t rank() const { return rank_; }
   zmq::socket_t& sub() { return sub_; }
-  // Non-blocking receive from the master's PUB; notes that the master is alive.
-  bool recvSub(zmq::message_t& m);
+  // Drains what the master published (non-blocking): FrameParams in order, and whether it
+  // said Shutdown. Its membership probes are skipped; malformed messages are dropped and counted.
+  struct Published {
+    std::vector<proto::FrameParams> params;
+    bool shutdown = false;
+  };
+  Published receive(DropCounter& drops, int max_messages = 256);
   // The master probes every 250 ms: this long without a word means it is gone, and a stage
   // left alone (outside the launcher) exits instead of waiting forever.
   bool masterLost() const;

@@ -49,24 +49,10 @@ class Stage {
  private:
   // False on Shutdown.
   bool readParams() {
-    for (int i = 0; i < 256; ++i) {
-      zmq::message_t m;
-      if (!link_.recvSub(m)) break;
-      auto h = proto::decodeHeader(view(m));
-      if (!h) {
-        drops_.drop(~0u, h.error());
-        continue;
-      }
-      if (h->type == proto::Type::Shutdown) return false;
-      if (h->type == proto::Type::Heartbeat) continue;
-      auto p = proto::decodeFrameParams(view(m));
-      if (!p) {
-        drops_.drop(h->sender, p.error());
-        continue;
-      }
-      if (auto why = gather_.addParams(std::move(*p)); !why.empty()) spdlog::debug("ignored FrameParams: {}", why);
-    }
-    return true;
+    auto published = link_.receive(drops_);
+    for (auto& p : published.params)
+      if (auto why = gather_.addParams(std::move(p)); !why.empty()) spdlog::debug("ignored FrameParams: {}", why);
+    return !published.shutdown;
   }
 
   void readPieces() {

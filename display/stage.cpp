@@ -54,31 +54,16 @@ class Stage {
   };
 
   void readParams() {
-    for (int i = 0; i < 256; ++i) {
-      zmq::message_t m;
-      if (!link_.recvSub(m)) break;
-      auto h = proto::decodeHeader(view(m));
-      if (!h) {
-        drops_.drop(~0u, h.error());
-        continue;
-      }
-      if (h->type == proto::Type::Shutdown) {
-        shutdown_ = true;
-        continue;
-      }
-      if (h->type == proto::Type::Heartbeat) continue;
-      auto p = proto::decodeFrameParams(view(m));
-      if (!p) {
-        drops_.drop(h->sender, p.error());
-        continue;
-      }
-      if (p->epoch < epoch_) continue;
-      if (p->epoch > epoch_) {  // frames in flight were issued again: forget their old strips
-        epoch_ = p->epoch;
+    auto published = link_.receive(drops_);
+    shutdown_ = shutdown_ || published.shutdown;
+    for (auto& p : published.params) {
+      if (p.epoch < epoch_) continue;
+      if (p.epoch > epoch_) {  // frames in flight were issued again: forget their old strips
+        epoch_ = p.epoch;
         for (auto& [f, pend] : frames_) std::erase_if(pend.strips, [&](auto& kv) { return kv.second.epoch < epoch_; });
       }
-      if (p->frame < next_) continue;
-      frames_[p->frame].params = std::move(*p);
+      if (p.frame < next_) continue;
+      frames_[p.frame].params = std::move(p);
     }
   }
 

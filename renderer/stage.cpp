@@ -49,29 +49,12 @@ class Stage {
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
       pollFor(items, 1, std::chrono::milliseconds(100));
-      std::deque<proto::FrameParams> queue;
       // Drain first, so frames superseded by a newer epoch are skipped, not rendered.
-      while (true) {
-        zmq::message_t m;
-        if (!link_.recvSub(m)) break;
-        auto h = proto::decodeHeader(view(m));
-        if (!h) {
-          drops_.drop(~0u, h.error());
-          continue;
-        }
-        if (h->type == proto::Type::Shutdown) return 0;
-        if (h->type == proto::Type::Heartbeat) continue;  // the master's membership probe
-        auto p = h->type == proto::Type::FrameParams ? proto::decodeFrameParams(view(m))
-                                                     : Result<proto::FrameParams>::fail("unexpected message on SUB");
-        if (!p) {
-          drops_.drop(h->sender, p.error());
-          continue;
-        }
-        epoch_ = std::max(epoch_, p->epoch);
-        queue.push_back(std::move(*p));
-      }
+      auto published = link_.receive(drops_);
+      if (published.shutdown) return 0;
+      for (const auto& p : published.params) epoch_ = std::max(epoch_, p.epoch);
       if (link_.masterLost()) return 1;
-      for (const auto& p : queue)
+      for (const auto& p : published.params)
         if (p.epoch == epoch_) renderFrame(p);
     }
     return 0;
