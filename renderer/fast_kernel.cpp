@@ -28,6 +28,12 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Float sample indices are exact below 2^24.
 constexpr int64_t kMaxSamples = int64_t{1} << 24;
 
+// Samples [begin, end) of a ray to be taken.
+struct Run {
+  int64_t begin, end;
+  uint64_t skipped_before_end;  // batch skip count when this run was last extended
+};
+
 struct Consts {
   float u0[3], du[3], umax[3];
   int imax[3];
@@ -188,12 +194,14 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4]
 // Double precision; samples are only leapt over when they lie kSkipMargin inside a cube of
 // empty blocks, so their float positions (the kernel's) are inside it too.
 struct Leaper {
-  double u0[3], du[3], inv[3], umax[3];
-  int imax[3], nb[3];
-  bool fwd[3], moving[3];
-  int nbx, nbxy;
-  int64_t block_run;  // samples after which the ray has surely left any block
-  const uint8_t* dist;
+  double u0[3]{}, du[3]{}, inv[3]{}, umax[3]{};
+  int imax[3]{}, nb[3]{};
+  bool fwd[3]{}, moving[3]{};
+  int nbx = 0, nbxy = 0;
+  int64_t block_run = 1;  // samples after which the ray has surely left any block
+  const uint8_t* dist = nullptr;
+
+  Leaper() = default;
 
   Leaper(const RaySpan& s, const Volume& v, const MinMaxHierarchy& h, const MinMaxHierarchy::Emptiness& e) {
     const auto d0 = h.dims(0);
@@ -268,72 +276,82 @@ struct Leaper {
 
 }  // namespace
 
-bool castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleCounts& counts) {
-  const Volume& v = *ctx.volume;
-  if (span.k_end >= kMaxSamples) throw std::invalid_argument("castFast: more than 2^24 samples on one ray (step too small)");
-  Consts c;
-  for (int a = 0; a < 3; ++a) {
-    c.u0[a] = (float)span.u0[a];
-    c.du[a] = (float)span.du[a];
-    c.umax[a] = (float)(v.dims[a] - 1);
-    c.imax[a] = std::max(0, v.dims[a] - 2);
-  }
-  c.nb_x = ctx.accel->nb[0];
-  c.nb_xy = ctx.accel->nb[0] * ctx.accel->nb[1];
-  c.vol = ctx.accel->bricked.data();
-  c.rgba = ctx.table->rgba();
-  c.nonzero = ctx.table->nonzero();
-  c.first_nz = ctx.table->firstNonzero();
-  c.last_nz = ctx.table->lastNonzero();
-  const float et = ctx.early_termination;
-  const bool skip = ctx.skip && ctx.emptiness;
+namespace {
 
+// One ray in flight: its constants, leaper, position and the runs of the current batch.
+// Two phases per batch: the leaper (branchy, scalar) lists the runs to sample, then the
+// packets run over that list; keeping them apart lets each loop stay tight and predictable.
+struct RayState {
+  static constexpr int kBatch = 16;
+  Consts c;
+  bool skip = false;
+  Leaper leaper;
+  int64_t k = 0, k_end = 0;
+  bool terminated = false;
 #ifdef TESSERA_AVX2
   __m128 acc = _mm_setzero_ps();
 #else
   float acc[4] = {0, 0, 0, 0};
 #endif
-  int64_t k = span.k_first;
-  const int64_t k_end = span.k_end;
-  bool terminated = false;
-  // Two phases per batch: the leaper (branchy, scalar) lists the runs to sample, then the
-  // packets run over that list; keeping them apart lets each loop stay tight and predictable.
-  struct Run {
-    int64_t begin, end;
-    uint64_t skipped_before_end;  // batch skip count when this run was last extended
-  };
-  constexpr int kBatch = 16;
   Run runs[kBatch];
-  std::optional<Leaper> leaper;
-  if (skip) leaper.emplace(span, v, ctx.accel->hierarchy, *ctx.emptiness);
-  while (k < k_end) {
-    int n = 0;
-    uint64_t batch_skipped = 0;
-    if (!leaper) {
+  int n = 0;
+  uint64_t batch_skipped = 0;
+
+  RayState(const FastContext& ctx, const RaySpan& span) {
+    const Volume& v = *ctx.volume;
+    if (span.k_end >= kMaxSamples)
+      throw std::invalid_argument("castFast: more than 2^24 samples on one ray (step too small)");
+    for (int a = 0; a < 3; ++a) {
+      c.u0[a] = (float)span.u0[a];
+      c.du[a] = (float)span.du[a];
+      c.umax[a] = (float)(v.dims[a] - 1);
+      c.imax[a] = std::max(0, v.dims[a] - 2);
+    }
+    c.nb_x = ctx.accel->nb[0];
+    c.nb_xy = ctx.accel->nb[0] * ctx.accel->nb[1];
+    c.vol = ctx.accel->bricked.data();
+    c.rgba = ctx.table->rgba();
+    c.nonzero = ctx.table->nonzero();
+    c.first_nz = ctx.table->firstNonzero();
+    c.last_nz = ctx.table->lastNonzero();
+    skip = ctx.skip && ctx.emptiness;
+    if (skip) leaper = Leaper(span, v, ctx.accel->hierarchy, *ctx.emptiness);
+    k = span.k_first;
+    k_end = span.k_end;
+  }
+
+  bool active() const { return k < k_end; }
+  bool planning() const { return k < k_end && n < kBatch; }
+
+  // One leaper decision: leaps over empty samples or appends a run.
+  void plan() {
+    if (!skip) {
       runs[n++] = Run{k, k_end, 0};
       k = k_end;
-    } else {
-      while (k < k_end && n < kBatch) {
-        int64_t run_end = k_end;
-        const int64_t next = leaper->step(k, k_end, run_end);
-        if (next > k) {
-          batch_skipped += (uint64_t)(next - k);
-          k = next;
-          continue;
-        }
-        // Whole packets up to the block exit, at least kMinRun samples: extra samples are
-        // harmless (just not skipped) and cheaper than another leaper decision (measured on
-        // the 256^3 hollow shell: 16..32 ~10% faster than 8).
-        run_end = std::min(k_end, k + (std::max<int64_t>(kMinRun, run_end - k) + kLanes - 1) / kLanes * kLanes);
-        if (n > 0 && runs[n - 1].end == k) {
-          runs[n - 1].end = run_end;
-          runs[n - 1].skipped_before_end = batch_skipped;
-        } else {
-          runs[n++] = Run{k, run_end, batch_skipped};
-        }
-        k = run_end;
-      }
+      return;
     }
+    int64_t run_end = k_end;
+    const int64_t next = leaper.step(k, k_end, run_end);
+    if (next > k) {
+      batch_skipped += (uint64_t)(next - k);
+      k = next;
+      return;
+    }
+    // Whole packets up to the block exit, at least kMinRun samples: extra samples are
+    // harmless (just not skipped) and cheaper than another leaper decision (measured on
+    // the 256^3 hollow shell: 16..32 ~10% faster than 8).
+    run_end = std::min(k_end, k + (std::max<int64_t>(kMinRun, run_end - k) + kLanes - 1) / kLanes * kLanes);
+    if (n > 0 && runs[n - 1].end == k) {
+      runs[n - 1].end = run_end;
+      runs[n - 1].skipped_before_end = batch_skipped;
+    } else {
+      runs[n++] = Run{k, run_end, batch_skipped};
+    }
+    k = run_end;
+  }
+
+  // Samples the batch's runs and starts the next batch.
+  void sample(float et, SampleCounts& counts) {
     counts.skipped += batch_skipped;
     for (int r = 0; r < n; ++r) {
       bool done = false;
@@ -358,13 +376,48 @@ bool castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
         break;
       }
     }
+    n = 0;
+    batch_skipped = 0;
   }
+
+  void store(float out[4]) const {
 #ifdef TESSERA_AVX2
-  _mm_storeu_ps(out, acc);
+    _mm_storeu_ps(out, acc);
 #else
-  for (int i = 0; i < 4; ++i) out[i] = acc[i];
+    for (int i = 0; i < 4; ++i) out[i] = acc[i];
 #endif
-  return terminated;
+  }
+};
+
+}  // namespace
+
+bool castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleCounts& counts) {
+  RayState s(ctx, span);
+  while (s.active()) {
+    while (s.planning()) s.plan();
+    s.sample(ctx.early_termination, counts);
+  }
+  s.store(out);
+  return s.terminated;
+}
+
+void castFastPair(const FastContext& ctx, const RaySpan* spans, float* out[2], SampleCounts& counts, bool terminated[2]) {
+  RayState a(ctx, spans[0]), b(ctx, spans[1]);
+  while (a.active() || b.active()) {
+    // The two rays' decisions are independent chains: interleaved, they overlap.
+    for (;;) {
+      const bool pa = a.planning(), pb = b.planning();
+      if (!(pa | pb)) break;
+      if (pa) a.plan();
+      if (pb) b.plan();
+    }
+    a.sample(ctx.early_termination, counts);
+    b.sample(ctx.early_termination, counts);
+  }
+  a.store(out[0]);
+  b.store(out[1]);
+  terminated[0] = a.terminated;
+  terminated[1] = b.terminated;
 }
 
 }  // namespace tessera::renderer

@@ -29,6 +29,9 @@ struct FastContext {
 // Samples span.k_first..k_end-1; out receives premultiplied RGBA. Returns true if the ray
 // was terminated early (its opacity reached early_termination).
 bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);
+// Two rays at once, bit-identical to two castFast calls: their empty-space decisions are
+// interleaved so the two dependency chains overlap in the CPU.
+void castFastPair(const FastContext& c, const RaySpan* spans, float* out[2], SampleCounts& counts, bool terminated[2]);
 
 // Double precision, exact transfer function, no skipping, no early termination.
 void castReference(const Volume& v, const TransferFunction& tf, double step, const RaySpan& span,

@@ -147,6 +147,37 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   auto worker = [&] {
     SampleCounts counts;
     int ax0 = width, ay0 = height, ax1 = -1, ay1 = -1;
+    auto mark = [&](int px, int py) {
+      if (img.at(px, py)[3] > 0) {
+        ax0 = std::min(ax0, px), ax1 = std::max(ax1, px);
+        ay0 = std::min(ay0, py), ay1 = std::max(ay1, py);
+      }
+    };
+    // Fast path: rays wait here in pairs and are cast two at a time (castFastPair).
+    struct Pending {
+      RaySpan span;
+      int px, py;
+      int64_t after;  // samples cut off after the clip box
+    } pending[2];
+    int n_pending = 0;
+    auto finish = [&](const Pending& p, bool terminated) {
+      // Samples cut off after a terminated ray count as terminated, as without the clip.
+      (terminated ? counts.terminated : counts.skipped) += (uint64_t)p.after;
+      mark(p.px, p.py);
+    };
+    auto flush = [&] {
+      if (n_pending == 2) {
+        const RaySpan spans[2] = {pending[0].span, pending[1].span};
+        float* outs[2] = {img.at(pending[0].px, pending[0].py), img.at(pending[1].px, pending[1].py)};
+        bool terminated[2];
+        castFastPair(fast, spans, outs, counts, terminated);
+        finish(pending[0], terminated[0]);
+        finish(pending[1], terminated[1]);
+      } else if (n_pending == 1) {
+        finish(pending[0], castFast(fast, pending[0].span, img.at(pending[0].px, pending[0].py), counts));
+      }
+      n_pending = 0;
+    };
     try {
       for (int t = next.fetch_add(1); t < tile_count; t = next.fetch_add(1)) {
         const int tx = fp.x + (t % tiles_x) * kTile, ty = fp.y + (t / tiles_x) * kTile;
@@ -162,21 +193,18 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
             } else if (!raySpan(geom, gen.pixelRay(px, py), brick, q.step, span)) {
               continue;
             }
-            float* o = img.at(px, py);
             if (q.reference) {
+              float* o = img.at(px, py);
               double d[4];
               castReference(v, impl_->tf, q.step, span, d, counts);
               for (int c = 0; c < 4; ++c) o[c] = (float)d[c];
+              mark(px, py);
             } else {
-              // Samples cut off after a terminated ray count as terminated, as without the clip.
-              const bool terminated = castFast(fast, span, o, counts);
-              (terminated ? counts.terminated : counts.skipped) += (uint64_t)after;
-            }
-            if (o[3] > 0) {
-              ax0 = std::min(ax0, px), ax1 = std::max(ax1, px);
-              ay0 = std::min(ay0, py), ay1 = std::max(ay1, py);
+              pending[n_pending++] = Pending{span, px, py, after};
+              if (n_pending == 2) flush();
             }
           }
+        flush();
       }
     } catch (...) {
       std::lock_guard lock(mu);
