@@ -1,14 +1,17 @@
 // Clipping rays to the box that can be non-empty: the box bounds exactly the non-empty
 // blocks, a clipped span keeps the global sample grid, and images and sample totals are
-// the same with skipping (and so clipping) on and off.
+// the same with skipping (and so clipping) on and off; rays cast in pairs match single rays.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 
+#include "renderer/kernels.h"
 #include "renderer/minmax.h"
 #include "renderer/ray_setup.h"
 #include "renderer/raycaster.h"
+#include "renderer/tf_table.h"
+#include "renderer/volume_accel.h"
 #include "tests/renderer/render_test_util.h"
 
 namespace tessera::renderer {
@@ -30,6 +33,8 @@ std::shared_ptr<Volume> ball(std::array<int, 3> dims, std::array<double, 3> c, d
 }
 
 // Transparent up to 0.05, like the default scene, so zero-valued blocks are empty.
+std::shared_ptr<const Volume> generatedBall() { return ball({40, 40, 40}, {28, 12, 26}, 9); }
+
 TransferFunction ballTf() {
   return TransferFunction({{0, 0, 0, 0, 0}, {0.05, 1, 0.5, 0.2, 0}, {0.2, 1, 0.5, 0.2, 0.3}, {1, 1, 1, 1, 0.9}});
 }
@@ -119,6 +124,44 @@ TEST(NonEmptyBox, SkippingOnAndOffGiveTheSameImageAndSampleTotal) {
   EXPECT_EQ(st.samples, 0u);
   EXPECT_GT(st.samples_skipped, 1000u);
   EXPECT_TRUE(activeRegion(img).empty());
+}
+
+TEST(CastFastPair, BitIdenticalToTwoSingleRays) {
+  // Rays of different lengths, some terminating early, with and without skipping: the
+  // interleaved pair must give exactly the colours and counts of two separate casts.
+  const auto vol = generatedBall();
+  const VolumeAccel accel(*vol);
+  const TransferFunction tf = ballTf();
+  const auto emptiness = accel.hierarchy.classify([&](float lo, float hi) { return TfTable::rangeIsEmpty(tf, lo, hi); });
+  const TfTable table(tf, 1.0 / 40);
+  const VolumeGeometry g(*vol);
+  uint32_t seed = 9;
+  auto rnd = [&] { return (seed = seed * 1664525u + 1013904223u) / 4294967296.0; };
+  int terminated_rays = 0;
+  for (int i = 0; i < 400; ++i) {
+    FastContext c{vol.get(), &accel, &table, &emptiness, i % 3 != 0, i % 2 ? 0.9f : 2.0f};
+    RaySpan spans[2];
+    int found = 0;
+    while (found < 2) {
+      const Vec3 o{rnd() * 3 - 1.5, rnd() * 3 - 1.5, 1.6}, p{0.1 * rnd() + 0.15, 0.1 * rnd() - 0.3, rnd() * 0.4 - 0.2};
+      if (raySpan(g, Ray{o, normalize(p - o)}, wholeVolume(*vol), 1.0 / 40, spans[found])) ++found;
+    }
+    float single[2][4], pair[2][4];
+    SampleCounts cs, cp;
+    bool ts[2], tp[2];
+    for (int r = 0; r < 2; ++r) ts[r] = castFast(c, spans[r], single[r], cs);
+    float* outs[2] = {pair[0], pair[1]};
+    castFastPair(c, spans, outs, cp, tp);
+    for (int r = 0; r < 2; ++r) {
+      for (int ch = 0; ch < 4; ++ch) ASSERT_EQ(pair[r][ch], single[r][ch]) << "ray pair " << i;
+      ASSERT_EQ(tp[r], ts[r]);
+      terminated_rays += ts[r];
+    }
+    ASSERT_EQ(cp.taken, cs.taken);
+    ASSERT_EQ(cp.skipped, cs.skipped);
+    ASSERT_EQ(cp.terminated, cs.terminated);
+  }
+  EXPECT_GT(terminated_rays, 20);  // early termination was exercised
 }
 
 }  // namespace
