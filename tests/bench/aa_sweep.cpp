@@ -1,14 +1,14 @@
 // Anti-aliasing sweep (see aa_sweep.h).
 #include "aa_sweep.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <stdexcept>
-
-#include <fmt/format.h>
 
 #include "renderer/fft_filter.h"
 
@@ -69,10 +69,9 @@ AaSweepResult aaSweep(renderer::GlRenderer& r, const renderer::SceneGeometry& g,
   const Image8 ref = renderOnce(r, g, cam, width, height, base, ref_method, &unused);
   res.reference_ms = msSince(t0);
 
-  const std::vector<AaRow> methods = {row("none"),         row("msaa", 2),       row("msaa", 4),
-                                      row("ssaa", 2),       row("ssaa", 3),       row("fft", 1, 0.4),
-                                      row("fft", 1, 0.6),   row("fft", 1, 0.8),   row("fft", 1, 1.0),
-                                      row("fft", 1, 1.5)};
+  const std::vector<AaRow> methods = {row("none"),        row("msaa", 2),     row("msaa", 4),     row("ssaa", 2),
+                                      row("ssaa", 3),     row("fft", 1, 0.4), row("fft", 1, 0.6), row("fft", 1, 0.8),
+                                      row("fft", 1, 1.0), row("fft", 1, 1.5)};
   Image8 previous;
   for (AaRow m : methods) {
     Image8 img;

@@ -12,12 +12,12 @@
 namespace tessera::bench {
 
 struct AaRow {
-  std::string method;  // none | msaa | ssaa | fft
-  int samples = 1;     // MSAA samples or SSAA factor k (k x k)
-  double sigma = 0;    // fft: Gaussian sigma in pixels
-  double ms = 0;       // best of repeats: render + post filter
-  double filter_ms = 0;  // fft: the post filter alone
-  ImageError err;        // vs the 16x reference, RGBA in [0,1]
+  std::string method;             // none | msaa | ssaa | fft
+  int samples = 1;                // MSAA samples or SSAA factor k (k x k)
+  double sigma = 0;               // fft: Gaussian sigma in pixels
+  double ms = 0;                  // best of repeats: render + post filter
+  double filter_ms = 0;           // fft: the post filter alone
+  ImageError err;                 // vs the 16x reference, RGBA in [0,1]
   bool same_as_previous = false;  // bytes identical to the row before (MSAA 2 rendered as 4)
   std::string label() const;      // "msaa 4", "ssaa 3x3", "fft s=0.7"
 };
