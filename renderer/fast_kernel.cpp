@@ -3,6 +3,7 @@
 // Every sample's value depends only on its index k (position u0 + k*du, one FMA), never on
 // how samples were grouped or skipped, so skipping cannot change a single bit.
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -85,11 +86,12 @@ inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off,
     f[a] = _mm256_sub_ps(u, _mm256_cvtepi32_ps(i[a]));
   }
   // Brick of the lower corner and position inside it; all eight corners are in that brick.
-  const __m256i seven = _mm256_set1_epi32(7);
+  constexpr int sh = std::countr_zero((unsigned)MinMaxHierarchy::kBlock);  // kBlock is a power of two
+  const __m256i seven = _mm256_set1_epi32(MinMaxHierarchy::kBlock - 1);
   const __m256i brick = _mm256_add_epi32(
-      _mm256_srli_epi32(i[0], 3),
-      _mm256_add_epi32(_mm256_mullo_epi32(_mm256_srli_epi32(i[1], 3), _mm256_set1_epi32(c.nb_x)),
-                       _mm256_mullo_epi32(_mm256_srli_epi32(i[2], 3), _mm256_set1_epi32(c.nb_xy))));
+      _mm256_srli_epi32(i[0], sh),
+      _mm256_add_epi32(_mm256_mullo_epi32(_mm256_srli_epi32(i[1], sh), _mm256_set1_epi32(c.nb_x)),
+                       _mm256_mullo_epi32(_mm256_srli_epi32(i[2], sh), _mm256_set1_epi32(c.nb_xy))));
   const __m256i local = _mm256_add_epi32(
       _mm256_and_si256(i[0], seven),
       _mm256_add_epi32(_mm256_mullo_epi32(_mm256_and_si256(i[1], seven), _mm256_set1_epi32(VolumeAccel::kEdge)),
@@ -169,9 +171,10 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4]
       i[a] = std::min((int)u, c.imax[a]);
       f[a] = u - (float)i[a];
     }
-    const size_t brick = (size_t)(i[0] >> 3) + (size_t)(i[1] >> 3) * c.nb_x + (size_t)(i[2] >> 3) * c.nb_xy;
-    const uint16_t* p = c.vol + brick * VolumeAccel::kBrickSize + (i[0] & 7) +
-                        VolumeAccel::kEdge * ((i[1] & 7) + VolumeAccel::kEdge * (i[2] & 7));
+    constexpr int B = MinMaxHierarchy::kBlock;
+    const size_t brick = (size_t)(i[0] / B) + (size_t)(i[1] / B) * c.nb_x + (size_t)(i[2] / B) * c.nb_xy;
+    const uint16_t* p = c.vol + brick * VolumeAccel::kBrickSize + (i[0] % B) +
+                        VolumeAccel::kEdge * ((i[1] % B) + VolumeAccel::kEdge * (i[2] % B));
     constexpr int oy = VolumeAccel::kEdge, oz = VolumeAccel::kEdge * VolumeAccel::kEdge;
     auto lx = [&](const uint16_t* q) { return lerp((float)q[0], (float)q[1], f[0]); };
     const float s = lerp(lerp(lx(p), lx(p + oy), f[1]), lerp(lx(p + oz), lx(p + oy + oz), f[1]), f[2]);
