@@ -2,8 +2,8 @@
 // (an axis-aligned voxel sub-box) into a premultiplied RGBA float image. Sample positions
 // are global along each ray (t0 + k*step from the whole-volume entry), so bricks rendered
 // separately and composited front-to-back reproduce the whole-volume image. With empty-space
-// skipping, rays are also cut to the box of blocks the transfer function leaves non-empty
-// and cast in pairs (see kernels.h); neither changes a bit of the image.
+// skipping, rays are also cut to the box of blocks the transfer function leaves non-empty;
+// the fast path casts rays in pairs (see kernels.h); neither changes a bit of the image.
 // A Raycaster is immutable after construction and safe to call from many threads.
 #pragma once
 #include <array>
