@@ -75,6 +75,10 @@ struct Classified {
 // Samples k0..k0+lanes-1 and appends those that may have alpha > 0 to `out` at position n
 // (`first_off`: offset of k0 in the chunk). Returns how many were appended. No branches on
 // the data, so consecutive packets overlap in the pipeline.
+// kSkipEmpty: return early for an all-empty packet. That branch pays where it is predictable
+// (long runs without skipping: most packets are empty) and costs where it is a coin flip
+// (short runs between leaps).
+template <bool kSkipEmpty>
 inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off, Classified& out, int n) {
   const __m256 kf = _mm256_add_ps(_mm256_set1_ps((float)k0), _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7));
   __m256 f[3];
@@ -123,6 +127,7 @@ inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off,
                                                _mm256_cmpgt_epi32(ti, _mm256_set1_epi32(c.last_nz)));
   int mask = ~_mm256_movemask_ps(_mm256_castsi256_ps(out_of_range));
   mask &= (1 << lanes) - 1;
+  if (kSkipEmpty && mask == 0) return 0;
   const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(kCompress.lanes[mask])));
   const __m256i off = _mm256_add_epi32(_mm256_set1_epi32(first_off), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(out.ti + n), _mm256_permutevar8x32_epi32(ti, perm));
@@ -135,6 +140,7 @@ inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off,
 // chunk are classified first, then the listed samples composited in order (the same
 // operations, in the same order, as one sample at a time). Returns true if the alpha
 // reached et; `stop` is the sample after the last one used.
+template <bool kSkipEmpty>
 inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, __m128& acc, int64_t& stop) {
   Classified cl;
   const __m128 one = _mm_set1_ps(1.0f), etv = _mm_set1_ps(et);
@@ -142,7 +148,7 @@ inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, __
     const int64_t chunk_end = std::min(end, j + Classified::kChunk);
     int n = 0;
     for (int64_t p = j; p < chunk_end; p += kLanes)
-      n += classifyPacket(c, p, (int)std::min<int64_t>(kLanes, chunk_end - p), (int)(p - j), cl, n);
+      n += classifyPacket<kSkipEmpty>(c, p, (int)std::min<int64_t>(kLanes, chunk_end - p), (int)(p - j), cl, n);
     for (int i = 0; i < n; ++i) {
       const float* e = c.rgba + 4 * cl.ti[i];
       const __m128 e0 = _mm_load_ps(e), e1 = _mm_load_ps(e + 4);
@@ -360,7 +366,8 @@ struct RayState {
       bool done = false;
 #ifdef TESSERA_AVX2
       int64_t j;
-      done = runPackets(c, runs[r].begin, runs[r].end, et, acc, j);
+      done = skip ? runPackets<false>(c, runs[r].begin, runs[r].end, et, acc, j)
+                  : runPackets<true>(c, runs[r].begin, runs[r].end, et, acc, j);
       counts.taken += (uint64_t)(j - runs[r].begin);
 #else
       int64_t j = runs[r].begin;
