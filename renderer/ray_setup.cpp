@@ -27,7 +27,8 @@ struct PreparedRay {
   }
 };
 
-bool interval(const VolumeGeometry& g, const PreparedRay& pr, const BrickBox& b, double& t_in, double& t_out) {
+// Inlined: called per ray, and out-of-line it kept t_in/t_out in memory.
+[[gnu::always_inline]] inline bool interval(const VolumeGeometry& g, const PreparedRay& pr, const BrickBox& b, double& t_in, double& t_out) {
   t_in = -kInf;
   t_out = kInf;
   for (int a = 0; a < 3; ++a) {
@@ -51,7 +52,7 @@ double sampleT(double t0, int64_t k, double step) { return t0 + ((double)k + 0.5
 
 // Smallest k >= 0 with t_k >= t (the same expression every brick evaluates). The guess
 // may be off by one (inv_step is rounded); the two loops make the result exact.
-int64_t firstAtOrAfter(double t0, double t, double step, double inv_step) {
+[[gnu::always_inline]] inline int64_t firstAtOrAfter(double t0, double t, double step, double inv_step) {
   double guess = std::ceil((t - t0) * inv_step - 0.5);
   int64_t k = guess > 0 ? (int64_t)guess : 0;
   while (k > 0 && sampleT(t0, k - 1, step) >= t) --k;
@@ -66,7 +67,7 @@ bool boxInterval(const VolumeGeometry& g, const Ray& r, const BrickBox& b, doubl
 
 namespace {
 // Whole-volume entry (t0) and the brick's k range; false if the brick has no samples.
-bool brickRange(const VolumeGeometry& g, const PreparedRay& r, const BrickBox& brick, double step, RaySpan& span,
+[[gnu::always_inline]] inline bool brickRange(const VolumeGeometry& g, const PreparedRay& r, const BrickBox& brick, double step, RaySpan& span,
                 double& w_out) {
   const BrickBox whole{{0, 0, 0}, g.n};
   double w_in, b_in, b_out;
@@ -97,13 +98,6 @@ void samplePositions(const VolumeGeometry& g, const Ray& r, double step, RaySpan
 }
 }  // namespace
 
-bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span) {
-  double w_out;
-  if (!brickRange(g, PreparedRay(r), brick, step, span, w_out)) return false;
-  samplePositions(g, r, step, span);
-  return true;
-}
-
 bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, const BrickBox& clip, double step,
                     RaySpan& span, int64_t& before, int64_t& after) {
   before = after = 0;
@@ -127,6 +121,12 @@ bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick
   after = k_end - span.k_end;
   samplePositions(g, r, step, span);
   return true;
+}
+
+// One code path (one compiled copy of the grid arithmetic) for every span.
+bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span) {
+  int64_t before, after;
+  return raySpanClipped(g, r, brick, brick, step, span, before, after);
 }
 
 }  // namespace tessera::renderer
