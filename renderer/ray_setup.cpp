@@ -123,6 +123,16 @@ bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick
   return true;
 }
 
+bool narrowSpan(double t_lo, double t_hi, double step, RaySpan& span, int64_t& before, int64_t& after) {
+  const double inv_step = 1.0 / step;
+  const int64_t k_first = span.k_first, k_end = span.k_end;
+  span.k_first = std::min(k_end, std::max(k_first, firstAtOrAfter(span.t0, t_lo, step, inv_step)));
+  span.k_end = std::max(span.k_first, std::min(k_end, firstAtOrAfter(span.t0, t_hi, step, inv_step)));
+  before = span.k_first - k_first;
+  after = k_end - span.k_end;
+  return span.k_end > span.k_first;
+}
+
 // One code path (one compiled copy of the grid arithmetic) for every span.
 bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span) {
   int64_t before, after;

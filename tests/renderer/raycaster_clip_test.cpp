@@ -126,6 +126,32 @@ TEST(NonEmptyBox, SkippingOnAndOffGiveTheSameImageAndSampleTotal) {
   EXPECT_TRUE(activeRegion(img).empty());
 }
 
+TEST(NonEmptyBox, DepthBoundsKeepImagesWithTheEyeAnywhere) {
+  // Two balls at different depths; eyes outside, grazing, and inside the volume (rays
+  // start at the eye, t0 = 0), whole volume and a brick: per-cell depth bounds must not
+  // change a bit, and every grid sample stays accounted for.
+  auto v = ball({48, 40, 44}, {12, 30, 10}, 6);
+  const auto other = ball({48, 40, 44}, {36, 10, 34}, 5);
+  for (size_t i = 0; i < v->values.size(); ++i) v->values[i] = std::max(v->values[i], other->values[i]);
+  const std::shared_ptr<const Volume> vol = v;
+  const Raycaster rc(vol, ballTf());
+  RenderOptions on = test::options("default", 2), off = test::options("default", 2);
+  off.quality.skip_empty = false;
+  const Camera cams[] = {Camera{{0.3, 0.4, 2.0}, {0, 0, 0}, {0, 1, 0}, 35, false, 1},
+                         Camera{{1.2, -0.1, 0.2}, {0, 0, 0}, {0, 1, 0}, 60, false, 1},
+                         Camera{{0.05, 0.02, 0.0}, {0.4, 0.1, 0.3}, {0, 1, 0}, 90, false, 1},
+                         Camera{{0.0, 0.0, 0.1}, {0.0, 0.2, -1}, {0, 1, 0}, 100, false, 1}};
+  for (const Brick& b : {wholeVolume(*vol), Brick{{0, 0, 0}, {25, 40, 44}}})
+    for (const Camera& cam : cams) {
+      RenderStats s_on, s_off;
+      const ImageF a = rc.render(cam, 57, 41, b, on, &s_on);
+      const ImageF c = rc.render(cam, 57, 41, b, off, &s_off);
+      EXPECT_TRUE(a == c) << "eye " << cam.eye[0] << "," << cam.eye[1] << "," << cam.eye[2] << " brick x " << b.hi[0];
+      EXPECT_EQ(s_on.samples + s_on.samples_skipped + s_on.samples_terminated, s_off.samples + s_off.samples_terminated);
+      EXPECT_LT(s_on.samples, s_off.samples);
+    }
+}
+
 TEST(CastFastPair, BitIdenticalToTwoSingleRays) {
   // Rays of different lengths, some terminating early, with and without skipping: the
   // interleaved pair must give exactly the colours and counts of two separate casts.
