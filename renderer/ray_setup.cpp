@@ -123,6 +123,12 @@ bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick
   return true;
 }
 
+int64_t spanSamples(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step) {
+  RaySpan span;
+  double w_out;
+  return brickRange(g, PreparedRay(r), brick, step, span, w_out) ? span.k_end - span.k_first : 0;
+}
+
 bool narrowSpan(double t_lo, double t_hi, double step, RaySpan& span, int64_t& before, int64_t& after) {
   const double inv_step = 1.0 / step;
   const int64_t k_first = span.k_first, k_end = span.k_end;

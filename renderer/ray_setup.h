@@ -49,6 +49,10 @@ bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, doubl
 bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, const BrickBox& clip, double step,
                     RaySpan& span, int64_t& before, int64_t& after);
 
+// How many samples of the global grid of `step` lie in `brick` (raySpan's k_end - k_first,
+// without the sample positions).
+int64_t spanSamples(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step);
+
 // Narrows `span` to its samples with t_lo <= t_k < t_hi (the grid is unchanged); `before`
 // and `after` receive how many samples were cut on each side. False if none remain.
 bool narrowSpan(double t_lo, double t_hi, double step, RaySpan& span, int64_t& before, int64_t& after);

@@ -251,12 +251,15 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
             RaySpan span;
             int64_t before = 0, after = 0;  // samples cut off by the clip box
             if (clipping) {
+              const size_t ci = depth ? (size_t)(py / DepthBounds::kCell) * depth->cols + px / DepthBounds::kCell : 0;
+              if (depth && !(depth->lo[ci] <= depth->hi[ci])) {  // no non-empty node here: count only
+                counts.skipped += (uint64_t)spanSamples(geom, gen.pixelRay(px, py), brick, q.step);
+                continue;
+              }
               bool hit = raySpanClipped(geom, gen.pixelRay(px, py), brick, clip, q.step, span, before, after);
               if (hit && depth) {
-                const size_t ci = (size_t)(py / DepthBounds::kCell) * depth->cols + px / DepthBounds::kCell;
-                int64_t cut_before = span.k_end - span.k_first, cut_after = 0;  // no node: all of it
-                hit = depth->lo[ci] <= depth->hi[ci] &&
-                      narrowSpan(depth->lo[ci], depth->hi[ci], q.step, span, cut_before, cut_after);
+                int64_t cut_before, cut_after;
+                hit = narrowSpan(depth->lo[ci], depth->hi[ci], q.step, span, cut_before, cut_after);
                 before += cut_before;
                 after += cut_after;
               }
