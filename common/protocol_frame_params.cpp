@@ -117,7 +117,8 @@ void readTiles(ByteReader& r, FrameParams& m) {
     t.renderer = r.u32("tiles.renderer");
     t.compositor = r.u32("tiles.compositor");
     t.tile = detail::readRect(r, "tiles.tile");
-    if (r.ok() && (t.tile.empty() || intersect(t.tile, image) != t.tile))
+    const Rect& g = t.tile;
+    if (r.ok() && (g.w <= 0 || g.h <= 0 || g.x < 0 || g.y < 0 || g.x > image.w - g.w || g.y > image.h - g.h))
       r.fail("tile " + std::to_string(i) + " " + detail::rectText(t.tile) + " empty or outside image " + detail::rectText(image));
   }
 }
