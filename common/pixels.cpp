@@ -59,13 +59,13 @@ float halfToFloat(uint16_t h) {
 static void floatsToHalfPlanes(const float* in, uint8_t* lo, uint8_t* hi, size_t n) {
   size_t i = 0;
 #if defined(__F16C__)
-  alignas(16) uint16_t h[8];
+  // Eight halves -> their eight low bytes, then their eight high bytes, in one shuffle.
+  const __m128i split = _mm_setr_epi8(0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 9, 11, 13, 15);
   for (; i + 8 <= n; i += 8) {
-    _mm_store_si128(reinterpret_cast<__m128i*>(h), _mm256_cvtps_ph(_mm256_loadu_ps(in + i), _MM_FROUND_TO_NEAREST_INT));
-    for (int k = 0; k < 8; ++k) {
-      lo[i + k] = (uint8_t)(h[k] & 0xFF);
-      hi[i + k] = (uint8_t)(h[k] >> 8);
-    }
+    __m128i h = _mm256_cvtps_ph(_mm256_loadu_ps(in + i), _MM_FROUND_TO_NEAREST_INT);
+    __m128i planes = _mm_shuffle_epi8(h, split);
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(lo + i), planes);
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(hi + i), _mm_unpackhi_epi64(planes, planes));
   }
 #endif
   for (; i < n; ++i) {
