@@ -139,6 +139,10 @@ class Master {
   void membershipChanged() {
     ++epoch_;
     assignBricks();
+    if (renderer_ranks_.empty() || compositors_.empty()) {
+      spdlog::warn("no {} left: waiting for one to join", renderer_ranks_.empty() ? "renderer" : "compositor");
+      return;  // frames in flight are issued again when one joins (its Hello bumps the epoch)
+    }
     for (auto& [frame, f] : inflight_) publish(frame, f.camera);
   }
 
