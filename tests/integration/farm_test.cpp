@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <random>
 #include <nlohmann/json.hpp>
 
 #include "farm_util.h"
@@ -65,6 +66,21 @@ TEST(FarmPixelFormats, Rgba8PiecesStayWithinTwoLevels) {
   auto run = dir.runFarm(scene, 4, 1, 2, 120, "--env TESSERA_FORMAT=rgba8");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(readPng(dir.frame(k).string()), dir.reference(scene, k)), 2);
+}
+
+// The same farm over TCP on loopback (what a cluster uses, minus the other hosts): the
+// master, display and compositors listen on ports derived from one base.
+TEST(FarmTransports, TcpLoopbackMatchesOneProcess) {
+  FarmDir dir("tcp");
+  auto scene = dir.writeScene(4);
+  std::random_device rd;
+  const int base = 20000 + (int)(rd() % 20000);  // PORT..PORT+2, PORT+10+rank: a free range is likely
+  auto run = dir.runFarm(scene, 2, 2, 2, 120, "", "tcp://127.0.0.1:" + std::to_string(base));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("tcp://127.0.0.1:" + std::to_string(base + 11)), std::string::npos)
+      << "compositor 1 should listen on base+11";
+  // 1/255: the sort-last contract.
+  for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(readPng(dir.frame(k).string()), dir.reference(scene, k)), 1);
 }
 
 TEST(FarmPixelFormats, Rgba32fPiecesKeepTheContract) {

@@ -64,13 +64,15 @@ class FarmDir {
   }
 
   // tessera-up on the project's compose.yaml, sockets and output in this folder.
+  // `endpoints` "" = ipc sockets in this folder.
   CommandResult runFarm(const fs::path& scene, int renderers, int compositors, int frames, int timeout_s = 120,
-                        const std::string& extra = "") const {
+                        const std::string& extra = "", const std::string& endpoints = "") const {
     std::string cmd = bin("tessera-up") + " " + TESSERA_SOURCE_DIR "/compose.yaml" +
                       " --env TESSERA_SCENE=" + scene.string() + " --env TESSERA_RENDERERS=" + std::to_string(renderers) +
                       " --env TESSERA_COMPOSITORS=" + std::to_string(compositors) +
                       " --env TESSERA_FRAMES=" + std::to_string(frames) + " --env TESSERA_OUT=" + (dir_ / "out").string() +
-                      " --env TESSERA_ENDPOINTS=ipc://" + (dir_ / "sockets").string() + " --env TESSERA_WINDOW=off " + extra;
+                      " --env TESSERA_ENDPOINTS=" + (endpoints.empty() ? "ipc://" + (dir_ / "sockets").string() : endpoints) +
+                      " --env TESSERA_WINDOW=off " + extra;
     return runCommand(cmd, timeout_s);
   }
 
