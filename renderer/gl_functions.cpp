@@ -21,4 +21,44 @@ void loadGlFunctions() {
   loaded = true;
 }
 
+static unsigned compile(GLenum kind, const char* src) {
+  const unsigned s = gl::CreateShader(kind);
+  gl::ShaderSource(s, 1, &src, nullptr);
+  gl::CompileShader(s);
+  GLint ok = 0;
+  gl::GetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[2048] = {};
+    gl::GetShaderInfoLog(s, sizeof log, nullptr, log);
+    gl::DeleteShader(s);
+    throw std::runtime_error(std::string("OSMesa: shader compilation failed: ") + log);
+  }
+  return s;
+}
+unsigned buildProgram(const char* vertex_src, const char* fragment_src) {
+  const unsigned vs = compile(GL_VERTEX_SHADER, vertex_src);
+  unsigned fs = 0;
+  try {
+    fs = compile(GL_FRAGMENT_SHADER, fragment_src);
+  } catch (...) {
+    gl::DeleteShader(vs);
+    throw;
+  }
+  const unsigned p = gl::CreateProgram();
+  gl::AttachShader(p, vs);
+  gl::AttachShader(p, fs);
+  gl::LinkProgram(p);
+  gl::DeleteShader(vs);
+  gl::DeleteShader(fs);
+  GLint ok = 0;
+  gl::GetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[2048] = {};
+    gl::GetProgramInfoLog(p, sizeof log, nullptr, log);
+    gl::DeleteProgram(p);
+    throw std::runtime_error(std::string("OSMesa: shader program failed to link: ") + log);
+  }
+  return p;
+}
+
 }  // namespace tessera::renderer::gl

@@ -53,5 +53,7 @@ TESSERA_GL_FUNCTIONS(TESSERA_GL_DECLARE)
 
 // Throws std::runtime_error naming the first entry point the context does not provide.
 void loadGlFunctions();
+// Compiles and links a vertex + fragment program; throws std::runtime_error with the log.
+unsigned buildProgram(const char* vertex_src, const char* fragment_src);
 
 }  // namespace tessera::renderer::gl

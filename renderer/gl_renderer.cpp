@@ -44,19 +44,6 @@ void main() {
   frag = vec4(clamp(v_color, 0.0, 1.0) * (ambient + (1.0 - ambient) * lambert), 1.0);
 })";
 
-unsigned compile(GLenum kind, const char* src) {
-  const unsigned s = gl::CreateShader(kind);
-  gl::ShaderSource(s, 1, &src, nullptr);
-  gl::CompileShader(s);
-  GLint ok = 0;
-  gl::GetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[1024] = {};
-    gl::GetShaderInfoLog(s, sizeof log, nullptr, log);
-    throw std::runtime_error(std::string("OSMesa: shader compilation failed: ") + log);
-  }
-  return s;
-}
 
 std::array<float, 16> toFloat(const std::array<double, 16>& m) {
   std::array<float, 16> f;
@@ -75,16 +62,7 @@ GlRenderer::GlRenderer() {
   try {
     makeCurrent();
     gl::loadGlFunctions();
-    const unsigned vs = compile(GL_VERTEX_SHADER, kVertexShader), fs = compile(GL_FRAGMENT_SHADER, kFragmentShader);
-    program_ = gl::CreateProgram();
-    gl::AttachShader(program_, vs);
-    gl::AttachShader(program_, fs);
-    gl::LinkProgram(program_);
-    gl::DeleteShader(vs);
-    gl::DeleteShader(fs);
-    GLint ok = 0;
-    gl::GetProgramiv(program_, GL_LINK_STATUS, &ok);
-    if (!ok) throw std::runtime_error("OSMesa: shader program failed to link");
+    program_ = gl::buildProgram(kVertexShader, kFragmentShader);
     loc_mvp_ = gl::GetUniformLocation(program_, "mvp");
     loc_view_ = gl::GetUniformLocation(program_, "view");
     loc_light_ = gl::GetUniformLocation(program_, "light");

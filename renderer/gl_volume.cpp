@@ -25,23 +25,6 @@ namespace {
 constexpr float kQuantScale = 65535.0f;  // same quantization as the CPU fast path
 constexpr int64_t kMaxSamples = int64_t{1} << 24;  // sample indices travel as exact floats
 
-// Pixels whose centre ray can hit the brick (the CPU caster's rule, so both touch the same
-// pixels): bounding box of the projected corners plus one pixel, or the whole image if a
-// corner is behind the eye.
-Rect footprint(const RayGenerator& gen, const VolumeGeometry& g, const Brick& b, int w, int h) {
-  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-  for (int c = 0; c < 8; ++c) {
-    Vec3 p{g.plane(0, (c & 1) ? b.hi[0] : b.lo[0]), g.plane(1, (c & 2) ? b.hi[1] : b.lo[1]),
-           g.plane(2, (c & 4) ? b.hi[2] : b.lo[2])};
-    double sx, sy;
-    if (!gen.project(p, sx, sy) || !std::isfinite(sx) || !std::isfinite(sy)) return Rect{0, 0, w, h};
-    x0 = std::min(x0, sx), x1 = std::max(x1, sx), y0 = std::min(y0, sy), y1 = std::max(y1, sy);
-  }
-  const double lx = std::max(0.0, std::floor(x0) - 1), ly = std::max(0.0, std::floor(y0) - 1);
-  const double hx = std::min((double)w, std::ceil(x1) + 1), hy = std::min((double)h, std::ceil(y1) + 1);
-  if (!(lx < hx && ly < hy)) return Rect{};
-  return Rect{(int)lx, (int)ly, (int)(hx - lx), (int)(hy - ly)};
-}
 
 void texParams(GLenum target, GLint filter) {
   glTexParameteri(target, GL_TEXTURE_MIN_FILTER, filter);
@@ -196,7 +179,7 @@ GlVolumeRenderer::GlVolumeRenderer(std::shared_ptr<const Volume> volume, Transfe
   try {
     m.makeCurrent();
     glv::loadVolumeGlFunctions();
-    m.program = glv::buildProgram(glv::volumeVertexShader(), glv::volumeFragmentShader());
+    m.program = gl::buildProgram(glv::volumeVertexShader(), glv::volumeFragmentShader());
     gl::GenVertexArrays(1, &m.vao);
     m.uploadVolume();
     m.uploadDistance();
@@ -247,7 +230,7 @@ ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const 
   const RayGenerator gen(cam, width, height);  // validates the camera
   const VolumeGeometry geom(v);
   ImageF img(width, height);
-  const Rect fp = footprint(gen, geom, brick, width, height);
+  const Rect fp = brickFootprint(gen, geom, brick, width, height);
   if (active) *active = Rect{};
   if (stats) *stats = RenderStats{};
   if (fp.empty()) return img;

@@ -25,9 +25,6 @@ OSMesaContext createCoreContext(int major, int minor);
 // Loads gl_functions.h's entry points and the ones above (idempotent).
 void loadVolumeGlFunctions();
 
-// Compiles and links a vertex + fragment program; throws with the info log on failure.
-unsigned buildProgram(const char* vertex_src, const char* fragment_src);
-
 // GLSL sources of the ray-casting program (gl_volume_shader.cpp).
 const char* volumeVertexShader();
 const char* volumeFragmentShader();

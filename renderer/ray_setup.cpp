@@ -145,4 +145,19 @@ bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, doubl
   return raySpanClipped(g, r, brick, brick, step, span, before, after);
 }
 
+Rect brickFootprint(const RayGenerator& gen, const VolumeGeometry& g, const BrickBox& b, int w, int h) {
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (int c = 0; c < 8; ++c) {
+    Vec3 p{g.plane(0, (c & 1) ? b.hi[0] : b.lo[0]), g.plane(1, (c & 2) ? b.hi[1] : b.lo[1]),
+           g.plane(2, (c & 4) ? b.hi[2] : b.lo[2])};
+    double sx, sy;
+    if (!gen.project(p, sx, sy) || !std::isfinite(sx) || !std::isfinite(sy)) return Rect{0, 0, w, h};
+    x0 = std::min(x0, sx), x1 = std::max(x1, sx), y0 = std::min(y0, sy), y1 = std::max(y1, sy);
+  }
+  const double lx = std::max(0.0, std::floor(x0) - 1), ly = std::max(0.0, std::floor(y0) - 1);
+  const double hx = std::min((double)w, std::ceil(x1) + 1), hy = std::min((double)h, std::ceil(y1) + 1);
+  if (!(lx < hx && ly < hy)) return Rect{};
+  return Rect{(int)lx, (int)ly, (int)(hx - lx), (int)(hy - ly)};
+}
+
 }  // namespace tessera::renderer

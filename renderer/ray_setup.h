@@ -6,6 +6,7 @@
 
 #include "common/bricks.h"
 #include "common/camera.h"
+#include "common/image.h"
 #include "common/volume.h"
 
 namespace tessera::renderer {
@@ -56,5 +57,10 @@ int64_t spanSamples(const VolumeGeometry& g, const Ray& r, const BrickBox& brick
 // Narrows `span` to its samples with t_lo <= t_k < t_hi (the grid is unchanged); `before`
 // and `after` receive how many samples were cut on each side. False if none remain.
 bool narrowSpan(double t_lo, double t_hi, double step, RaySpan& span, int64_t& before, int64_t& after);
+
+// Pixels whose centre ray can hit the brick, shared by both volume backends so they touch
+// the same pixels: the bounding box of its projected corners plus one pixel; the whole
+// image if a corner is behind the eye (the projection is not convex then).
+Rect brickFootprint(const RayGenerator& gen, const VolumeGeometry& g, const BrickBox& b, int w, int h);
 
 }  // namespace tessera::renderer

@@ -75,22 +75,6 @@ namespace {
 
 constexpr int kTile = 32;
 
-// Pixels whose centre ray can hit the brick: bounding box of its projected corners plus
-// one pixel; the whole image if a corner is behind the eye (projection not convex then).
-Rect footprint(const RayGenerator& gen, const VolumeGeometry& g, const Brick& b, int w, int h) {
-  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-  for (int c = 0; c < 8; ++c) {
-    Vec3 p{g.plane(0, (c & 1) ? b.hi[0] : b.lo[0]), g.plane(1, (c & 2) ? b.hi[1] : b.lo[1]),
-           g.plane(2, (c & 4) ? b.hi[2] : b.lo[2])};
-    double sx, sy;
-    if (!gen.project(p, sx, sy) || !std::isfinite(sx) || !std::isfinite(sy)) return Rect{0, 0, w, h};
-    x0 = std::min(x0, sx), x1 = std::max(x1, sx), y0 = std::min(y0, sy), y1 = std::max(y1, sy);
-  }
-  const double lx = std::max(0.0, std::floor(x0) - 1), ly = std::max(0.0, std::floor(y0) - 1);
-  const double hx = std::min((double)w, std::ceil(x1) + 1), hy = std::min((double)h, std::ceil(y1) + 1);
-  if (!(lx < hx && ly < hy)) return Rect{};
-  return Rect{(int)lx, (int)ly, (int)(hx - lx), (int)(hy - ly)};
-}
 
 // Per 8x8-pixel cell, the ray parameters at which a ray through the cell can meet a
 // non-empty node: [lo, hi) bounds the distance from the eye to every non-empty node whose
@@ -129,7 +113,7 @@ DepthBounds depthBounds(const RayGenerator& gen, const VolumeGeometry& g, const 
           overlaps = overlaps && b.lo[a] < b.hi[a];
         }
         if (!overlaps) continue;
-        const Rect r = footprint(gen, g, b, w, h);
+        const Rect r = brickFootprint(gen, g, b, w, h);
         if (r.empty()) continue;
         double near2 = 0, far2 = 0;
         for (int a = 0; a < 3; ++a) {
@@ -169,7 +153,7 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   const RayGenerator gen(cam, width, height);  // validates the camera
   const VolumeGeometry geom(v);
   ImageF img(width, height);
-  const Rect fp = footprint(gen, geom, brick, width, height);
+  const Rect fp = brickFootprint(gen, geom, brick, width, height);
 
   std::optional<TfTable> table;
   FastContext fast;
