@@ -53,11 +53,13 @@ std::string defaultEndpointBase() {
                "ipc://" + (std::filesystem::temp_directory_path() / ("tessera-" + std::to_string(getuid()))).string());
 }
 
+// host_env: the variable that may name this endpoint's host ("" = always the base host).
 static std::string named(const std::string& base, const std::string& name, int port_offset,
                          const std::string& host_env) {
   if (startsWith(base, "tcp://")) {
     auto t = parseTcp(base);
-    return "tcp://" + envOr(host_env.c_str(), t.host) + ":" + std::to_string(t.port + port_offset);
+    std::string host = host_env.empty() ? t.host : envOr(host_env.c_str(), t.host);
+    return "tcp://" + host + ":" + std::to_string(t.port + port_offset);
   }
   if (startsWith(base, "inproc://")) return base + "-" + name;
   return base + "/" + name;

@@ -1,7 +1,6 @@
 #include "over.h"
 
 #include <algorithm>
-#include <cstring>
 
 #if defined(__AVX2__)
 #include <immintrin.h>

@@ -1,10 +1,7 @@
 #include "master.h"
 
 #include <chrono>
-#include <cmath>
-#include <fstream>
 #include <map>
-#include <optional>
 #include <thread>
 
 #include "balance.h"

@@ -22,7 +22,7 @@ std::vector<TileRenderer::Output> TileRenderer::render(const proto::FrameParams&
     if (t.renderer == rank) groups[t.compositor].push_back(t.tile);
   const ViewProjection vp = gl_.viewProjection(p.camera, p.width, p.height);
   st.chunks_total = geometry_.chunks.size();
-  std::map<const Rect*, double> ms;  // per tile, reported below in p.tiles order
+  std::map<uint32_t, std::vector<double>> ms;  // per compositor, parallel to its tiles
   std::vector<Output> out;
   for (auto& [compositor, rects] : groups) {
     TilePacking packing = packTiles(rects, p.width);
@@ -38,7 +38,7 @@ std::vector<TileRenderer::Output> TileRenderer::render(const proto::FrameParams&
       for (int y = 0; y < tile.height; ++y)
         std::memcpy(fb.at(pt.fb_x, pt.fb_y + y), tile.at(0, y), 4 * (size_t)tile.width);
       double tile_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-      ms[&rects[i]] = tile_ms;
+      ms[compositor].push_back(tile_ms);
       group_ms += tile_ms;
       st.chunks_drawn += draw.size();
       st.triangles += gs.triangles;
@@ -59,11 +59,8 @@ std::vector<TileRenderer::Output> TileRenderer::render(const proto::FrameParams&
   }
   // Per-tile costs in the master's order, so it can re-cut the screen by cost.
   std::map<uint32_t, size_t> next;
-  for (const auto& t : p.tiles) {
-    if (t.renderer != rank) continue;
-    const auto& rects = groups[t.compositor];
-    st.tile_ms.push_back(ms[&rects[next[t.compositor]++]]);
-  }
+  for (const auto& t : p.tiles)
+    if (t.renderer == rank) st.tile_ms.push_back(ms[t.compositor][next[t.compositor]++]);
   return out;
 }
 
