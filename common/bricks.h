@@ -3,9 +3,9 @@
 #pragma once
 #include <vector>
 
-#include "camera.h"
-#include "transfer_function.h"
-#include "volume.h"
+#include "common/camera.h"
+#include "common/transfer_function.h"
+#include "common/volume.h"
 
 namespace tessera {
 

@@ -1,7 +1,7 @@
 // Camera per DESIGN.md: perspective (vertical fov, degrees) or orthographic (view height).
 // The ray of pixel (px,py) passes through the pixel centre. Units are the unit-box scene units.
 #pragma once
-#include "vec.h"
+#include "common/vec.h"
 
 namespace tessera {
 

@@ -6,9 +6,9 @@
 #include <string>
 #include <variant>
 
-#include "camera.h"
-#include "transfer_function.h"
-#include "volume.h"
+#include "common/camera.h"
+#include "common/transfer_function.h"
+#include "common/volume.h"
 
 namespace tessera {
 

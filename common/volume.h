@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "vec.h"
+#include "common/vec.h"
 
 namespace tessera {
 

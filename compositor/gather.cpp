@@ -1,4 +1,4 @@
-#include "gather.h"
+#include "compositor/gather.h"
 
 #include <utility>
 

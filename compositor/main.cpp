@@ -3,9 +3,9 @@
 
 #include <CLI/CLI.hpp>
 
-#include "common/log.h"
-#include "common/stop.h"
-#include "stage.h"
+#include "common/net/log.h"
+#include "common/net/stop.h"
+#include "compositor/stage.h"
 
 int main(int argc, char** argv) {
   using namespace tessera;

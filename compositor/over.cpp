@@ -1,4 +1,4 @@
-#include "over.h"
+#include "compositor/over.h"
 
 #include <algorithm>
 
@@ -6,7 +6,7 @@
 #include <immintrin.h>
 #endif
 
-#include "common/pixels.h"
+#include "common/wire/pixels.h"
 
 namespace tessera::compositor {
 namespace {

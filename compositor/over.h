@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "common/image.h"
-#include "common/protocol.h"
+#include "common/wire/protocol.h"
 
 namespace tessera::compositor {
 

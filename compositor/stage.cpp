@@ -1,15 +1,15 @@
-#include "stage.h"
+#include "compositor/stage.h"
 
 #include <chrono>
 #include <cstring>
 #include <map>
 
-#include "common/log.h"
-#include "common/stage_link.h"
-#include "common/strips.h"
-#include "common/transport.h"
-#include "gather.h"
-#include "over.h"
+#include "common/net/log.h"
+#include "common/net/stage_link.h"
+#include "common/wire/strips.h"
+#include "common/net/transport.h"
+#include "compositor/gather.h"
+#include "compositor/over.h"
 
 namespace tessera::compositor {
 namespace {

@@ -6,7 +6,7 @@
 
 #include <zmq.hpp>
 
-#include "common/endpoints.h"
+#include "common/net/endpoints.h"
 
 namespace tessera::compositor {
 

@@ -1,9 +1,9 @@
 // tessera-display: shows the farm's frames in a window, or writes them as PNG files.
 #include <CLI/CLI.hpp>
 
-#include "common/log.h"
-#include "common/stop.h"
-#include "stage.h"
+#include "common/net/log.h"
+#include "common/net/stop.h"
+#include "display/stage.h"
 
 int main(int argc, char** argv) {
   using namespace tessera;

@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "common/image_io.h"
+#include "common/io/image_io.h"
 #include "display/sink.h"
 
 namespace tessera::display {

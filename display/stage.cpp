@@ -1,4 +1,4 @@
-#include "stage.h"
+#include "display/stage.h"
 
 #include <chrono>
 #include <deque>
@@ -6,11 +6,11 @@
 
 #include <fmt/format.h>
 
-#include "common/log.h"
-#include "common/stage_link.h"
-#include "common/strips.h"
-#include "common/transport.h"
-#include "sink.h"
+#include "common/net/log.h"
+#include "common/net/stage_link.h"
+#include "common/wire/strips.h"
+#include "common/net/transport.h"
+#include "display/sink.h"
 
 namespace tessera::display {
 namespace {

@@ -9,7 +9,7 @@
 
 #include <zmq.hpp>
 
-#include "common/endpoints.h"
+#include "common/net/endpoints.h"
 
 namespace tessera::display {
 

@@ -1,4 +1,4 @@
-#include "balance.h"
+#include "master/balance.h"
 
 #include <algorithm>
 #include <numeric>

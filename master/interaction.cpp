@@ -1,4 +1,4 @@
-#include "interaction.h"
+#include "master/interaction.h"
 
 #include <algorithm>
 #include <cmath>

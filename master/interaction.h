@@ -1,7 +1,7 @@
 // Interactive camera control: how the display's drag/wheel input moves the camera.
 #pragma once
 #include "common/camera.h"
-#include "common/protocol.h"
+#include "common/wire/protocol.h"
 
 namespace tessera::master {
 

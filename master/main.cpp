@@ -1,9 +1,9 @@
 // tessera-master: loads the scene, registers the stages and drives the frames.
 #include <CLI/CLI.hpp>
 
-#include "common/log.h"
-#include "common/stop.h"
-#include "master.h"
+#include "common/net/log.h"
+#include "common/net/stop.h"
+#include "master/master.h"
 
 int main(int argc, char** argv) {
   using namespace tessera;

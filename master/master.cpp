@@ -1,15 +1,15 @@
-#include "master.h"
+#include "master/master.h"
 
 #include <chrono>
 #include <map>
 #include <thread>
 
-#include "balance.h"
-#include "interaction.h"
-#include "tiling.h"
-#include "common/log.h"
-#include "common/transport.h"
-#include "metrics.h"
+#include "master/balance.h"
+#include "master/interaction.h"
+#include "master/tiling.h"
+#include "common/net/log.h"
+#include "common/net/transport.h"
+#include "master/metrics.h"
 
 namespace tessera::master {
 namespace {

@@ -7,9 +7,9 @@
 
 #include <zmq.hpp>
 
-#include "common/codec.h"
-#include "common/endpoints.h"
-#include "common/protocol.h"
+#include "common/wire/codec.h"
+#include "common/net/endpoints.h"
+#include "common/wire/protocol.h"
 #include "common/scene.h"
 
 namespace tessera::master {

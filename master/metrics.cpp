@@ -1,4 +1,4 @@
-#include "metrics.h"
+#include "master/metrics.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -6,7 +6,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include "balance.h"
+#include "master/balance.h"
 
 namespace tessera::master {
 

@@ -12,7 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/protocol.h"
+#include "common/wire/protocol.h"
 
 namespace tessera::master {
 

@@ -1,4 +1,4 @@
-#include "tiling.h"
+#include "master/tiling.h"
 
 #include <algorithm>
 #include <cmath>

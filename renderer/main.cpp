@@ -1,9 +1,9 @@
 // tessera-renderer: one renderer stage of the farm (ranks come from the master).
 #include <CLI/CLI.hpp>
 
-#include "common/log.h"
-#include "common/stop.h"
-#include "stage.h"
+#include "common/net/log.h"
+#include "common/net/stop.h"
+#include "renderer/stage.h"
 
 int main(int argc, char** argv) {
   using namespace tessera;

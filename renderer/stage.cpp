@@ -1,17 +1,17 @@
-#include "stage.h"
+#include "renderer/stage.h"
 
 #include <chrono>
 #include <deque>
 #include <map>
 #include <optional>
 
-#include "common/log.h"
-#include "common/pixels.h"
-#include "common/protocol.h"
-#include "common/stage_link.h"
-#include "common/transport.h"
-#include "raycaster.h"
-#include "tile_render.h"
+#include "common/net/log.h"
+#include "common/wire/pixels.h"
+#include "common/wire/protocol.h"
+#include "common/net/stage_link.h"
+#include "common/net/transport.h"
+#include "renderer/volume/raycaster.h"
+#include "renderer/tile_render.h"
 
 namespace tessera::renderer {
 namespace {

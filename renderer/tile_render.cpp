@@ -1,10 +1,10 @@
-#include "tile_render.h"
+#include "renderer/tile_render.h"
 
 #include <chrono>
 #include <cstring>
 #include <map>
 
-#include "common/strips.h"
+#include "common/wire/strips.h"
 
 namespace tessera::renderer {
 

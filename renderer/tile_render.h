@@ -6,10 +6,10 @@
 #include <memory>
 #include <vector>
 
-#include "common/protocol.h"
+#include "common/wire/protocol.h"
 #include "common/scene.h"
-#include "renderer/gl_renderer.h"
-#include "renderer/mesh_scene.h"
+#include "renderer/gl/gl_renderer.h"
+#include "renderer/mesh/mesh_scene.h"
 
 namespace tessera::renderer {
 

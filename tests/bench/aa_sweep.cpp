@@ -1,5 +1,5 @@
 // Anti-aliasing sweep (see aa_sweep.h).
-#include "aa_sweep.h"
+#include "tests/bench/aa_sweep.h"
 
 #include <fmt/format.h>
 
@@ -10,7 +10,7 @@
 #include <fstream>
 #include <stdexcept>
 
-#include "renderer/fft_filter.h"
+#include "renderer/tools/fft_filter.h"
 
 namespace tessera::bench {
 

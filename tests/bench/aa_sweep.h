@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "common/image.h"
-#include "renderer/gl_renderer.h"
-#include "renderer/mesh_scene.h"
+#include "renderer/gl/gl_renderer.h"
+#include "renderer/mesh/mesh_scene.h"
 
 namespace tessera::bench {
 

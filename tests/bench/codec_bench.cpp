@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "common/codec.h"
-#include "common/protocol.h"
+#include "common/wire/codec.h"
+#include "common/wire/protocol.h"
 
 namespace {
 

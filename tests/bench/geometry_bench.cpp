@@ -20,12 +20,12 @@
 #include <string>
 #include <vector>
 
-#include "aa_sweep.h"
-#include "common/image_io.h"
+#include "tests/bench/aa_sweep.h"
+#include "common/io/image_io.h"
 #include "common/scene.h"
 #include "master/tiling.h"
-#include "renderer/gl_renderer.h"
-#include "renderer/mesh_scene.h"
+#include "renderer/gl/gl_renderer.h"
+#include "renderer/mesh/mesh_scene.h"
 
 namespace fs = std::filesystem;
 using namespace tessera;

@@ -10,13 +10,13 @@
 #include <vector>
 
 #include "common/image.h"
-#include "common/pixels.h"
+#include "common/wire/pixels.h"
 #include "common/scene.h"
 #include "compositor/over.h"
-#include "renderer/kernels.h"
-#include "renderer/minmax.h"
-#include "renderer/raycaster.h"
-#include "renderer/tf_table.h"
+#include "renderer/volume/kernels.h"
+#include "renderer/volume/minmax.h"
+#include "renderer/volume/raycaster.h"
+#include "renderer/volume/tf_table.h"
 
 namespace {
 

@@ -17,10 +17,10 @@
 #include <string>
 #include <vector>
 
-#include "common/image_io.h"
+#include "common/io/image_io.h"
 #include "common/scene.h"
-#include "render_sweep_report.h"
-#include "renderer/raycaster.h"
+#include "tests/bench/render_sweep_report.h"
+#include "renderer/volume/raycaster.h"
 
 namespace {
 

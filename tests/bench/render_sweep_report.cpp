@@ -1,4 +1,4 @@
-#include "render_sweep_report.h"
+#include "tests/bench/render_sweep_report.h"
 
 #include <cmath>
 #include <cstdio>

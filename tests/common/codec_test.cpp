@@ -1,5 +1,5 @@
 // Codec round trips and failure modes: every decoder must reject bad input cleanly.
-#include "common/codec.h"
+#include "common/wire/codec.h"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // PNG and raw float files written to a temporary folder and read back.
-#include "common/image_io.h"
+#include "common/io/image_io.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

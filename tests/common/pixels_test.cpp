@@ -1,4 +1,4 @@
-#include "common/pixels.h"
+#include "common/wire/pixels.h"
 
 #include <gtest/gtest.h>
 

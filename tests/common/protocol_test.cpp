@@ -1,6 +1,6 @@
 // Wire protocol: every message round-trips, and every kind of damage is a clean failure
 // with a reason (never a crash, never a partially trusted message).
-#include "common/protocol.h"
+#include "common/wire/protocol.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // Strip headers: exact round trips, and hostile streams that must be rejected and counted
 // without a single byte written outside the destination.
-#include "common/strips.h"
+#include "common/wire/strips.h"
 
 #include <gtest/gtest.h>
 

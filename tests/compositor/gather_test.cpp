@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "common/pixels.h"
+#include "common/wire/pixels.h"
 #include "compositor/over.h"
 
 namespace tessera::compositor {

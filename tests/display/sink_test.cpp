@@ -8,10 +8,10 @@
 #include <cmath>
 #include <filesystem>
 
-#include "common/image_io.h"
+#include "common/io/image_io.h"
 #include "display/font.h"
 #include "display/sink.h"
-#include "xvfb.h"
+#include "tests/display/xvfb.h"
 
 namespace tessera::display {
 namespace {

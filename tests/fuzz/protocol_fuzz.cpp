@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "common/protocol.h"
+#include "common/wire/protocol.h"
 
 using namespace tessera;
 using namespace tessera::proto;

@@ -3,7 +3,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "common/strips.h"
+#include "common/wire/strips.h"
 
 using namespace tessera;
 

@@ -12,8 +12,8 @@
 #include <nlohmann/json.hpp>
 #include <zmq.hpp>
 
-#include "common/protocol.h"
-#include "farm_util.h"
+#include "common/wire/protocol.h"
+#include "tests/integration/farm_util.h"
 
 namespace tessera::test {
 namespace {

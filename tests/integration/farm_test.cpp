@@ -6,7 +6,7 @@
 #include <random>
 #include <nlohmann/json.hpp>
 
-#include "farm_util.h"
+#include "tests/integration/farm_util.h"
 
 namespace tessera::test {
 namespace {

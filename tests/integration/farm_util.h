@@ -12,7 +12,7 @@
 #include <string>
 
 #include "common/image.h"
-#include "common/image_io.h"
+#include "common/io/image_io.h"
 
 namespace tessera::test {
 

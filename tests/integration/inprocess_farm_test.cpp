@@ -11,13 +11,13 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/image_io.h"
+#include "common/io/image_io.h"
 #include "compositor/stage.h"
 #include "display/stage.h"
-#include "farm_util.h"
+#include "tests/integration/farm_util.h"
 #include "master/interaction.h"
 #include "master/master.h"
-#include "renderer/raycaster.h"
+#include "renderer/volume/raycaster.h"
 #include "renderer/stage.h"
 
 namespace tessera::test {

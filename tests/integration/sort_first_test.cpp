@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "farm_util.h"
+#include "tests/integration/farm_util.h"
 
 namespace tessera::test {
 namespace {

@@ -6,10 +6,10 @@
 #include <filesystem>
 #include <memory>
 
-#include "common/image_io.h"
-#include "renderer/fft_filter.h"
-#include "renderer/gl_renderer.h"
-#include "renderer/marching_cubes.h"
+#include "common/io/image_io.h"
+#include "renderer/tools/fft_filter.h"
+#include "renderer/gl/gl_renderer.h"
+#include "renderer/mesh/marching_cubes.h"
 
 namespace tessera::renderer {
 namespace {

@@ -1,14 +1,14 @@
 // GLSL (OSMesa) volume backend against the CPU ray caster and the reference, skipping
 // on/off, bricks composited vs whole, and a context that cannot be created.
-#include "renderer/gl_volume.h"
+#include "renderer/volume/gl_volume.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
 
 #include "common/bricks.h"
-#include "renderer/gl_volume_context.h"
-#include "render_test_util.h"
+#include "renderer/volume/gl_volume_context.h"
+#include "tests/renderer/render_test_util.h"
 
 namespace tessera::renderer {
 namespace {

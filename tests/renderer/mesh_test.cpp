@@ -10,10 +10,10 @@
 #include <set>
 #include <random>
 
-#include "renderer/chunks.h"
-#include "renderer/marching_cubes.h"
-#include "renderer/mesh.h"
-#include "renderer/mesh_scene.h"
+#include "renderer/mesh/chunks.h"
+#include "renderer/mesh/marching_cubes.h"
+#include "renderer/mesh/mesh.h"
+#include "renderer/mesh/mesh_scene.h"
 
 namespace tessera::renderer {
 namespace {

@@ -1,13 +1,13 @@
 // Min-max hierarchy: block ranges include the trilinear apron, a block is empty iff the
 // transfer function has zero opacity over its range, coarser levels and the directional
 // distance maps are exact.
-#include "renderer/minmax.h"
+#include "renderer/volume/minmax.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
-#include "renderer/tf_table.h"
+#include "renderer/volume/tf_table.h"
 
 namespace tessera::renderer {
 namespace {

@@ -5,7 +5,7 @@
 #include <algorithm>
 
 #include "common/bricks.h"
-#include "renderer/raycaster.h"
+#include "renderer/volume/raycaster.h"
 #include "tests/renderer/render_test_util.h"
 
 namespace tessera::renderer {

@@ -6,12 +6,12 @@
 #include <algorithm>
 #include <cmath>
 
-#include "renderer/kernels.h"
-#include "renderer/minmax.h"
-#include "renderer/ray_setup.h"
-#include "renderer/raycaster.h"
-#include "renderer/tf_table.h"
-#include "renderer/volume_accel.h"
+#include "renderer/volume/kernels.h"
+#include "renderer/volume/minmax.h"
+#include "renderer/volume/ray_setup.h"
+#include "renderer/volume/raycaster.h"
+#include "renderer/volume/tf_table.h"
+#include "renderer/volume/volume_accel.h"
 #include "tests/renderer/render_test_util.h"
 
 namespace tessera::renderer {

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-#include "renderer/raycaster.h"
+#include "renderer/volume/raycaster.h"
 #include "tests/renderer/render_test_util.h"
 
 namespace tessera::renderer {

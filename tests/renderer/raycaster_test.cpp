@@ -1,14 +1,14 @@
 // Ray caster: sampling, ray-box intervals, quality vs reference, skipping and footprints.
-#include "renderer/raycaster.h"
+#include "renderer/volume/raycaster.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "common/bricks.h"
-#include "renderer/kernels.h"
-#include "renderer/ray_setup.h"
-#include "renderer/tf_table.h"
+#include "renderer/volume/kernels.h"
+#include "renderer/volume/ray_setup.h"
+#include "renderer/volume/tf_table.h"
 #include "tests/renderer/render_test_util.h"
 
 namespace tessera::renderer {

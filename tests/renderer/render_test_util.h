@@ -9,10 +9,10 @@
 #include <string>
 
 #include "common/image.h"
-#include "common/image_io.h"
+#include "common/io/image_io.h"
 #include "common/scene.h"
 #include "common/volume.h"
-#include "renderer/raycaster.h"
+#include "renderer/volume/raycaster.h"
 
 namespace tessera::renderer::test {
 

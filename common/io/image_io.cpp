@@ -1,0 +1,150 @@
+// PNG (libpng, straight alpha) and raw float image files.
+#include "common/io/image_io.h"
+
+#include <png.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+
+namespace tessera {
+
+namespace {
+
+struct FileCloser {
+  void operator()(FILE* f) const { if (f) std::fclose(f); }
+};
+using FilePtr = std::unique_ptr<FILE, FileCloser>;
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw std::runtime_error(path + ": " + what);
+}
+
+uint8_t clampByte(double v) {
+  v = std::floor(v + 0.5);
+  return (uint8_t)(v < 0 ? 0 : (v > 255 ? 255 : v));
+}
+
+// Premultiplied float RGBA -> 8-bit straight (or opaque over a background) RGBA.
+template <class Get>
+std::vector<uint8_t> toStraight(int w, int h, Get get, const std::optional<std::array<double, 3>>& bg) {
+  std::vector<uint8_t> out((size_t)w * h * 4);
+  for (size_t i = 0; i < (size_t)w * h; ++i) {
+    double c[4];
+    for (int k = 0; k < 4; ++k) {
+      c[k] = get(4 * i + k);
+      if (!std::isfinite(c[k])) c[k] = 0;
+      c[k] = std::clamp(c[k], 0.0, 1.0);
+    }
+    uint8_t* o = &out[4 * i];
+    if (bg) {
+      for (int k = 0; k < 3; ++k) o[k] = clampByte(255.0 * (c[k] + (1 - c[3]) * (*bg)[k]));
+      o[3] = 255;
+    } else if (c[3] > 0) {
+      for (int k = 0; k < 3; ++k) o[k] = clampByte(255.0 * std::min(1.0, c[k] / c[3]));
+      o[3] = clampByte(255.0 * c[3]);
+    } else {
+      o[0] = o[1] = o[2] = o[3] = 0;
+    }
+  }
+  return out;
+}
+
+void writeRows(const std::string& path, int w, int h, const std::vector<uint8_t>& rgba) {
+  if (w <= 0 || h <= 0) fail(path, "cannot write an empty image as PNG");
+  FilePtr f(std::fopen(path.c_str(), "wb"));
+  if (!f) fail(path, std::string("cannot open for writing: ") + std::strerror(errno));
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  if (!info) {
+    png_destroy_write_struct(&png, nullptr);
+    fail(path, "libpng init failed");
+  }
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    fail(path, "libpng write error");
+  }
+  png_init_io(png, f.get());
+  png_set_IHDR(png, info, w, h, 8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  png_set_compression_level(png, 3);  // fast: frames are written often
+  png_write_info(png, info);
+  for (int y = 0; y < h; ++y) png_write_row(png, rgba.data() + (size_t)y * w * 4);
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+}
+
+}  // namespace
+
+void writePng(const std::string& path, const Image8& img, std::optional<std::array<double, 3>> background) {
+  auto rgba = toStraight(img.width, img.height, [&](size_t i) { return img.px[i] / 255.0; }, background);
+  writeRows(path, img.width, img.height, rgba);
+}
+
+void writePng(const std::string& path, const ImageF& img, std::optional<std::array<double, 3>> background) {
+  auto rgba = toStraight(img.width, img.height, [&](size_t i) { return (double)img.px[i]; }, background);
+  writeRows(path, img.width, img.height, rgba);
+}
+
+Image8 readPng(const std::string& path) {
+  FilePtr f(std::fopen(path.c_str(), "rb"));
+  if (!f) fail(path, std::string("cannot open: ") + std::strerror(errno));
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  if (!info) {
+    png_destroy_read_struct(&png, nullptr, nullptr);
+    fail(path, "libpng init failed");
+  }
+  Image8 img;
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    fail(path, "not a valid PNG file");
+  }
+  png_init_io(png, f.get());
+  png_read_info(png, info);
+  // Normalise every PNG flavour to 8-bit RGBA.
+  png_set_expand(png);
+  png_set_strip_16(png);
+  png_set_gray_to_rgb(png);
+  png_set_add_alpha(png, 0xff, PNG_FILLER_AFTER);
+  png_read_update_info(png, info);
+  const int w = (int)png_get_image_width(png, info), h = (int)png_get_image_height(png, info);
+  std::vector<uint8_t> rows((size_t)w * h * 4);
+  std::vector<png_bytep> ptrs(h);
+  for (int y = 0; y < h; ++y) ptrs[y] = rows.data() + (size_t)y * w * 4;
+  png_read_image(png, ptrs.data());
+  png_read_end(png, nullptr);
+  png_destroy_read_struct(&png, &info, nullptr);
+  img = Image8(w, h);
+  for (size_t i = 0; i < (size_t)w * h; ++i) {
+    const uint8_t* s = &rows[4 * i];
+    uint8_t* d = &img.px[4 * i];
+    for (int k = 0; k < 3; ++k) d[k] = (uint8_t)((s[k] * s[3] + 127) / 255);  // premultiply, rounded
+    d[3] = s[3];
+  }
+  return img;
+}
+
+void writeRawF32(const std::string& path, const ImageF& img) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) fail(path, "cannot open for writing");
+  auto put32 = [&](uint32_t v) {
+    unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8), (unsigned char)(v >> 16), (unsigned char)(v >> 24)};
+    out.write(reinterpret_cast<const char*>(b), 4);
+  };
+  out.write("TSRAWF32", 8);
+  put32((uint32_t)img.width);
+  put32((uint32_t)img.height);
+  for (float v : img.px) {
+    uint32_t u;
+    std::memcpy(&u, &v, 4);
+    put32(u);
+  }
+  if (!out) fail(path, "write failed");
+}
+
+}  // namespace tessera

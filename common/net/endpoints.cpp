@@ -1,0 +1,87 @@
+#include "common/net/endpoints.h"
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <stdexcept>
+
+namespace tessera {
+namespace {
+
+bool startsWith(const std::string& s, const std::string& p) { return s.rfind(p, 0) == 0; }
+
+struct TcpBase {
+  std::string host;
+  int port;
+};
+
+TcpBase parseTcp(const std::string& base) {
+  auto rest = base.substr(6);
+  auto colon = rest.rfind(':');
+  if (colon == std::string::npos) throw std::invalid_argument("endpoint base '" + base + "': expected tcp://HOST:PORT");
+  int port = 0;
+  try {
+    port = std::stoi(rest.substr(colon + 1));
+  } catch (const std::exception&) {
+    port = -1;
+  }
+  if (port <= 0 || port > 65535 - 100) throw std::invalid_argument("endpoint base '" + base + "': bad port");
+  return {rest.substr(0, colon), port};
+}
+
+std::string envOr(const char* name, const std::string& fallback) {
+  const char* v = std::getenv(name);
+  return v && *v ? v : fallback;
+}
+
+}  // namespace
+
+Endpoints makeEndpoints(const std::string& base) {
+  if (startsWith(base, "tcp://")) {
+    parseTcp(base);
+  } else if (startsWith(base, "ipc://")) {
+    std::filesystem::create_directories(base.substr(6));
+  } else if (!startsWith(base, "inproc://")) {
+    throw std::invalid_argument("endpoint base '" + base + "': expected ipc://DIR, tcp://HOST:PORT or inproc://NAME");
+  }
+  return Endpoints{base};
+}
+
+std::string defaultEndpointBase() {
+  return envOr("TESSERA_ENDPOINTS",
+               "ipc://" + (std::filesystem::temp_directory_path() / ("tessera-" + std::to_string(getuid()))).string());
+}
+
+// host_env: the variable that may name this endpoint's host ("" = always the base host).
+static std::string named(const std::string& base, const std::string& name, int port_offset,
+                         const std::string& host_env) {
+  if (startsWith(base, "tcp://")) {
+    auto t = parseTcp(base);
+    std::string host = host_env.empty() ? t.host : envOr(host_env.c_str(), t.host);
+    return "tcp://" + host + ":" + std::to_string(t.port + port_offset);
+  }
+  if (startsWith(base, "inproc://")) return base + "-" + name;
+  return base + "/" + name;
+}
+
+std::string Endpoints::masterPub() const { return named(base, "master-pub", 0, "TESSERA_MASTER_HOST"); }
+std::string Endpoints::masterControl() const { return named(base, "master-ctl", 1, "TESSERA_MASTER_HOST"); }
+std::string Endpoints::display() const { return named(base, "display", 2, "TESSERA_DISPLAY_HOST"); }
+std::string Endpoints::compositor(uint32_t rank) const {
+  return named(base, "compositor-" + std::to_string(rank), 10 + (int)rank, "");
+}
+std::string Endpoints::compositorOn(uint32_t rank, const std::string& host) const {
+  if (host.empty() || !startsWith(base, "tcp://")) return compositor(rank);
+  return "tcp://" + host + ":" + std::to_string(parseTcp(base).port + 10 + (int)rank);
+}
+
+std::string Endpoints::compositorBind(uint32_t rank) const { return bind(compositor(rank)); }
+
+std::string Endpoints::bind(const std::string& connect_form) const {
+  if (!startsWith(connect_form, "tcp://")) return connect_form;
+  auto t = parseTcp(connect_form);
+  return "tcp://" + envOr("TESSERA_BIND_HOST", t.host) + ":" + std::to_string(t.port);
+}
+
+}  // namespace tessera

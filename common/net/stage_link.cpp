@@ -1,0 +1,104 @@
+#include "common/net/stage_link.h"
+
+#include <unistd.h>
+
+#include <chrono>
+
+#include <spdlog/spdlog.h>
+
+#include "common/net/transport.h"
+
+namespace tessera {
+
+using Clock = std::chrono::steady_clock;
+
+StageLink::StageLink(zmq::context_t& ctx, const Endpoints& ep, proto::Role role, std::string advertise)
+    : ctx_(ctx), ep_(ep), role_(role), advertise_(std::move(advertise)),
+      sub_(makeSocket(ctx, zmq::socket_type::sub)), ctl_(makeSocket(ctx, zmq::socket_type::dealer)) {
+  sub_.set(zmq::sockopt::subscribe, "");
+  sub_.set(zmq::sockopt::rcvhwm, 0);  // FrameParams must never be dropped by the queue
+  sub_.connect(ep_.masterPub());
+  ctl_.connect(ep_.masterControl());
+}
+
+StageLink::~StageLink() {
+  quit_ = true;
+  if (heartbeat_.joinable()) heartbeat_.join();
+}
+
+bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
+  auto start = Clock::now();
+  auto expired = [&] { return std::chrono::duration<double>(Clock::now() - start).count() > timeout_s; };
+  // 1. The master's probe proves our subscription is live before we announce ourselves.
+  zmq::pollitem_t sub_item[] = {{sub_.handle(), 0, ZMQ_POLLIN, 0}};
+  while (true) {
+    if ((stop && *stop) || expired()) return false;
+    pollFor(sub_item, 1, std::chrono::milliseconds(100));
+    if (sub_item[0].revents & ZMQ_POLLIN) {
+      zmq::message_t m;
+      (void)sub_.recv(m);
+      break;
+    }
+  }
+  // 2. Hello until Welcome (the master may still be starting; Hello is idempotent per reply).
+  zmq::pollitem_t ctl_item[] = {{ctl_.handle(), 0, ZMQ_POLLIN, 0}};
+  sendBytes(ctl_, proto::encode(proto::Hello{role_, (uint32_t)getpid(), advertise_}, 0));
+  while (true) {
+    if ((stop && *stop) || expired()) return false;
+    pollFor(ctl_item, 1, std::chrono::milliseconds(100));
+    if (!(ctl_item[0].revents & ZMQ_POLLIN)) continue;
+    zmq::message_t m;
+    (void)ctl_.recv(m);
+    auto w = proto::decodeWelcome(view(m));
+    if (!w || w->role != role_) {
+      spdlog::warn("ignoring unexpected control message while joining: {}", w ? "wrong role" : w.error());
+      continue;
+    }
+    rank_ = w->rank;
+    last_heard_ = Clock::now();
+    break;
+  }
+  heartbeat_ = std::thread([this] {
+    zmq::socket_t hb = makeSocket(ctx_, zmq::socket_type::dealer);
+    hb.connect(ep_.masterControl());
+    while (!quit_) {
+      sendBytes(hb, proto::encode(proto::Heartbeat{role_, rank_}, rank_), false, true);
+      for (int i = 0; i < 5 && !quit_; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  });
+  return true;
+}
+
+StageLink::Published StageLink::receive(DropCounter& drops, int max_messages) {
+  Published out;
+  for (int i = 0; i < max_messages; ++i) {
+    zmq::message_t m;
+    if (!sub_.recv(m, zmq::recv_flags::dontwait)) break;
+    last_heard_ = Clock::now();
+    auto h = proto::decodeHeader(view(m));
+    if (!h) {
+      drops.drop(~0u, h.error());
+      continue;
+    }
+    if (h->type == proto::Type::Shutdown) out.shutdown = true;
+    if (h->type == proto::Type::Shutdown || h->type == proto::Type::Heartbeat) continue;
+    auto p = h->type == proto::Type::FrameParams ? proto::decodeFrameParams(view(m))
+                                                 : Result<proto::FrameParams>::fail("unexpected message on SUB");
+    if (!p) {
+      drops.drop(h->sender, p.error());
+      continue;
+    }
+    out.params.push_back(std::move(*p));
+  }
+  return out;
+}
+
+bool StageLink::masterLost() const {
+  if (std::chrono::duration<double>(Clock::now() - last_heard_).count() < kMasterSilenceS) return false;
+  spdlog::error("master lost: nothing from {} for {:.0f} s", ep_.masterPub(), kMasterSilenceS);
+  return true;
+}
+
+void StageLink::report(std::vector<std::byte>&& msg) { sendBytes(ctl_, std::move(msg), false, true); }
+
+}  // namespace tessera

@@ -1,0 +1,55 @@
+// A stage's link to the master: SUB for FrameParams/Shutdown, DEALER for Hello and
+// reports, and a heartbeat thread (its own socket) so a long render never looks like a
+// dead stage. join() waits for the master's probe (so the subscription is live), says
+// Hello and waits for the Welcome that carries this stage's rank.
+#pragma once
+#include <atomic>
+#include <chrono>
+#include <string>
+#include <thread>
+
+#include <zmq.hpp>
+
+#include "common/net/endpoints.h"
+#include "common/net/log.h"
+#include "common/wire/protocol.h"
+
+namespace tessera {
+
+class StageLink {
+ public:
+  StageLink(zmq::context_t& ctx, const Endpoints& ep, proto::Role role, std::string advertise = "");
+  ~StageLink();
+  StageLink(const StageLink&) = delete;
+  StageLink& operator=(const StageLink&) = delete;
+
+  // False if `stop` was raised or no Welcome came within timeout_s.
+  bool join(const std::atomic<bool>* stop, double timeout_s = 120);
+  uint32_t rank() const { return rank_; }
+  zmq::socket_t& sub() { return sub_; }
+  // Drains what the master published (non-blocking): FrameParams in order, and whether it
+  // said Shutdown. Its membership probes are skipped; malformed messages are dropped and counted.
+  struct Published {
+    std::vector<proto::FrameParams> params;
+    bool shutdown = false;
+  };
+  Published receive(DropCounter& drops, int max_messages = 256);
+  // The master probes every 250 ms: this long without a word means it is gone, and a stage
+  // left alone (outside the launcher) exits instead of waiting forever.
+  bool masterLost() const;
+  static constexpr double kMasterSilenceS = 10.0;
+  void report(std::vector<std::byte>&& msg);  // to the master, from the owning thread
+
+ private:
+  zmq::context_t& ctx_;
+  Endpoints ep_;
+  proto::Role role_;
+  std::string advertise_;
+  zmq::socket_t sub_, ctl_;
+  uint32_t rank_ = 0;
+  std::atomic<bool> quit_{false};
+  std::chrono::steady_clock::time_point last_heard_ = std::chrono::steady_clock::now();
+  std::thread heartbeat_;
+};
+
+}  // namespace tessera

@@ -1,0 +1,64 @@
+// tessera-up: runs compose.yaml as local processes, no container engine needed.
+//   tessera-up [FILE] [--env KEY=VALUE]... [--dry-run]
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+#include "common/net/log.h"
+#include "master/launcher/compose.h"
+#include "master/launcher/launcher.h"
+
+namespace {
+
+// Returns false if some executable was not found.
+bool printPlan(const tessera::launcher::ComposeProject& project,
+               const std::vector<tessera::launcher::PlannedProcess>& plan) {
+  std::cout << "project " << project.name << " (runs in " << project.directory.string() << ")\n";
+  if (!plan.empty()) std::cout << "PATH=" << plan.front().environment.at("PATH") << "\n";
+  bool all_found = true;
+  for (const auto& p : plan) {
+    std::cout << p.label << (p.exit_leader ? " [exit leader]" : "") << "\n";
+    std::cout << "  argv: " << tessera::launcher::quoteCommand(p.argv) << "\n";
+    std::cout << "  executable: " << (p.executable.empty() ? "NOT FOUND on PATH" : p.executable) << "\n";
+    if (!p.note.empty()) std::cout << "  note: " << p.note << "\n";
+    for (const auto& [k, v] : p.environment) {
+      if (k != "PATH") std::cout << "  env: " << k << "=" << tessera::launcher::quoteCommand({v}) << "\n";
+    }
+    all_found = all_found && !p.executable.empty();
+  }
+  return all_found;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  auto log = tessera::setupLogging("tessera-up");
+  CLI::App app{"Runs a compose.yaml farm as local processes (no container engine)."};
+  std::string file = "compose.yaml";
+  std::vector<std::string> env_args;
+  bool dry_run = false;
+  app.add_option("file", file, "Compose file")->capture_default_str();
+  app.add_option("--env", env_args, "Variable for interpolation, KEY=VALUE (wins over the "
+                                    "environment and .env)");
+  app.add_flag("--dry-run", dry_run, "Print the resolved processes, argv and environment; start nothing");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    tessera::launcher::ComposeOptions options;
+    for (const std::string& kv : env_args) {
+      const size_t eq = kv.find('=');
+      if (eq == 0 || eq == std::string::npos) throw std::runtime_error("--env " + kv + ": expected KEY=VALUE");
+      options.overrides[kv.substr(0, eq)] = kv.substr(eq + 1);
+    }
+    const auto project = tessera::launcher::loadCompose(file, options);
+    for (const auto& w : project.warnings) log->warn("{}", w);
+    tessera::launcher::LaunchOptions launch_options;
+    if (dry_run) {
+      return printPlan(project, tessera::launcher::planProcesses(project, launch_options, true)) ? 0 : 1;
+    }
+    return tessera::launcher::launch(project, launch_options);
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
+    return 2;
+  }
+}

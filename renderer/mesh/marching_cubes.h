@@ -1,0 +1,17 @@
+// Isosurface of a Volume by marching cubes: vertices on the grid of voxel centres in the
+// volume's world box (common/volume.h), normals from the central-difference gradient
+// (pointing towards lower values), colour `color`. Pure function; thread-safe.
+#pragma once
+#include <array>
+
+#include "common/volume.h"
+#include "renderer/mesh/mesh.h"
+
+namespace tessera::renderer {
+
+// Triangles separate voxels with value >= level from those below. An empty result (level
+// outside the data) is an empty Mesh, not an error; the caller decides.
+Mesh marchingCubes(const Volume& volume, float level,
+                   std::array<float, 3> color = {kDefaultMeshColor[0], kDefaultMeshColor[1], kDefaultMeshColor[2]});
+
+}  // namespace tessera::renderer

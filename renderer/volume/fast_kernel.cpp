@@ -1,0 +1,433 @@
+// Fast kernel: float, SIMD over 8 consecutive samples of one ray (AVX2 gathers), table
+// classification, empty-space skipping over the min-max hierarchy, early termination.
+// Every sample's value depends only on its index k (position u0 + k*du, one FMA), never on
+// how samples were grouped or skipped, so skipping cannot change a single bit.
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+
+#include "renderer/volume/kernels.h"
+
+#if defined(__AVX2__) && defined(__FMA__)
+#include <immintrin.h>
+#define TESSERA_AVX2 1
+#endif
+
+namespace tessera::renderer {
+
+namespace {
+
+constexpr int kLanes = 8;
+constexpr int64_t kMinRun = 16;
+// Skipped samples must lie this far (voxels) inside an empty node: float positions differ
+// from the exact ones by < 1e-3 voxel for volumes up to 2048^3, so they stay inside.
+constexpr double kSkipMargin = 1.0 / 64;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Float sample indices are exact below 2^24.
+constexpr int64_t kMaxSamples = int64_t{1} << 24;
+
+// Samples [begin, end) of a ray to be taken.
+struct Run {
+  int64_t begin, end;
+  uint64_t skipped_before_end;  // batch skip count when this run was last extended
+};
+
+struct Consts {
+  float u0[3], du[3], umax[3];
+  int imax[3];
+  int nb_x, nb_xy;         // bricks per row / per slice
+  const uint16_t* vol;     // bricked (VolumeAccel); a 32-bit read at i holds voxels i and i+1
+  const float* rgba;
+  const int32_t* nonzero;
+  int first_nz, last_nz;  // TfTable::firstNonzero/lastNonzero
+};
+
+// Table position of a scalar in quantized units [0, 65535].
+constexpr float kToTable = (float)(TfTable::kEntries - 1) / VolumeAccel::kQuantScale;
+
+#ifdef TESSERA_AVX2
+// Permutations that move the lanes set in an 8-bit mask to the front (AVX2 has no
+// compress instruction): entry m lists the set lanes of m in order.
+struct CompressTable {
+  alignas(8) uint8_t lanes[256][8];
+  constexpr CompressTable() : lanes{} {
+    for (int m = 0; m < 256; ++m) {
+      int n = 0;
+      for (int l = 0; l < 8; ++l)
+        if (m & (1 << l)) lanes[m][n++] = (uint8_t)l;
+    }
+  }
+};
+constexpr CompressTable kCompress;
+
+// Classified samples of a chunk, in ray order: table index, interpolation weight and the
+// sample's offset in the chunk; only samples that may have alpha > 0 are listed.
+struct Classified {
+  static constexpr int kChunk = 64;  // samples per chunk (a multiple of kLanes)
+  alignas(32) int32_t ti[kChunk + kLanes];
+  alignas(32) float w[kChunk + kLanes];
+  alignas(32) int32_t off[kChunk + kLanes];
+};
+
+// Samples k0..k0+lanes-1 and appends those that may have alpha > 0 to `out` at position n
+// (`first_off`: offset of k0 in the chunk). Returns how many were appended. No branches on
+// the data, so consecutive packets overlap in the pipeline.
+// kSkipEmpty: return early for an all-empty packet. That branch pays where it is predictable
+// (long runs without skipping: most packets are empty) and costs where it is a coin flip
+// (short runs between leaps).
+template <bool kSkipEmpty>
+inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off, Classified& out, int n) {
+  const __m256 kf = _mm256_add_ps(_mm256_set1_ps((float)k0), _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7));
+  __m256 f[3];
+  __m256i i[3];
+  for (int a = 0; a < 3; ++a) {
+    __m256 u = _mm256_fmadd_ps(kf, _mm256_set1_ps(c.du[a]), _mm256_set1_ps(c.u0[a]));
+    u = _mm256_min_ps(_mm256_max_ps(u, _mm256_setzero_ps()), _mm256_set1_ps(c.umax[a]));
+    i[a] = _mm256_min_epi32(_mm256_cvttps_epi32(u), _mm256_set1_epi32(c.imax[a]));
+    f[a] = _mm256_sub_ps(u, _mm256_cvtepi32_ps(i[a]));
+  }
+  // Brick of the lower corner and position inside it; all eight corners are in that brick.
+  constexpr int sh = std::countr_zero((unsigned)MinMaxHierarchy::kBlock);  // kBlock is a power of two
+  const __m256i seven = _mm256_set1_epi32(MinMaxHierarchy::kBlock - 1);
+  const __m256i brick = _mm256_add_epi32(
+      _mm256_srli_epi32(i[0], sh),
+      _mm256_add_epi32(_mm256_mullo_epi32(_mm256_srli_epi32(i[1], sh), _mm256_set1_epi32(c.nb_x)),
+                       _mm256_mullo_epi32(_mm256_srli_epi32(i[2], sh), _mm256_set1_epi32(c.nb_xy))));
+  const __m256i local = _mm256_add_epi32(
+      _mm256_and_si256(i[0], seven),
+      _mm256_add_epi32(_mm256_mullo_epi32(_mm256_and_si256(i[1], seven), _mm256_set1_epi32(VolumeAccel::kEdge)),
+                       _mm256_mullo_epi32(_mm256_and_si256(i[2], seven),
+                                          _mm256_set1_epi32(VolumeAccel::kEdge * VolumeAccel::kEdge))));
+  const __m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(brick, _mm256_set1_epi32(VolumeAccel::kBrickSize)), local);
+  // Four 32-bit gathers (scale 2 on uint16 data) fetch the eight corners as x pairs.
+  constexpr int oy = VolumeAccel::kEdge, oz = VolumeAccel::kEdge * VolumeAccel::kEdge;
+  const auto* b = c.vol;
+  const __m256i g00 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b), idx, 2);
+  const __m256i g10 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b + oy), idx, 2);
+  const __m256i g01 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b + oz), idx, 2);
+  const __m256i g11 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(b + oy + oz), idx, 2);
+  const __m256i low = _mm256_set1_epi32(0xFFFF);
+  auto lerpx = [&](__m256i g) {
+    const __m256 v0 = _mm256_cvtepi32_ps(_mm256_and_si256(g, low));
+    const __m256 v1 = _mm256_cvtepi32_ps(_mm256_srli_epi32(g, 16));
+    return _mm256_fmadd_ps(f[0], _mm256_sub_ps(v1, v0), v0);
+  };
+  auto lerp = [](__m256 a, __m256 b2, __m256 t) { return _mm256_fmadd_ps(t, _mm256_sub_ps(b2, a), a); };
+  const __m256 s = lerp(lerp(lerpx(g00), lerpx(g10), f[1]), lerp(lerpx(g01), lerpx(g11), f[1]), f[2]);
+  __m256 ft = _mm256_mul_ps(s, _mm256_set1_ps(kToTable));
+  ft = _mm256_min_ps(_mm256_max_ps(ft, _mm256_setzero_ps()), _mm256_set1_ps((float)(TfTable::kEntries - 1)));
+  const __m256i ti = _mm256_min_epi32(_mm256_cvttps_epi32(ft), _mm256_set1_epi32(TfTable::kEntries - 2));
+  const __m256 w = _mm256_sub_ps(ft, _mm256_cvtepi32_ps(ti));
+  // Range filter instead of a gather of c.nonzero: lanes outside [first, last] have
+  // exactly zero alpha; lanes inside with zero alpha composite as exact no-ops.
+  const __m256i out_of_range = _mm256_or_si256(_mm256_cmpgt_epi32(_mm256_set1_epi32(c.first_nz), ti),
+                                               _mm256_cmpgt_epi32(ti, _mm256_set1_epi32(c.last_nz)));
+  int mask = ~_mm256_movemask_ps(_mm256_castsi256_ps(out_of_range));
+  mask &= (1 << lanes) - 1;
+  if (kSkipEmpty && mask == 0) return 0;
+  const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(kCompress.lanes[mask])));
+  const __m256i off = _mm256_add_epi32(_mm256_set1_epi32(first_off), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out.ti + n), _mm256_permutevar8x32_epi32(ti, perm));
+  _mm256_storeu_ps(out.w + n, _mm256_permutevar8x32_ps(w, perm));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out.off + n), _mm256_permutevar8x32_epi32(off, perm));
+  return __builtin_popcount((unsigned)mask);
+}
+
+// Samples [begin, end) composited front to back into acc, in chunks: all packets of a
+// chunk are classified first, then the listed samples composited in order (the same
+// operations, in the same order, as one sample at a time). Returns true if the alpha
+// reached et; `stop` is the sample after the last one used.
+template <bool kSkipEmpty>
+inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, __m128& acc, int64_t& stop) {
+  Classified cl;
+  const __m128 one = _mm_set1_ps(1.0f), etv = _mm_set1_ps(et);
+  for (int64_t j = begin; j < end; j += Classified::kChunk) {
+    const int64_t chunk_end = std::min(end, j + Classified::kChunk);
+    int n = 0;
+    for (int64_t p = j; p < chunk_end; p += kLanes)
+      n += classifyPacket<kSkipEmpty>(c, p, (int)std::min<int64_t>(kLanes, chunk_end - p), (int)(p - j), cl, n);
+    for (int i = 0; i < n; ++i) {
+      const float* e = c.rgba + 4 * cl.ti[i];
+      const __m128 e0 = _mm_load_ps(e), e1 = _mm_load_ps(e + 4);
+      const __m128 pc = _mm_fmadd_ps(_mm_set1_ps(cl.w[i]), _mm_sub_ps(e1, e0), e0);
+      const __m128 t = _mm_sub_ps(one, _mm_shuffle_ps(acc, acc, 0xFF));
+      acc = _mm_fmadd_ps(t, pc, acc);
+      if (_mm_movemask_ps(_mm_cmpge_ps(acc, etv)) & 8) {
+        stop = j + cl.off[i] + 1;
+        return true;
+      }
+    }
+  }
+  stop = end;
+  return false;
+}
+#else
+// Portable version of the same arithmetic (one sample at a time).
+inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4], bool& done) {
+  auto lerp = [](float a, float b, float t) { return std::fma(t, b - a, a); };
+  for (int l = 0; l < lanes; ++l) {
+    const float kf = (float)k0 + (float)l;
+    float f[3];
+    int i[3];
+    for (int a = 0; a < 3; ++a) {
+      const float u = std::min(std::max(std::fma(kf, c.du[a], c.u0[a]), 0.0f), c.umax[a]);
+      i[a] = std::min((int)u, c.imax[a]);
+      f[a] = u - (float)i[a];
+    }
+    constexpr int B = MinMaxHierarchy::kBlock;
+    const size_t brick = (size_t)(i[0] / B) + (size_t)(i[1] / B) * c.nb_x + (size_t)(i[2] / B) * c.nb_xy;
+    const uint16_t* p = c.vol + brick * VolumeAccel::kBrickSize + (i[0] % B) +
+                        VolumeAccel::kEdge * ((i[1] % B) + VolumeAccel::kEdge * (i[2] % B));
+    constexpr int oy = VolumeAccel::kEdge, oz = VolumeAccel::kEdge * VolumeAccel::kEdge;
+    auto lx = [&](const uint16_t* q) { return lerp((float)q[0], (float)q[1], f[0]); };
+    const float s = lerp(lerp(lx(p), lx(p + oy), f[1]), lerp(lx(p + oz), lx(p + oy + oz), f[1]), f[2]);
+    const float ft = std::min(std::max(s * kToTable, 0.0f), (float)(TfTable::kEntries - 1));
+    const int ti = std::min((int)ft, TfTable::kEntries - 2);
+    const float w = ft - (float)ti;
+    if (!c.nonzero[ti]) continue;
+    const float t = 1.0f - acc[3];
+    for (int ch = 0; ch < 4; ++ch) acc[ch] = std::fma(t, lerp(c.rgba[4 * ti + ch], c.rgba[4 * ti + 4 + ch], w), acc[ch]);
+    if (acc[3] >= et) {
+      done = true;
+      return l + 1;
+    }
+  }
+  return lanes;
+}
+#endif
+
+// Empty-space leaps over the level-0 block grid, using the chessboard distance map.
+// Double precision; samples are only leapt over when they lie kSkipMargin inside a cube of
+// empty blocks, so their float positions (the kernel's) are inside it too.
+struct Leaper {
+  double u0[3]{}, du[3]{}, inv[3]{}, umax[3]{};
+  int imax[3]{}, nb[3]{};
+  bool fwd[3]{}, moving[3]{};
+  int nbx = 0, nbxy = 0;
+  int64_t block_run = 1;  // samples after which the ray has surely left any block
+  const uint8_t* dist = nullptr;
+
+  Leaper() = default;
+
+  Leaper(const RaySpan& s, const Volume& v, const MinMaxHierarchy& h, const MinMaxHierarchy::Emptiness& e) {
+    const auto d0 = h.dims(0);
+    for (int a = 0; a < 3; ++a) {
+      u0[a] = s.u0[a];
+      du[a] = s.du[a];
+      moving[a] = s.du[a] != 0;
+      fwd[a] = s.du[a] > 0;
+      inv[a] = moving[a] ? 1.0 / s.du[a] : 0.0;
+      umax[a] = v.dims[a] - 1;
+      imax[a] = std::max(0, v.dims[a] - 2);
+      nb[a] = d0[a];
+    }
+    nbx = d0[0];
+    nbxy = d0[0] * d0[1];
+    // A ray crosses a block's extent B along its fastest axis within B / max|du| samples.
+    const double fastest = std::max({std::fabs(s.du[0]), std::fabs(s.du[1]), std::fabs(s.du[2])});
+    block_run = (int64_t)std::min(1e9, std::ceil(MinMaxHierarchy::kBlock / fastest)) + 1;
+    const int octant = (s.du[0] < 0 ? 1 : 0) | (s.du[1] < 0 ? 2 : 0) | (s.du[2] < 0 ? 4 : 0);
+    dist = e.octant_distance[octant].data();
+  }
+
+  // Where the ray (from sample k) leaves the cube of r^3 blocks that starts at block b and
+  // extends forward (the ray's octant), shrunk by `margin`; `inside` tells whether sample
+  // k itself is in the shrunk cube.
+  double exit(const double u[3], const int b[3], int r, double margin, bool& inside) const {
+    constexpr double B = MinMaxHierarchy::kBlock;
+    double e = kInf;
+    inside = true;
+    for (int a = 0; a < 3; ++a) {
+      const bool neg = du[a] < 0;
+      const int first = neg ? b[a] - r + 1 : b[a], last = neg ? b[a] + 1 : b[a] + r;
+      const double lo = first <= 0 ? -kInf : first * B + margin;
+      const double hi = last >= nb[a] ? kInf : last * B - margin;
+      inside = inside & (u[a] >= lo) & (u[a] <= hi);
+      const double ea = moving[a] ? ((fwd[a] ? hi : lo) - u0[a]) * inv[a] : kInf;
+      e = std::min(e, ea);
+    }
+    return e;
+  }
+
+  // Returns the first sample not leapt over (== k if sample k must be taken) and sets
+  // run_end to a sample index where the ray has left k's block (the next decision point).
+  int64_t step(int64_t k, int64_t k_end, int64_t& run_end) const {
+    double u[3];
+    int b[3];
+    for (int a = 0; a < 3; ++a) {
+      u[a] = u0[a] + (double)k * du[a];
+      const double uc = std::min(std::max(u[a], 0.0), umax[a]);
+      b[a] = std::min((int)uc, imax[a]) / MinMaxHierarchy::kBlock;
+    }
+    const int d = dist[b[0] + nbx * b[1] + nbxy * b[2]];
+    bool inside;
+    if (d > 0) {
+      const double e = std::min(exit(u, b, d, kSkipMargin, inside), (double)k_end);
+      // Samples k..floor(e) lie inside the shrunk cube; double rounding of e (~1e-13 of a
+      // step) is far below the margin, so the last of them is still safe to leap over.
+      const int64_t next = std::min(k_end, (int64_t)e + 1);
+      if (inside && next > k) return next;
+    }
+    // Sample k must be taken; the run has to reach past k's block. Runs are at least
+    // kMinRun samples, so when a block takes fewer (coarse steps) its exact exit is moot.
+    if (block_run <= kMinRun) {
+      run_end = k + block_run;
+    } else {
+      const double e = std::min(exit(u, b, 1, 0.0, inside), (double)k_end);
+      run_end = (int64_t)e + 1;
+    }
+    return k;
+  }
+};
+
+}  // namespace
+
+namespace {
+
+// One ray in flight: its constants, leaper, position and the runs of the current batch.
+// Two phases per batch: the leaper (branchy, scalar) lists the runs to sample, then the
+// packets run over that list; keeping them apart lets each loop stay tight and predictable.
+struct RayState {
+  static constexpr int kBatch = 16;
+  Consts c;
+  bool skip = false;
+  Leaper leaper;
+  int64_t k = 0, k_end = 0;
+  bool terminated = false;
+#ifdef TESSERA_AVX2
+  __m128 acc = _mm_setzero_ps();
+#else
+  float acc[4] = {0, 0, 0, 0};
+#endif
+  Run runs[kBatch];
+  int n = 0;
+  uint64_t batch_skipped = 0;
+
+  RayState(const FastContext& ctx, const RaySpan& span) {
+    const Volume& v = *ctx.volume;
+    if (span.k_end >= kMaxSamples)
+      throw std::invalid_argument("castFast: more than 2^24 samples on one ray (step too small)");
+    for (int a = 0; a < 3; ++a) {
+      c.u0[a] = (float)span.u0[a];
+      c.du[a] = (float)span.du[a];
+      c.umax[a] = (float)(v.dims[a] - 1);
+      c.imax[a] = std::max(0, v.dims[a] - 2);
+    }
+    c.nb_x = ctx.accel->nb[0];
+    c.nb_xy = ctx.accel->nb[0] * ctx.accel->nb[1];
+    c.vol = ctx.accel->bricked.data();
+    c.rgba = ctx.table->rgba();
+    c.nonzero = ctx.table->nonzero();
+    c.first_nz = ctx.table->firstNonzero();
+    c.last_nz = ctx.table->lastNonzero();
+    skip = ctx.skip && ctx.emptiness;
+    if (skip) leaper = Leaper(span, v, ctx.accel->hierarchy, *ctx.emptiness);
+    k = span.k_first;
+    k_end = span.k_end;
+  }
+
+  bool active() const { return k < k_end; }
+  bool planning() const { return k < k_end && n < kBatch; }
+
+  // One leaper decision: leaps over empty samples or appends a run.
+  void plan() {
+    if (!skip) {
+      runs[n++] = Run{k, k_end, 0};
+      k = k_end;
+      return;
+    }
+    int64_t run_end = k_end;
+    const int64_t next = leaper.step(k, k_end, run_end);
+    if (next > k) {
+      batch_skipped += (uint64_t)(next - k);
+      k = next;
+      return;
+    }
+    // Whole packets up to the block exit, at least kMinRun samples: extra samples are
+    // harmless (just not skipped) and cheaper than another leaper decision (measured on
+    // the 256^3 hollow shell: 16..32 ~10% faster than 8).
+    run_end = std::min(k_end, k + (std::max<int64_t>(kMinRun, run_end - k) + kLanes - 1) / kLanes * kLanes);
+    if (n > 0 && runs[n - 1].end == k) {
+      runs[n - 1].end = run_end;
+      runs[n - 1].skipped_before_end = batch_skipped;
+    } else {
+      runs[n++] = Run{k, run_end, batch_skipped};
+    }
+    k = run_end;
+  }
+
+  // Samples the batch's runs and starts the next batch.
+  void sample(float et, SampleCounts& counts) {
+    counts.skipped += batch_skipped;
+    for (int r = 0; r < n; ++r) {
+      bool done = false;
+#ifdef TESSERA_AVX2
+      int64_t j;
+      done = skip ? runPackets<false>(c, runs[r].begin, runs[r].end, et, acc, j)
+                  : runPackets<true>(c, runs[r].begin, runs[r].end, et, acc, j);
+      counts.taken += (uint64_t)(j - runs[r].begin);
+#else
+      int64_t j = runs[r].begin;
+      while (j < runs[r].end && !done) {
+        const int used = packet(c, j, (int)std::min<int64_t>(kLanes, runs[r].end - j), et, acc, done);
+        counts.taken += (uint64_t)used;
+        j += used;
+      }
+#endif
+      if (done) {
+        // Everything after j counts as terminated, including what the leaper had passed over.
+        counts.skipped -= batch_skipped - runs[r].skipped_before_end;
+        counts.terminated += (uint64_t)(k_end - j);
+        k = k_end;
+        terminated = true;
+        break;
+      }
+    }
+    n = 0;
+    batch_skipped = 0;
+  }
+
+  void store(float out[4]) const {
+#ifdef TESSERA_AVX2
+    _mm_storeu_ps(out, acc);
+#else
+    for (int i = 0; i < 4; ++i) out[i] = acc[i];
+#endif
+  }
+};
+
+}  // namespace
+
+bool castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleCounts& counts) {
+  RayState s(ctx, span);
+  while (s.active()) {
+    while (s.planning()) s.plan();
+    s.sample(ctx.early_termination, counts);
+  }
+  s.store(out);
+  return s.terminated;
+}
+
+void castFastPair(const FastContext& ctx, const RaySpan* spans, float* out[2], SampleCounts& counts, bool terminated[2]) {
+  RayState a(ctx, spans[0]), b(ctx, spans[1]);
+  while (a.active() || b.active()) {
+    // The two rays' decisions are independent chains: interleaved, they overlap.
+    for (;;) {
+      const bool pa = a.planning(), pb = b.planning();
+      if (!(pa | pb)) break;
+      if (pa) a.plan();
+      if (pb) b.plan();
+    }
+    a.sample(ctx.early_termination, counts);
+    b.sample(ctx.early_termination, counts);
+  }
+  a.store(out[0]);
+  b.store(out[1]);
+  terminated[0] = a.terminated;
+  terminated[1] = b.terminated;
+}
+
+}  // namespace tessera::renderer

@@ -1,0 +1,44 @@
+// Per-ray sampling kernels: the fast float path (SIMD over 8 consecutive samples of a ray,
+// table classification, empty-space skipping, early termination) and the double-precision
+// reference path. Both composite front to back into premultiplied RGBA. Thread-safe.
+#pragma once
+#include <cstdint>
+
+#include "common/transfer_function.h"
+#include "common/volume.h"
+#include "renderer/volume/minmax.h"
+#include "renderer/volume/ray_setup.h"
+#include "renderer/volume/tf_table.h"
+#include "renderer/volume/volume_accel.h"
+
+namespace tessera::renderer {
+
+struct SampleCounts {
+  uint64_t taken = 0, skipped = 0, terminated = 0;
+};
+
+struct FastContext {
+  const Volume* volume = nullptr;
+  const VolumeAccel* accel = nullptr;                     // quantized values, hierarchy
+  const TfTable* table = nullptr;
+  const MinMaxHierarchy::Emptiness* emptiness = nullptr;  // of `table`'s transfer function
+  bool skip = true;                                       // empty-space skipping
+  float early_termination = 2.0f;                        // > 1: never
+};
+
+// Samples span.k_first..k_end-1; out receives premultiplied RGBA. Returns true if the ray
+// was terminated early (its opacity reached early_termination).
+bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);
+// Two rays at once, bit-identical to two castFast calls: their empty-space decisions are
+// interleaved so the two dependency chains overlap in the CPU.
+void castFastPair(const FastContext& c, const RaySpan* spans, float* out[2], SampleCounts& counts, bool terminated[2]);
+
+// Double precision, exact transfer function, no skipping, no early termination.
+void castReference(const Volume& v, const TransferFunction& tf, double step, const RaySpan& span,
+                   double out[4], SampleCounts& counts);
+
+// Trilinear interpolation at voxel coordinate u (voxel centres at integers), clamped at
+// the border; double precision (the reference path and tests use it).
+double sampleTrilinear(const Volume& v, double ux, double uy, double uz);
+
+}  // namespace tessera::renderer

@@ -1,0 +1,163 @@
+// Ray-box intervals and the global sample grid (see ray_setup.h).
+#include "renderer/volume/ray_setup.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace tessera::renderer {
+
+VolumeGeometry::VolumeGeometry(const Volume& v) : n(v.dims) {
+  const Vec3 h = v.halfExtent();
+  for (int a = 0; a < 3; ++a) {
+    half[a] = h[a];
+    cell[a] = 2.0 * h[a] / n[a];
+  }
+}
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A ray with its per-axis reciprocals computed once for all the boxes it is tested against.
+struct PreparedRay {
+  const Ray& r;
+  double inv[3];
+  explicit PreparedRay(const Ray& ray) : r(ray) {
+    for (int a = 0; a < 3; ++a) inv[a] = r.dir[a] == 0 ? 0.0 : 1.0 / r.dir[a];
+  }
+};
+
+// Inlined: called per ray, and out-of-line it kept t_in/t_out in memory.
+[[gnu::always_inline]] inline bool interval(const VolumeGeometry& g, const PreparedRay& pr, const BrickBox& b, double& t_in, double& t_out) {
+  t_in = -kInf;
+  t_out = kInf;
+  for (int a = 0; a < 3; ++a) {
+    const double o = pr.r.origin[a], d = pr.r.dir[a];
+    const double p_lo = g.plane(a, b.lo[a]), p_hi = g.plane(a, b.hi[a]);
+    if (d == 0) {
+      // Parallel to the slab: inside for all t or for none (half-open, like the t test).
+      if (!(o >= p_lo && o < p_hi)) return false;
+      continue;
+    }
+    // (p - o) * (1/d) is monotone in p under rounding, and every box uses the same 1/d,
+    // so shared faces give identical parameters.
+    const double t_lo = (p_lo - o) * pr.inv[a], t_hi = (p_hi - o) * pr.inv[a];
+    t_in = std::max(t_in, d > 0 ? t_lo : t_hi);
+    t_out = std::min(t_out, d > 0 ? t_hi : t_lo);
+  }
+  return t_in < t_out;
+}
+
+double sampleT(double t0, int64_t k, double step) { return t0 + ((double)k + 0.5) * step; }
+
+// Smallest k >= 0 with t_k >= t (the same expression every brick evaluates). The guess
+// may be off by one (inv_step is rounded); the two loops make the result exact.
+[[gnu::always_inline]] inline int64_t firstAtOrAfter(double t0, double t, double step, double inv_step) {
+  double guess = std::ceil((t - t0) * inv_step - 0.5);
+  int64_t k = guess > 0 ? (int64_t)guess : 0;
+  while (k > 0 && sampleT(t0, k - 1, step) >= t) --k;
+  while (sampleT(t0, k, step) < t) ++k;
+  return k;
+}
+}  // namespace
+
+bool boxInterval(const VolumeGeometry& g, const Ray& r, const BrickBox& b, double& t_in, double& t_out) {
+  return interval(g, PreparedRay(r), b, t_in, t_out);
+}
+
+namespace {
+// Whole-volume entry (t0) and the brick's k range; false if the brick has no samples.
+[[gnu::always_inline]] inline bool brickRange(const VolumeGeometry& g, const PreparedRay& r, const BrickBox& brick, double step, RaySpan& span,
+                double& w_out) {
+  const BrickBox whole{{0, 0, 0}, g.n};
+  double w_in, b_in, b_out;
+  if (!interval(g, r, whole, w_in, w_out)) return false;
+  if (!(w_out > 0)) return false;
+  if (brick == whole) {
+    b_in = w_in;
+    b_out = w_out;
+  } else if (!interval(g, r, brick, b_in, b_out)) {
+    return false;
+  }
+  span.t0 = std::max(w_in, 0.0);
+  b_in = std::max(b_in, span.t0);
+  b_out = std::min(b_out, w_out);
+  if (!(b_in < b_out)) return false;
+  const double inv_step = 1.0 / step;
+  span.k_first = firstAtOrAfter(span.t0, b_in, step, inv_step);
+  span.k_end = firstAtOrAfter(span.t0, b_out, step, inv_step);
+  return span.k_end > span.k_first;
+}
+
+void samplePositions(const VolumeGeometry& g, const Ray& r, double step, RaySpan& span) {
+  const double tb = span.t0 + 0.5 * step;
+  for (int a = 0; a < 3; ++a) {
+    span.u0[a] = (r.origin[a] + tb * r.dir[a] + g.half[a]) / g.cell[a] - 0.5;
+    span.du[a] = r.dir[a] * step / g.cell[a];
+  }
+}
+}  // namespace
+
+bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, const BrickBox& clip, double step,
+                    RaySpan& span, int64_t& before, int64_t& after) {
+  before = after = 0;
+  double w_out;
+  const PreparedRay pr(r);
+  if (!brickRange(g, pr, brick, step, span, w_out)) return false;
+  const int64_t k_first = span.k_first, k_end = span.k_end;
+  before = k_end - k_first;
+  if (clip != brick) {
+    double c_in, c_out;
+    if (!interval(g, pr, clip, c_in, c_out)) return false;
+    c_in = std::max(c_in, span.t0);
+    c_out = std::min(c_out, w_out);
+    if (!(c_in < c_out)) return false;
+    const double inv_step = 1.0 / step;
+    span.k_first = std::max(span.k_first, firstAtOrAfter(span.t0, c_in, step, inv_step));
+    span.k_end = std::min(span.k_end, firstAtOrAfter(span.t0, c_out, step, inv_step));
+    if (span.k_end <= span.k_first) return false;
+  }
+  before = span.k_first - k_first;
+  after = k_end - span.k_end;
+  samplePositions(g, r, step, span);
+  return true;
+}
+
+int64_t spanSamples(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step) {
+  RaySpan span;
+  double w_out;
+  return brickRange(g, PreparedRay(r), brick, step, span, w_out) ? span.k_end - span.k_first : 0;
+}
+
+bool narrowSpan(double t_lo, double t_hi, double step, RaySpan& span, int64_t& before, int64_t& after) {
+  const double inv_step = 1.0 / step;
+  const int64_t k_first = span.k_first, k_end = span.k_end;
+  span.k_first = std::min(k_end, std::max(k_first, firstAtOrAfter(span.t0, t_lo, step, inv_step)));
+  span.k_end = std::max(span.k_first, std::min(k_end, firstAtOrAfter(span.t0, t_hi, step, inv_step)));
+  before = span.k_first - k_first;
+  after = k_end - span.k_end;
+  return span.k_end > span.k_first;
+}
+
+// One code path (one compiled copy of the grid arithmetic) for every span.
+bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span) {
+  int64_t before, after;
+  return raySpanClipped(g, r, brick, brick, step, span, before, after);
+}
+
+Rect brickFootprint(const RayGenerator& gen, const VolumeGeometry& g, const BrickBox& b, int w, int h) {
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (int c = 0; c < 8; ++c) {
+    Vec3 p{g.plane(0, (c & 1) ? b.hi[0] : b.lo[0]), g.plane(1, (c & 2) ? b.hi[1] : b.lo[1]),
+           g.plane(2, (c & 4) ? b.hi[2] : b.lo[2])};
+    double sx, sy;
+    if (!gen.project(p, sx, sy) || !std::isfinite(sx) || !std::isfinite(sy)) return Rect{0, 0, w, h};
+    x0 = std::min(x0, sx), x1 = std::max(x1, sx), y0 = std::min(y0, sy), y1 = std::max(y1, sy);
+  }
+  const double lx = std::max(0.0, std::floor(x0) - 1), ly = std::max(0.0, std::floor(y0) - 1);
+  const double hx = std::min((double)w, std::ceil(x1) + 1), hy = std::min((double)h, std::ceil(y1) + 1);
+  if (!(lx < hx && ly < hy)) return Rect{};
+  return Rect{(int)lx, (int)ly, (int)(hx - lx), (int)(hy - ly)};
+}
+
+}  // namespace tessera::renderer

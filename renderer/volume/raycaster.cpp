@@ -1,0 +1,301 @@
+// Raycaster: per-frame setup (screen footprint of the brick, classification table),
+// image tiles pulled by worker threads from an atomic counter, per-pixel ray spans.
+#include "renderer/volume/raycaster.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "renderer/volume/kernels.h"
+#include "renderer/volume/minmax.h"
+#include "renderer/volume/ray_setup.h"
+#include "renderer/volume/tf_table.h"
+#include "renderer/volume/volume_accel.h"
+
+namespace tessera::renderer {
+
+RenderStats& RenderStats::operator+=(const RenderStats& o) {
+  samples += o.samples;
+  samples_skipped += o.samples_skipped;
+  samples_terminated += o.samples_terminated;
+  ms += o.ms;
+  return *this;
+}
+
+Brick wholeVolume(const Volume& v) { return Brick{{0, 0, 0}, v.dims}; }
+
+struct Raycaster::Impl {
+  std::shared_ptr<const Volume> volume;
+  TransferFunction tf;
+  std::shared_ptr<const VolumeAccel> accel;
+  MinMaxHierarchy::Emptiness emptiness;
+  Brick nonempty;  // voxel box holding every sample that can be non-empty (lo == hi: none)
+};
+
+Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf) : impl_(std::make_unique<Impl>()) {
+  if (!volume) throw std::invalid_argument("Raycaster: null volume");
+  const Volume& v = *volume;
+  for (int a = 0; a < 3; ++a)
+    if (v.dims[a] <= 0) throw std::invalid_argument("Raycaster: volume dims must be positive");
+  if (v.values.size() != v.voxelCount()) throw std::invalid_argument("Raycaster: volume value count != dims product");
+  // 32-bit gather indices (AVX2) address at most 2^31 voxels.
+  if (v.voxelCount() >= (size_t{1} << 31)) throw std::invalid_argument("Raycaster: volume larger than 2^31 voxels");
+  if (tf.points().empty()) throw std::invalid_argument("Raycaster: transfer function has no points");
+  for (size_t i = 0; i < v.values.size(); ++i)
+    if (!std::isfinite(v.values[i]))
+      throw std::invalid_argument("Raycaster: non-finite volume value at linear index " + std::to_string(i));
+  impl_->volume = std::move(volume);
+  impl_->tf = std::move(tf);
+  impl_->accel = VolumeAccel::forVolume(impl_->volume);
+  const TransferFunction& f = impl_->tf;
+  impl_->emptiness = impl_->accel->hierarchy.classify([&f](float lo, float hi) { return TfTable::rangeIsEmpty(f, lo, hi); });
+  // Block b holds the samples at voxel coordinates [8b, 8b+8) (clamped at the border); the
+  // cell box [8b, 8b+9) holds them with half a voxel to spare, far above the kernel's float
+  // error (< 1e-3 voxel), so samples outside it have exactly zero opacity.
+  const auto& e = impl_->emptiness;
+  Brick& box = impl_->nonempty;
+  box = Brick{{0, 0, 0}, {0, 0, 0}};
+  if (!e.allEmpty())
+    for (int a = 0; a < 3; ++a) {
+      box.lo[a] = e.nonempty_lo[a] * MinMaxHierarchy::kBlock;
+      box.hi[a] = std::min(v.dims[a], e.nonempty_hi[a] * MinMaxHierarchy::kBlock + 1);
+    }
+}
+
+Raycaster::~Raycaster() = default;
+
+namespace {
+
+constexpr int kTile = 32;
+
+
+// Per 8x8-pixel cell, the ray parameters at which a ray through the cell can meet a
+// non-empty node: [lo, hi) bounds the distance from the eye to every non-empty node whose
+// footprint covers the cell (perspective rays start at the eye with unit directions, so t
+// is that distance). Node boxes carry the same half-voxel margin as the clip box. Rays of
+// a cell that no non-empty node covers sample nothing.
+struct DepthBounds {
+  static constexpr int kCell = 8;
+  int cols = 0;
+  std::vector<double> lo, hi;
+};
+
+DepthBounds depthBounds(const RayGenerator& gen, const VolumeGeometry& g, const Vec3& eye, const MinMaxHierarchy& mm,
+                        const MinMaxHierarchy::Emptiness& e, const Brick& clip, int w, int h) {
+  DepthBounds d;
+  d.cols = (w + DepthBounds::kCell - 1) / DepthBounds::kCell;
+  const int rows = (h + DepthBounds::kCell - 1) / DepthBounds::kCell;
+  d.lo.assign((size_t)d.cols * rows, std::numeric_limits<double>::infinity());
+  d.hi.assign(d.lo.size(), -std::numeric_limits<double>::infinity());
+  // The finest level with at most 2^15 nodes keeps this well under a millisecond or two.
+  int level = 0;
+  auto count = [&](int l) { const auto n = mm.dims(l); return (int64_t)n[0] * n[1] * n[2]; };
+  while (level + 1 < mm.levels() && count(level) > (1 << 15)) ++level;
+  const int edge = MinMaxHierarchy::kBlock << level;
+  const auto n = mm.dims(level);
+  for (int z = 0; z < n[2]; ++z)
+    for (int y = 0; y < n[1]; ++y)
+      for (int x = 0; x < n[0]; ++x) {
+        if (e.empty[level][mm.index(level, x, y, z)]) continue;
+        const int q[3] = {x, y, z};
+        Brick b;
+        bool overlaps = true;
+        for (int a = 0; a < 3; ++a) {
+          b.lo[a] = std::max(clip.lo[a], q[a] * edge);
+          b.hi[a] = std::min(clip.hi[a], q[a] * edge + edge + 1);
+          overlaps = overlaps && b.lo[a] < b.hi[a];
+        }
+        if (!overlaps) continue;
+        const Rect r = brickFootprint(gen, g, b, w, h);
+        if (r.empty()) continue;
+        double near2 = 0, far2 = 0;
+        for (int a = 0; a < 3; ++a) {
+          const double p0 = g.plane(a, b.lo[a]), p1 = g.plane(a, b.hi[a]);
+          const double dn = std::max({p0 - eye[a], 0.0, eye[a] - p1});
+          const double df = std::max(std::fabs(eye[a] - p0), std::fabs(eye[a] - p1));
+          near2 += dn * dn, far2 += df * df;
+        }
+        // Relative slack far above double rounding of t and of the ray's unit length.
+        const double t_near = std::sqrt(near2) * (1 - 1e-9), t_far = std::sqrt(far2) * (1 + 1e-9) + 1e-12;
+        for (int cy = r.y / DepthBounds::kCell; cy <= (r.y + r.h - 1) / DepthBounds::kCell; ++cy)
+          for (int cx = r.x / DepthBounds::kCell; cx <= (r.x + r.w - 1) / DepthBounds::kCell; ++cx) {
+            const size_t i = (size_t)cy * d.cols + cx;
+            d.lo[i] = std::min(d.lo[i], t_near);
+            d.hi[i] = std::max(d.hi[i], t_far);
+          }
+      }
+  return d;
+}
+
+}  // namespace
+
+ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
+                         RenderStats* stats, Rect* active) const {
+  const auto start = std::chrono::steady_clock::now();
+  const Volume& v = *impl_->volume;
+  if (width <= 0 || height <= 0)
+    throw std::invalid_argument("Raycaster::render: image size must be positive, got " + std::to_string(width) + "x" +
+                                std::to_string(height));
+  for (int a = 0; a < 3; ++a)
+    if (brick.lo[a] < 0 || brick.hi[a] > v.dims[a] || brick.lo[a] >= brick.hi[a])
+      throw std::invalid_argument("Raycaster::render: brick outside the volume or empty on axis " + std::to_string(a));
+  const Quality& q = opt.quality;
+  if (!(q.step > 0) || !std::isfinite(q.step))
+    throw std::invalid_argument("Raycaster::render: quality.step must be positive and finite");
+
+  const RayGenerator gen(cam, width, height);  // validates the camera
+  const VolumeGeometry geom(v);
+  ImageF img(width, height);
+  const Rect fp = brickFootprint(gen, geom, brick, width, height);
+
+  std::optional<TfTable> table;
+  FastContext fast;
+  if (!q.reference) {
+    table.emplace(impl_->tf, q.step);
+    fast.volume = &v;
+    fast.accel = impl_->accel.get();
+    fast.table = &*table;
+    fast.emptiness = &impl_->emptiness;
+    fast.skip = q.skip_empty;
+    fast.early_termination = (float)std::min(q.early_termination, 2.0);
+  }
+
+  // With skipping, rays are cut to the box that can be non-empty (same sample grid, so the
+  // image is unchanged); samples outside it count as skipped.
+  const bool clipping = !q.reference && q.skip_empty;
+  Brick clip = brick;
+  if (clipping) {
+    const Brick& ne = impl_->nonempty;
+    for (int a = 0; a < 3; ++a) {
+      clip.lo[a] = std::max(brick.lo[a], ne.lo[a]);
+      clip.hi[a] = std::max(clip.lo[a], std::min(brick.hi[a], ne.hi[a]));
+    }
+  }
+
+  // Perspective rays with skipping: per-cell depth bounds of the non-empty nodes.
+  std::optional<DepthBounds> depth;
+  if (clipping && !cam.orthographic && clip.lo[0] < clip.hi[0] && clip.lo[1] < clip.hi[1] && clip.lo[2] < clip.hi[2])
+    depth = depthBounds(gen, geom, cam.eye, impl_->accel->hierarchy, impl_->emptiness, clip, width, height);
+
+  const int tiles_x = (fp.w + kTile - 1) / kTile, tiles_y = (fp.h + kTile - 1) / kTile;
+  const int tile_count = fp.empty() ? 0 : tiles_x * tiles_y;
+  std::atomic<int> next{0};
+  std::mutex mu;
+  SampleCounts total;
+  Rect act;
+  std::exception_ptr error;
+
+  auto worker = [&] {
+    SampleCounts counts;
+    int ax0 = width, ay0 = height, ax1 = -1, ay1 = -1;
+    auto mark = [&](int px, int py) {
+      if (img.at(px, py)[3] > 0) {
+        ax0 = std::min(ax0, px), ax1 = std::max(ax1, px);
+        ay0 = std::min(ay0, py), ay1 = std::max(ay1, py);
+      }
+    };
+    // Fast path: rays wait here in pairs and are cast two at a time (castFastPair).
+    struct Pending {
+      RaySpan span;
+      int px, py;
+      int64_t after;  // samples cut off after the clip box
+    } pending[2];
+    int n_pending = 0;
+    auto finish = [&](const Pending& p, bool terminated) {
+      // Samples cut off after a terminated ray count as terminated, as without the clip.
+      (terminated ? counts.terminated : counts.skipped) += (uint64_t)p.after;
+      mark(p.px, p.py);
+    };
+    auto flush = [&] {
+      if (n_pending == 2) {
+        const RaySpan spans[2] = {pending[0].span, pending[1].span};
+        float* outs[2] = {img.at(pending[0].px, pending[0].py), img.at(pending[1].px, pending[1].py)};
+        bool terminated[2];
+        castFastPair(fast, spans, outs, counts, terminated);
+        finish(pending[0], terminated[0]);
+        finish(pending[1], terminated[1]);
+      } else if (n_pending == 1) {
+        finish(pending[0], castFast(fast, pending[0].span, img.at(pending[0].px, pending[0].py), counts));
+      }
+      n_pending = 0;
+    };
+    try {
+      for (int t = next.fetch_add(1); t < tile_count; t = next.fetch_add(1)) {
+        const int tx = fp.x + (t % tiles_x) * kTile, ty = fp.y + (t / tiles_x) * kTile;
+        const int ex = std::min(fp.x + fp.w, tx + kTile), ey = std::min(fp.y + fp.h, ty + kTile);
+        for (int py = ty; py < ey; ++py)
+          for (int px = tx; px < ex; ++px) {
+            RaySpan span;
+            int64_t before = 0, after = 0;  // samples cut off by the clip box
+            if (clipping) {
+              const size_t ci = depth ? (size_t)(py / DepthBounds::kCell) * depth->cols + px / DepthBounds::kCell : 0;
+              if (depth && !(depth->lo[ci] <= depth->hi[ci])) {  // no non-empty node here: count only
+                counts.skipped += (uint64_t)spanSamples(geom, gen.pixelRay(px, py), brick, q.step);
+                continue;
+              }
+              bool hit = raySpanClipped(geom, gen.pixelRay(px, py), brick, clip, q.step, span, before, after);
+              if (hit && depth) {
+                int64_t cut_before, cut_after;
+                hit = narrowSpan(depth->lo[ci], depth->hi[ci], q.step, span, cut_before, cut_after);
+                before += cut_before;
+                after += cut_after;
+              }
+              counts.skipped += (uint64_t)before;
+              if (!hit) {
+                counts.skipped += (uint64_t)after;
+                continue;
+              }
+            } else if (!raySpan(geom, gen.pixelRay(px, py), brick, q.step, span)) {
+              continue;
+            }
+            if (q.reference) {
+              float* o = img.at(px, py);
+              double d[4];
+              castReference(v, impl_->tf, q.step, span, d, counts);
+              for (int c = 0; c < 4; ++c) o[c] = (float)d[c];
+              mark(px, py);
+            } else {
+              pending[n_pending++] = Pending{span, px, py, after};
+              if (n_pending == 2) flush();
+            }
+          }
+        flush();
+      }
+    } catch (...) {
+      std::lock_guard lock(mu);
+      if (!error) error = std::current_exception();
+      next.store(tile_count);
+    }
+    std::lock_guard lock(mu);
+    total.taken += counts.taken;
+    total.skipped += counts.skipped;
+    total.terminated += counts.terminated;
+    if (ax1 >= 0) act = unite(act, Rect{ax0, ay0, ax1 - ax0 + 1, ay1 - ay0 + 1});
+  };
+
+  unsigned threads = opt.threads > 0 ? (unsigned)opt.threads : std::max(1u, std::thread::hardware_concurrency());
+  threads = std::min<unsigned>(threads, (unsigned)std::max(1, tile_count));
+  std::vector<std::thread> pool;
+  for (unsigned i = 1; i < threads; ++i) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+
+  if (active) *active = act;
+  if (stats) {
+    stats->samples = total.taken;
+    stats->samples_skipped = total.skipped;
+    stats->samples_terminated = total.terminated;
+    stats->ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
+  return img;
+}
+
+}  // namespace tessera::renderer
