@@ -1,4 +1,5 @@
 // Raw volume loading (little-endian uint8/uint16/float32) and the built-in procedural volumes.
+#include "common/parallel.h"
 #include "common/volume.h"
 
 #include <algorithm>
@@ -54,16 +55,11 @@ T readLE(const unsigned char* p) {
   return v;
 }
 
-// Runs body(z0, z1) over slabs of z on up to two threads (the machine has two cores).
+// Runs body(z0, z1) over slabs of z on up to four threads, at least 8 slices each.
 template <class F>
 void parallelZ(int nz, F body) {
-  unsigned hw = std::max(1u, std::min(4u, std::thread::hardware_concurrency()));
-  int parts = std::min<int>((int)hw, std::max(1, nz / 8));
-  if (parts <= 1) return body(0, nz);
-  std::vector<std::thread> ts;
-  for (int p = 1; p < parts; ++p) ts.emplace_back(body, nz * p / parts, nz * (p + 1) / parts);
-  body(0, nz / parts);
-  for (auto& t : ts) t.join();
+  parallelRanges(nz, threadCount(0, std::min(4, std::max(1, nz / 8))),
+                 [&](long long z0, long long z1) { body((int)z0, (int)z1); });
 }
 
 }  // namespace

@@ -14,8 +14,13 @@ int main(int argc, char** argv) {
   app.add_option("scene", scene_path, "scene file (default: the built-in scene)")->envname("TESSERA_SCENE");
   app.add_option("--endpoints", base, "endpoint base (ipc://DIR | tcp://HOST:PORT)")->envname("TESSERA_ENDPOINTS");
   app.add_option("--threads", opt.threads, "ray-casting threads (0: all cores)")->envname("TESSERA_THREADS");
+  std::string backend = "cpu";
+  app.add_option("--backend", backend, "volume backend: cpu (SIMD ray caster) | osmesa (GLSL on llvmpipe)")
+      ->envname("TESSERA_BACKEND")
+      ->check(CLI::IsMember({"cpu", "osmesa"}));
   CLI11_PARSE(app, argc, argv);
   try {
+    opt.backend = renderer::parseBackend(backend);
     opt.scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
     opt.endpoints = makeEndpoints(base.empty() ? defaultEndpointBase() : base);
     zmq::context_t ctx(1);

@@ -10,7 +10,6 @@
 #include "common/wire/protocol.h"
 #include "common/net/stage_link.h"
 #include "common/net/transport.h"
-#include "renderer/volume/raycaster.h"
 #include "renderer/tile_render.h"
 
 namespace tessera::renderer {
@@ -36,7 +35,7 @@ class Stage {
       tiles_ = std::make_unique<TileRenderer>(opt.scene);
     } else {
       volume_ = std::make_shared<Volume>(loadVolume(opt.scene));
-      caster_ = std::make_unique<Raycaster>(volume_, opt.scene.tf);
+      caster_ = makeVolumeBackend(opt.backend, volume_, opt.scene.tf);
     }
   }
 
@@ -45,7 +44,7 @@ class Stage {
       spdlog::error("renderer could not join the master at {}", opt_.endpoints.masterControl());
       return 1;
     }
-    spdlog::info("renderer rank={} joined", link_.rank());
+    spdlog::info("renderer rank={} joined backend={}", link_.rank(), caster_ ? backendName(opt_.backend) : "osmesa-mesh");
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
       pollFor(items, 1, std::chrono::milliseconds(100));
@@ -158,7 +157,7 @@ class Stage {
   zmq::context_t& ctx_;
   StageLink link_;
   std::shared_ptr<Volume> volume_;
-  std::unique_ptr<Raycaster> caster_;     // volume scenes (sort-last)
+  std::unique_ptr<VolumeBackend> caster_;  // volume scenes (sort-last)
   std::unique_ptr<TileRenderer> tiles_;   // geometry scenes (sort-first)
   std::deque<Cached> cache_;
   std::map<std::string, zmq::socket_t> pushes_;

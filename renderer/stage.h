@@ -8,6 +8,7 @@
 
 #include "common/net/endpoints.h"
 #include "common/scene.h"
+#include "renderer/volume/backend.h"
 
 namespace tessera::renderer {
 
@@ -15,6 +16,7 @@ struct StageOptions {
   Scene scene;
   Endpoints endpoints;
   int threads = 0;  // ray-casting threads; 0 = all cores
+  BackendKind backend = BackendKind::Cpu;  // volume scenes
 };
 
 // Returns the exit code: 0 on Shutdown or stop, 1 if it could not join the farm.

@@ -16,9 +16,8 @@
 #include "common/bricks.h"
 #include "common/io/image_io.h"
 #include "common/scene.h"
-#include "renderer/volume/gl_volume.h"
+#include "renderer/volume/backend.h"
 #include "renderer/tools/mesh_render_tool.h"
-#include "renderer/volume/raycaster.h"
 
 namespace {
 
@@ -58,9 +57,7 @@ void parseSize(const std::string& s, int& w, int& h) {
 }
 
 // Renders the scene whole (bricks <= 1) or as bricks composited in visibility order.
-// Backend: renderer::Raycaster or renderer::GlVolumeRenderer (same render() signature).
-template <class Backend>
-ImageF renderScene(const Backend& rc, const Volume& vol, const TransferFunction& tf, const Camera& cam,
+ImageF renderScene(const renderer::VolumeBackend& rc, const Volume& vol, const TransferFunction& tf, const Camera& cam,
                    int w, int h, int bricks, const renderer::RenderOptions& opt, renderer::RenderStats& stats) {
   if (bricks <= 1) return rc.render(cam, w, h, renderer::wholeVolume(vol), opt, &stats);
   const BrickTree tree = splitBricks(vol, bricks, &tf);
@@ -141,9 +138,7 @@ int run(int argc, char** argv) {
   const Camera cam = scene.orbit.at(scene.camera, frame);
 
   auto vol = std::make_shared<const Volume>(loadVolume(scene));
-  const renderer::Raycaster rc(vol, scene.tf);
-  std::unique_ptr<renderer::GlVolumeRenderer> glr;
-  if (backend == "osmesa") glr = std::make_unique<renderer::GlVolumeRenderer>(vol, scene.tf);
+  auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(backend), vol, scene.tf);
   ImageF img;
   renderer::RenderStats stats;
   double best_ms = 1e300, best_cpu_ms = 1e300;
@@ -151,8 +146,7 @@ int run(int argc, char** argv) {
     stats = {};
     const auto t0 = std::chrono::steady_clock::now();
     const std::clock_t c0 = std::clock();
-    img = glr ? renderScene(*glr, *vol, scene.tf, cam, w, h, bricks, opt, stats)
-              : renderScene(rc, *vol, scene.tf, cam, w, h, bricks, opt, stats);
+    img = renderScene(*chosen, *vol, scene.tf, cam, w, h, bricks, opt, stats);
     best_cpu_ms = std::min(best_cpu_ms, 1000.0 * (double)(std::clock() - c0) / CLOCKS_PER_SEC);
     best_ms = std::min(best_ms, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
@@ -172,7 +166,7 @@ int run(int argc, char** argv) {
     renderer::RenderOptions ropt = opt;
     ropt.quality = namedQuality("reference");
     renderer::RenderStats rs;
-    const ImageF ref = renderScene(rc, *vol, scene.tf, cam, w, h, bricks, ropt, rs);
+    const ImageF ref = renderScene(*chosen, *vol, scene.tf, cam, w, h, bricks, ropt, rs);
     const ImageError e = compare(img, ref);
     std::printf("vs reference: max_abs=%.6f rmse=%.6f psnr=%.2f dB (reference %.0f ms)\n", e.max_abs, e.rmse, e.psnr,
                 rs.ms);

@@ -1,5 +1,6 @@
 // GlVolumeRenderer: textures, per-frame ray setup on the CPU (double precision, shared with
 // the CPU caster), one draw over the brick's footprint into an RGBA32F FBO, float readback.
+#include "common/parallel.h"
 #include "renderer/volume/gl_volume.h"
 
 #include <algorithm>
@@ -254,15 +255,7 @@ ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const 
         b[3] = (float)span.k_end;
       }
   };
-  unsigned threads = opt.threads > 0 ? (unsigned)opt.threads : std::max(1u, std::thread::hardware_concurrency());
-  threads = std::min<unsigned>(threads, (unsigned)fp.h);
-  {
-    std::vector<std::thread> pool;
-    for (unsigned i = 1; i < threads; ++i)
-      pool.emplace_back(setup, (int)((long long)fp.h * i / threads), (int)((long long)fp.h * (i + 1) / threads));
-    setup(0, (int)(fp.h / threads));
-    for (auto& t : pool) t.join();
-  }
+  parallelRanges(fp.h, threadCount(opt.threads, fp.h), [&](long long r0, long long r1) { setup((int)r0, (int)r1); });
   if (too_long)
     throw std::invalid_argument("GlVolumeRenderer::render: more than 2^24 samples on one ray (step too small)");
 

@@ -10,7 +10,7 @@
 
 namespace tessera::renderer {
 
-class GlVolumeRenderer {
+class GlVolumeRenderer final : public VolumeBackend {
  public:
   // Creates the context, uploads the volume (R16, quantized like the CPU fast path) and
   // the min-max distance maps. Throws std::runtime_error with one line if the OSMesa
@@ -23,7 +23,7 @@ class GlVolumeRenderer {
   // As Raycaster::render. opt.threads sizes the CPU ray setup only; llvmpipe's own thread
   // count comes from LP_NUM_THREADS (default: all cores).
   ImageF render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
-                RenderStats* stats = nullptr, Rect* active = nullptr) const;
+                RenderStats* stats = nullptr, Rect* active = nullptr) const override;
 
  private:
   struct Impl;

@@ -1,4 +1,5 @@
 // Min-max hierarchy construction and per-transfer-function classification.
+#include "common/parallel.h"
 #include "renderer/volume/minmax.h"
 
 #include <algorithm>
@@ -70,13 +71,8 @@ MinMaxHierarchy::MinMaxHierarchy(const Volume& v) {
         }
   };
   const int nz = l0.dims[2];
-  if (nz >= 4 && v.voxelCount() >= (1u << 18)) {
-    std::thread t(work, nz / 2, nz);
-    work(0, nz / 2);
-    t.join();
-  } else {
-    work(0, nz);
-  }
+  const bool big = nz >= 4 && v.voxelCount() >= (1u << 18);  // threads cost more than small volumes
+  parallelRanges(nz, big ? 2 : 1, [&](long long z0, long long z1) { work((int)z0, (int)z1); });
   levels_.push_back(std::move(l0));
   // Octree levels: each node covers 2x2x2 nodes of the finer level.
   while (levels_.back().dims != std::array<int, 3>{1, 1, 1}) {

@@ -2,6 +2,8 @@
 // image tiles pulled by worker threads from an atomic counter, per-pixel ray spans.
 #include "renderer/volume/raycaster.h"
 
+#include "common/parallel.h"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -20,16 +22,6 @@
 #include "renderer/volume/volume_accel.h"
 
 namespace tessera::renderer {
-
-RenderStats& RenderStats::operator+=(const RenderStats& o) {
-  samples += o.samples;
-  samples_skipped += o.samples_skipped;
-  samples_terminated += o.samples_terminated;
-  ms += o.ms;
-  return *this;
-}
-
-Brick wholeVolume(const Volume& v) { return Brick{{0, 0, 0}, v.dims}; }
 
 struct Raycaster::Impl {
   std::shared_ptr<const Volume> volume;
@@ -190,7 +182,6 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   std::mutex mu;
   SampleCounts total;
   Rect act;
-  std::exception_ptr error;
 
   auto worker = [&] {
     SampleCounts counts;
@@ -269,9 +260,8 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
         flush();
       }
     } catch (...) {
-      std::lock_guard lock(mu);
-      if (!error) error = std::current_exception();
-      next.store(tile_count);
+      next.store(tile_count);  // the other workers stop at their next tile; runParts rethrows
+      throw;
     }
     std::lock_guard lock(mu);
     total.taken += counts.taken;
@@ -280,13 +270,7 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
     if (ax1 >= 0) act = unite(act, Rect{ax0, ay0, ax1 - ax0 + 1, ay1 - ay0 + 1});
   };
 
-  unsigned threads = opt.threads > 0 ? (unsigned)opt.threads : std::max(1u, std::thread::hardware_concurrency());
-  threads = std::min<unsigned>(threads, (unsigned)std::max(1, tile_count));
-  std::vector<std::thread> pool;
-  for (unsigned i = 1; i < threads; ++i) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
+  runParts(threadCount(opt.threads, std::max(1, tile_count)), [&](unsigned) { worker(); });
 
   if (active) *active = act;
   if (stats) {

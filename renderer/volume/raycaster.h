@@ -17,27 +17,11 @@
 #include "common/scene.h"
 #include "common/transfer_function.h"
 #include "common/volume.h"
+#include "renderer/volume/backend.h"
 
 namespace tessera::renderer {
 
-// Voxel index box [lo, hi) on each axis. Its spatial extent is the union of its cells.
-using Brick = BrickBox;
-Brick wholeVolume(const Volume& v);
-
-struct RenderStats {
-  uint64_t samples = 0;             // samples classified and composited
-  uint64_t samples_skipped = 0;     // samples passed over by empty-space skipping
-  uint64_t samples_terminated = 0;  // samples not taken because of early ray termination
-  double ms = 0;
-  RenderStats& operator+=(const RenderStats& o);
-};
-
-struct RenderOptions {
-  Quality quality;
-  int threads = 0;  // 0: hardware concurrency
-};
-
-class Raycaster {
+class Raycaster final : public VolumeBackend {
  public:
   // Builds the min-max hierarchy and classification tables once per volume/transfer function.
   Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf);
@@ -46,8 +30,8 @@ class Raycaster {
   // Renders `brick` as seen by `cam` into a width x height image. Pixels outside the
   // brick's screen footprint are never touched (left transparent). `active` receives the
   // bounding rectangle of pixels with alpha > 0.
-  ImageF render(const Camera& cam, int width, int height, const Brick& brick,
-                const RenderOptions& opt, RenderStats* stats = nullptr, Rect* active = nullptr) const;
+  ImageF render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
+                RenderStats* stats = nullptr, Rect* active = nullptr) const override;
 
  private:
   struct Impl;

@@ -1,4 +1,5 @@
 // Shared per-volume acceleration data (see volume_accel.h).
+#include "common/parallel.h"
 #include "renderer/volume/volume_accel.h"
 
 #include <cmath>
@@ -32,13 +33,8 @@ VolumeAccel::VolumeAccel(const Volume& v) : hierarchy(v), nb(hierarchy.dims(0)) 
           }
         }
   };
-  if (nb[2] >= 4 && v.voxelCount() >= (1u << 18)) {
-    std::thread t(fill, nb[2] / 2, nb[2]);
-    fill(0, nb[2] / 2);
-    t.join();
-  } else {
-    fill(0, nb[2]);
-  }
+  const bool big = nb[2] >= 4 && v.voxelCount() >= (1u << 18);  // threads cost more than small volumes
+  parallelRanges(nb[2], big ? 2 : 1, [&](long long z0, long long z1) { fill((int)z0, (int)z1); });
 }
 
 std::shared_ptr<const VolumeAccel> VolumeAccel::forVolume(const std::shared_ptr<const Volume>& v) {

@@ -1,0 +1,51 @@
+// The volume backend interface: what a renderer needs to render one brick of a volume.
+// Two implementations share the sample grid and conventions, so either can serve the farm
+// and the farm still matches tessera-render: `cpu` (Raycaster, SIMD ray casting) and
+// `osmesa` (GlVolumeRenderer, GLSL on llvmpipe). Implementations document their threading.
+#pragma once
+#include <memory>
+#include <string>
+
+#include "common/bricks.h"
+#include "common/camera.h"
+#include "common/image.h"
+#include "common/scene.h"
+#include "common/volume.h"
+
+namespace tessera::renderer {
+
+// Voxel index box [lo, hi) on each axis. Its spatial extent is the union of its cells.
+using Brick = BrickBox;
+Brick wholeVolume(const Volume& v);
+
+struct RenderStats {
+  uint64_t samples = 0;             // samples classified and composited
+  uint64_t samples_skipped = 0;     // samples passed over by empty-space skipping
+  uint64_t samples_terminated = 0;  // samples not taken because of early ray termination
+  double ms = 0;
+  RenderStats& operator+=(const RenderStats& o);
+};
+
+struct RenderOptions {
+  Quality quality;
+  int threads = 0;  // 0: hardware concurrency
+};
+
+class VolumeBackend {
+ public:
+  virtual ~VolumeBackend() = default;
+  // Renders `brick` as seen by `cam` into a width x height premultiplied image. Pixels
+  // outside the brick's screen footprint stay transparent; `active` receives the bounding
+  // rectangle of pixels with alpha > 0.
+  virtual ImageF render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
+                        RenderStats* stats = nullptr, Rect* active = nullptr) const = 0;
+};
+
+enum class BackendKind { Cpu, Osmesa };
+// "cpu" | "osmesa"; throws std::invalid_argument naming the value otherwise.
+BackendKind parseBackend(const std::string& name);
+const char* backendName(BackendKind kind);
+std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_ptr<const Volume> volume,
+                                                 TransferFunction tf);
+
+}  // namespace tessera::renderer
