@@ -1,4 +1,4 @@
-// Camera validation, orbiting and per-pixel ray generation (DESIGN.md "Camera").
+// Camera validation, orbiting and per-pixel ray generation (docs/DESIGN.md "Camera").
 #include "common/camera.h"
 
 #include <cmath>

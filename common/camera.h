@@ -1,4 +1,4 @@
-// Camera per DESIGN.md: perspective (vertical fov, degrees) or orthographic (view height).
+// Camera per docs/DESIGN.md: perspective (vertical fov, degrees) or orthographic (view height).
 // The ray of pixel (px,py) passes through the pixel centre. Units are the unit-box scene units.
 #pragma once
 #include "common/vec.h"

@@ -1,4 +1,4 @@
-// Scene file parser (DESIGN.md "Scene file"): strict YAML with errors naming file and key path.
+// Scene file parser (scenes/README.md): strict YAML with errors naming file and key path.
 #include "common/scene.h"
 
 #include <yaml-cpp/yaml.h>

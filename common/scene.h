@@ -1,4 +1,4 @@
-// The scene file (DESIGN.md "Scene file"): one YAML file every process and tool takes.
+// The scene file (scenes/README.md): one YAML file every process and tool takes.
 // Unknown keys, missing keys and bad values are errors naming the key's path.
 #pragma once
 #include <optional>

@@ -1,4 +1,4 @@
-// Piecewise-linear transfer function and opacity correction (DESIGN.md "Transfer function").
+// Piecewise-linear transfer function and opacity correction (docs/DESIGN.md "Transfer function").
 #include "common/transfer_function.h"
 
 #include <algorithm>

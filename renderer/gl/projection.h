@@ -1,4 +1,4 @@
-// The OpenGL view and projection of a Tessera Camera (DESIGN.md "Camera": pixel centres, vertical
+// The OpenGL view and projection of a Tessera Camera (docs/DESIGN.md "Camera": pixel centres, vertical
 // fov or orthographic height, aspect W/H) with near/far from the scene bounds. Depth is reversed
 // (near -> 1, far -> 0, glClipControl ZERO_TO_ONE, 32-bit float depth) so that a camera inside
 // the mesh, whose near plane must be tiny, keeps its depth precision. Plain values.

@@ -11,7 +11,7 @@
 
 namespace tessera::renderer {
 
-// World <-> voxel mapping of one volume (DESIGN.md: origin-centred box, largest extent 1,
+// World <-> voxel mapping of one volume (docs/DESIGN.md: origin-centred box, largest extent 1,
 // voxel i at the centre of its cell).
 struct VolumeGeometry {
   std::array<int, 3> n{1, 1, 1};

@@ -1,4 +1,4 @@
-// CPU volume ray caster (DESIGN.md conventions). Renders the whole volume or one brick
+// CPU volume ray caster (docs/DESIGN.md conventions). Renders the whole volume or one brick
 // (an axis-aligned voxel sub-box) into a premultiplied RGBA float image. Sample positions
 // are global along each ray (t0 + k*step from the whole-volume entry), so bricks rendered
 // separately and composited front-to-back reproduce the whole-volume image. With empty-space

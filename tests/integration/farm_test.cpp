@@ -1,4 +1,4 @@
-// The farm's frames equal the one-process render (DESIGN.md accuracy contract: sort-last,
+// The farm's frames equal the one-process render (docs/DESIGN.md accuracy contract: sort-last,
 // rgba8, max abs <= 1/255 per channel), for 1, 2 and 4 renderers and 1 and 2 compositors.
 #include <gtest/gtest.h>
 

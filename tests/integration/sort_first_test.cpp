@@ -1,6 +1,6 @@
 // Sort-first geometry through the real farm: renderers draw their screen tiles on OSMesa,
 // pack them with strip headers, compositors route the strips by their headers alone.
-// DESIGN.md contract: the farm's frames are bit-identical to the one-process render at the
+// docs/DESIGN.md contract: the farm's frames are bit-identical to the one-process render at the
 // same size and sample count, for any tiling.
 #include <gtest/gtest.h>
 

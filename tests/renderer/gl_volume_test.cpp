@@ -76,7 +76,7 @@ TEST(GlVolume, MatchesCpuBackendAndReference) {
     EXPECT_LE(maxDiff8(g, f), 1) << test::dumpImages(std::string("gl_vs_cpu_") + c.generator, f, g);
     // In float the two differ only by texture-unit vs CPU rounding (measured ~2e-6).
     EXPECT_LE(e_cpu.max_abs, 1e-4);
-    // DESIGN.md accuracy contract for default quality.
+    // docs/DESIGN.md accuracy contract for default quality.
     EXPECT_GE(e_ref.psnr, 40.0);
     EXPECT_EQ(ga, ca) << "active regions differ";
     // Same span per pixel: taken + leapt + terminated covers every sample of the grid.

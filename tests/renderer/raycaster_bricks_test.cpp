@@ -38,7 +38,7 @@ struct BrickCase {
 
 class BricksVsWhole : public ::testing::TestWithParam<BrickCase> {};
 
-// DESIGN.md contract: sort-last vs one process, any brick split, rgba8: max abs <= 1/255.
+// docs/DESIGN.md contract: sort-last vs one process, any brick split, rgba8: max abs <= 1/255.
 // Every brick takes exactly the whole image's samples (one global grid per ray), so only
 // float compositing order differs. Early termination is disabled here: a brick cannot
 // see the opacity in front of it, so with ET at 0.99 the split image legitimately gains up

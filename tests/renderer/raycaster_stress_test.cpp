@@ -1,4 +1,4 @@
-// Numerical stress (DESIGN.md): opacity near 0 over very many samples and near 1 in one
+// Numerical stress (docs/DESIGN.md): opacity near 0 over very many samples and near 1 in one
 // sample, grazing rays, eye inside, scales 1e-6..1e6, tiny and odd image sizes,
 // orthographic cameras, non-finite input. Output must be finite everywhere.
 #include <gtest/gtest.h>

@@ -131,7 +131,7 @@ TEST(TfTable, ErrorAgainstExactClassificationIsSmall) {
   RecordProperty("tf_table_max_error", std::to_string(worst));
 }
 
-// DESIGN.md accuracy contract: default volume quality vs reference PSNR >= 40 dB.
+// docs/DESIGN.md accuracy contract: default volume quality vs reference PSNR >= 40 dB.
 class GeneratorQuality : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(GeneratorQuality, DefaultMatchesReference) {
