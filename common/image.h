@@ -2,6 +2,7 @@
 // ImageF (float, [0,1]) is what renderers and compositors compute in; Image8 is rgba8.
 // Plain values; not thread-safe for concurrent writes to the same pixels.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -42,6 +43,9 @@ Rect activeRegion(const ImageF& img);
 Rect activeRegion(const Image8& img);
 
 // Round-to-nearest quantization of [0,1] floats (clamped) to bytes.
+// [0,1] floats to bytes rounding to nearest (clamp, x255, +0.5, truncate; NaN -> 0): the one
+// rgba8 quantizer, so the farm and tessera-render round identically. AVX2 where built for it.
+void quantizeToUnorm8(const float* in, uint8_t* out, size_t n);
 Image8 toRGBA8(const ImageF& img);
 ImageF toFloat(const Image8& img);
 

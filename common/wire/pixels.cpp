@@ -83,7 +83,7 @@ std::vector<std::byte> packPixels(const ImageF& img, const Rect& r, proto::Pixel
     const float* row = img.at(r.x, y);
     size_t first = (size_t)(y - r.y) * row_values;  // index of this row's first value
     if (f == proto::PixelFormat::RGBA8) {
-      for (size_t c = 0; c < row_values; ++c) o[first + c] = (uint8_t)(std::clamp(row[c], 0.0f, 1.0f) * 255.0f + 0.5f);
+      quantizeToUnorm8(row, o + first, row_values);
     } else if (f == proto::PixelFormat::RGBA16F) {
       floatsToHalfPlanes(row, o + first, o + values + first, row_values);
     } else {

@@ -94,3 +94,21 @@ TEST(Image, CompareMetrics) {
   EXPECT_NEAR(e8.rmse, std::sqrt(1.0 / 8), 1e-12);
   EXPECT_THROW(compare(ImageF(1, 2), ImageF(2, 1)), std::invalid_argument);
 }
+
+namespace tessera {
+namespace {
+
+// The one rgba8 quantizer: round to nearest, clamp, NaN -> 0, identical in the SIMD body and
+// the scalar tail (19 values: two 8-wide steps and a tail of 3).
+TEST(Quantize, RoundsClampsAndZeroesNaNInBodyAndTail) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<float> in = {0.0f, 1.0f, -1.0f, 2.0f, nan, 0.5f / 255, 0.49f / 255, 128.5f / 255, 254.49f / 255,
+                                 1.0f, nan,  -0.f, 0.2f, 0.7f, 1e30f, -1e30f, nan, 0.5f / 255, 2.0f};
+  const std::vector<int> want = {0, 255, 0, 255, 0, 1, 0, 129, 254, 255, 0, 0, 51, 179, 255, 0, 0, 1, 255};
+  std::vector<uint8_t> out(in.size(), 77);
+  quantizeToUnorm8(in.data(), out.data(), in.size());
+  for (size_t i = 0; i < in.size(); ++i) EXPECT_EQ(int(out[i]), want[i]) << "value " << i << " = " << in[i];
+}
+
+}  // namespace
+}  // namespace tessera
