@@ -1,5 +1,4 @@
 // Raw volume loading (little-endian uint8/uint16/float32) and the built-in procedural volumes.
-#include "common/parallel.h"
 #include "common/volume.h"
 
 #include <algorithm>
@@ -12,6 +11,8 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+
+#include "common/parallel.h"
 
 namespace tessera {
 

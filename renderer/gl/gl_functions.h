@@ -45,7 +45,13 @@ namespace tessera::renderer::gl {
   X(PFNGLUNIFORM3FPROC, Uniform3f)                                   \
   X(PFNGLUNIFORM1FPROC, Uniform1f)                                   \
   X(PFNGLCLIPCONTROLPROC, ClipControl)                               \
-  X(PFNGLDRAWELEMENTSBASEVERTEXPROC, DrawElementsBaseVertex)
+  X(PFNGLDRAWELEMENTSBASEVERTEXPROC, DrawElementsBaseVertex)        \
+  X(PFNGLTEXIMAGE3DPROC, TexImage3D)                                 \
+  X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                           \
+  X(PFNGLUNIFORM1IPROC, Uniform1i)                                   \
+  X(PFNGLUNIFORM3IPROC, Uniform3i)                                   \
+  X(PFNGLDRAWBUFFERSPROC, DrawBuffers)                               \
+  X(PFNGLFRAMEBUFFERTEXTURE2DPROC, FramebufferTexture2D)
 
 #define TESSERA_GL_DECLARE(type, name) extern type name;
 TESSERA_GL_FUNCTIONS(TESSERA_GL_DECLARE)

@@ -53,15 +53,9 @@ std::array<float, 16> toFloat(const std::array<double, 16>& m) {
 
 }  // namespace
 
-GlRenderer::GlRenderer() {
-  const int attrs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 0, OSMESA_STENCIL_BITS, 0,
-                       OSMESA_ACCUM_BITS, 0, OSMESA_PROFILE, OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 4,
-                       OSMESA_CONTEXT_MINOR_VERSION, 5, 0};
-  ctx_ = OSMesaCreateContextAttribs(attrs, nullptr);
-  if (!ctx_) throw std::runtime_error("OSMesa: cannot create an OpenGL 4.5 core profile context (RGBA8)");
-  try {
+GlRenderer::GlRenderer() : context_("triangle renderer") {
+  {
     makeCurrent();
-    gl::loadGlFunctions();
     program_ = gl::buildProgram(kVertexShader, kFragmentShader);
     loc_mvp_ = gl::GetUniformLocation(program_, "mvp");
     loc_view_ = gl::GetUniformLocation(program_, "view");
@@ -71,9 +65,6 @@ GlRenderer::GlRenderer() {
     gl::GenBuffers(1, &vbo_);
     gl::GenBuffers(1, &ibo_);
     gl::ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);  // reversed float depth, see projection.h
-  } catch (...) {
-    OSMesaDestroyContext(ctx_);
-    throw;
   }
 }
 
@@ -84,15 +75,9 @@ GlRenderer::~GlRenderer() {
   gl::DeleteBuffers(1, &ibo_);
   gl::DeleteVertexArrays(1, &vao_);
   gl::DeleteProgram(program_);
-  OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0);
-  OSMesaDestroyContext(ctx_);
 }
 
-void GlRenderer::makeCurrent() {
-  if (OSMesaGetCurrentContext() == ctx_) return;
-  if (!OSMesaMakeCurrent(ctx_, dummy_, GL_UNSIGNED_BYTE, 1, 1))
-    throw std::runtime_error("OSMesa: cannot make the context current");
-}
+void GlRenderer::makeCurrent() { context_.makeCurrent(); }
 
 void GlRenderer::setMesh(const Mesh& mesh) {
   validateMesh(mesh, "GlRenderer::setMesh");

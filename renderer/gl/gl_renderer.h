@@ -11,6 +11,7 @@
 
 #include "common/camera.h"
 #include "common/image.h"
+#include "renderer/gl/gl_context.h"
 #include "renderer/mesh/chunks.h"
 #include "renderer/mesh/mesh.h"
 #include "renderer/gl/projection.h"
@@ -65,8 +66,7 @@ class GlRenderer {
   void ensureTargets(int width, int height, int samples);
   void releaseTargets();
 
-  OSMesaContext ctx_ = nullptr;
-  unsigned char dummy_[4] = {};  // OSMesa needs a default framebuffer; we draw into FBOs
+  gl::GlContext context_;
   unsigned program_ = 0, vao_ = 0, vbo_ = 0, ibo_ = 0;
   int loc_mvp_ = -1, loc_view_ = -1, loc_light_ = -1, loc_ambient_ = -1;
   // Framebuffers: `draw` (multisampled when samples > 1) and `resolve` (single sample).

@@ -1,6 +1,5 @@
 // GlVolumeRenderer: textures, per-frame ray setup on the CPU (double precision, shared with
 // the CPU caster), one draw over the brick's footprint into an RGBA32F FBO, float readback.
-#include "common/parallel.h"
 #include "renderer/volume/gl_volume.h"
 
 #include <algorithm>
@@ -8,13 +7,16 @@
 #include <cmath>
 #include <cstring>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "common/parallel.h"
+#include "renderer/gl/gl_context.h"
 #include "renderer/gl/gl_functions.h"
-#include "renderer/volume/gl_volume_context.h"
+#include "renderer/volume/gl_volume_shader.h"
 #include "renderer/volume/minmax.h"
 #include "renderer/volume/ray_setup.h"
 #include "renderer/volume/tf_table.h"
@@ -47,8 +49,7 @@ void checkGl(const char* what) {
 struct GlVolumeRenderer::Impl {
   std::shared_ptr<const Volume> volume;
   TransferFunction tf;
-  OSMesaContext ctx = nullptr;
-  unsigned char dummy[4] = {};
+  std::optional<gl::GlContext> context;
   unsigned program = 0, vao = 0, fbo = 0;
   unsigned tex_vol = 0, tex_table = 0, tex_dist = 0, tex_span0 = 0, tex_span1 = 0, tex_color = 0, tex_counts = 0;
   int fb_w = 0, fb_h = 0, span_w = 0, span_h = 0;
@@ -58,11 +59,7 @@ struct GlVolumeRenderer::Impl {
   mutable std::mutex mu;
   std::unique_ptr<Raycaster> reference;  // CPU double-precision path for quality: reference
 
-  void makeCurrent() {
-    if (OSMesaGetCurrentContext() == ctx) return;
-    if (!OSMesaMakeCurrent(ctx, dummy, GL_UNSIGNED_BYTE, 1, 1))
-      throw std::runtime_error("OSMesa: cannot make the volume context current");
-  }
+  void makeCurrent() { context->makeCurrent(); }
   int uniform(const char* name) const { return gl::GetUniformLocation(program, name); }
   void uploadVolume();
   void uploadDistance();
@@ -86,7 +83,7 @@ void GlVolumeRenderer::Impl::uploadVolume() {
   glBindTexture(GL_TEXTURE_3D, tex_vol);
   texParams(GL_TEXTURE_3D, GL_LINEAR);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glv::TexImage3D(GL_TEXTURE_3D, 0, GL_R16, v.dims[0], v.dims[1], v.dims[2], 0, GL_RED, GL_UNSIGNED_SHORT, q.data());
+  gl::TexImage3D(GL_TEXTURE_3D, 0, GL_R16, v.dims[0], v.dims[1], v.dims[2], 0, GL_RED, GL_UNSIGNED_SHORT, q.data());
   checkGl("uploading the volume texture");
 }
 
@@ -102,7 +99,7 @@ void GlVolumeRenderer::Impl::uploadDistance() {
   glBindTexture(GL_TEXTURE_3D, tex_dist);
   texParams(GL_TEXTURE_3D, GL_NEAREST);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glv::TexImage3D(GL_TEXTURE_3D, 0, GL_R8UI, nb[0], nb[1], nb[2] * 8, 0, GL_RED_INTEGER, GL_UNSIGNED_BYTE, d.data());
+  gl::TexImage3D(GL_TEXTURE_3D, 0, GL_R8UI, nb[0], nb[1], nb[2] * 8, 0, GL_RED_INTEGER, GL_UNSIGNED_BYTE, d.data());
   checkGl("uploading the distance maps");
 }
 
@@ -131,10 +128,10 @@ void GlVolumeRenderer::Impl::ensureTargets(int w, int h) {
   }
   if (!fbo) gl::GenFramebuffers(1, &fbo);
   gl::BindFramebuffer(GL_FRAMEBUFFER, fbo);
-  glv::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex_color, 0);
-  glv::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, tex_counts, 0);
+  gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex_color, 0);
+  gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, tex_counts, 0);
   const GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-  glv::DrawBuffers(2, bufs);
+  gl::DrawBuffers(2, bufs);
   const GLenum st = gl::CheckFramebufferStatus(GL_FRAMEBUFFER);
   if (st != GL_FRAMEBUFFER_COMPLETE)
     throw std::runtime_error("OSMesa: RGBA32F framebuffer " + std::to_string(w) + "x" + std::to_string(h) +
@@ -176,19 +173,11 @@ GlVolumeRenderer::GlVolumeRenderer(std::shared_ptr<const Volume> volume, Transfe
   Impl& m = *impl_;
   m.volume = std::move(volume);
   m.tf = std::move(tf);
-  m.ctx = glv::createCoreContext(4, 5);
-  try {
-    m.makeCurrent();
-    glv::loadVolumeGlFunctions();
-    m.program = gl::buildProgram(glv::volumeVertexShader(), glv::volumeFragmentShader());
-    gl::GenVertexArrays(1, &m.vao);
-    m.uploadVolume();
-    m.uploadDistance();
-  } catch (...) {
-    OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0);
-    OSMesaDestroyContext(m.ctx);
-    throw;
-  }
+  m.context.emplace("GLSL volume backend");  // destroyed with impl_: frees what is left on failure
+  m.program = gl::buildProgram(glv::volumeVertexShader(), glv::volumeFragmentShader());
+  gl::GenVertexArrays(1, &m.vao);
+  m.uploadVolume();
+  m.uploadDistance();
 }
 
 GlVolumeRenderer::~GlVolumeRenderer() {
@@ -200,10 +189,8 @@ GlVolumeRenderer::~GlVolumeRenderer() {
     if (m.fbo) gl::DeleteFramebuffers(1, &m.fbo);
     gl::DeleteVertexArrays(1, &m.vao);
     gl::DeleteProgram(m.program);
-  } catch (...) {  // destroying the context frees everything anyway
+  } catch (...) {  // destroying the context (with impl_) frees everything anyway
   }
-  OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0);
-  OSMesaDestroyContext(m.ctx);
 }
 
 ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
@@ -270,21 +257,21 @@ ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const 
   gl::UseProgram(m.program);
   gl::Uniform3f(m.uniform("inv_n"), 1.0f / v.dims[0], 1.0f / v.dims[1], 1.0f / v.dims[2]);
   gl::Uniform3f(m.uniform("umax"), (float)(v.dims[0] - 1), (float)(v.dims[1] - 1), (float)(v.dims[2] - 1));
-  glv::Uniform3i(m.uniform("imax"), std::max(0, v.dims[0] - 2), std::max(0, v.dims[1] - 2), std::max(0, v.dims[2] - 2));
-  glv::Uniform3i(m.uniform("nb"), m.nb[0], m.nb[1], m.nb[2]);
+  gl::Uniform3i(m.uniform("imax"), std::max(0, v.dims[0] - 2), std::max(0, v.dims[1] - 2), std::max(0, v.dims[2] - 2));
+  gl::Uniform3i(m.uniform("nb"), m.nb[0], m.nb[1], m.nb[2]);
   gl::Uniform1f(m.uniform("et"), (float)std::min(q.early_termination, 2.0));
-  glv::Uniform1i(m.uniform("skip"), q.skip_empty ? 1 : 0);
-  glv::Uniform1i(m.uniform("first_nz"), m.first_nz);
-  glv::Uniform1i(m.uniform("last_nz"), m.last_nz);
+  gl::Uniform1i(m.uniform("skip"), q.skip_empty ? 1 : 0);
+  gl::Uniform1i(m.uniform("first_nz"), m.first_nz);
+  gl::Uniform1i(m.uniform("last_nz"), m.last_nz);
   gl::Uniform1f(m.uniform("table_max"), (float)(TfTable::kEntries - 1));
   const std::pair<GLenum, unsigned> units[] = {{GL_TEXTURE_3D, m.tex_vol},   {GL_TEXTURE_1D, m.tex_table},
                                                {GL_TEXTURE_3D, m.tex_dist},  {GL_TEXTURE_2D, m.tex_span0},
                                                {GL_TEXTURE_2D, m.tex_span1}};
   for (int i = 0; i < 5; ++i) {
-    glv::ActiveTexture(GL_TEXTURE0 + i);
+    gl::ActiveTexture(GL_TEXTURE0 + i);
     glBindTexture(units[i].first, units[i].second);
   }
-  glv::ActiveTexture(GL_TEXTURE0);
+  gl::ActiveTexture(GL_TEXTURE0);
   gl::BindVertexArray(m.vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
 

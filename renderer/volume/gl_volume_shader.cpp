@@ -7,7 +7,7 @@
 // chessboard distance maps over the 8^3 min-max blocks): a sample is leapt over only when
 // it lies kMargin inside an empty cube, and a sample taken in an empty block classifies to
 // exactly zero alpha, so leaping changes no bit of the image.
-#include "renderer/volume/gl_volume_context.h"
+#include "renderer/volume/gl_volume_shader.h"
 
 namespace tessera::renderer::glv {
 

@@ -1,10 +1,11 @@
 // Min-max hierarchy construction and per-transfer-function classification.
-#include "common/parallel.h"
 #include "renderer/volume/minmax.h"
 
 #include <algorithm>
 #include <stdexcept>
 #include <thread>
+
+#include "common/parallel.h"
 
 namespace tessera::renderer {
 

@@ -1,5 +1,4 @@
 // Shared per-volume acceleration data (see volume_accel.h).
-#include "common/parallel.h"
 #include "renderer/volume/volume_accel.h"
 
 #include <cmath>
@@ -7,6 +6,8 @@
 #include <mutex>
 #include <thread>
 #include <algorithm>
+
+#include "common/parallel.h"
 
 namespace tessera::renderer {
 
