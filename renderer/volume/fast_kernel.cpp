@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "renderer/volume/kernels.h"
+#include "renderer/volume/leaper.h"
 
 #if defined(__AVX2__) && defined(__FMA__)
 #include <immintrin.h>
@@ -20,12 +21,10 @@ namespace tessera::renderer {
 
 namespace {
 
+using fast::Leaper;
+using fast::kInf;
+using fast::kMinRun;
 constexpr int kLanes = 8;
-constexpr int64_t kMinRun = 16;
-// Skipped samples must lie this far (voxels) inside an empty node: float positions differ
-// from the exact ones by < 1e-3 voxel for volumes up to 2048^3, so they stay inside.
-constexpr double kSkipMargin = 1.0 / 64;
-constexpr double kInf = std::numeric_limits<double>::infinity();
 // Float sample indices are exact below 2^24.
 constexpr int64_t kMaxSamples = int64_t{1} << 24;
 
@@ -75,10 +74,10 @@ struct Classified {
 // Samples k0..k0+lanes-1 and appends those that may have alpha > 0 to `out` at position n
 // (`first_off`: offset of k0 in the chunk). Returns how many were appended. No branches on
 // the data, so consecutive packets overlap in the pipeline.
-// kSkipEmpty: return early for an all-empty packet. That branch pays where it is predictable
+// kEarlyOutEmpty: return early for an all-empty packet. That branch pays where it is predictable
 // (long runs without skipping: most packets are empty) and costs where it is a coin flip
 // (short runs between leaps).
-template <bool kSkipEmpty>
+template <bool kEarlyOutEmpty>
 inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off, Classified& out, int n) {
   const __m256 kf = _mm256_add_ps(_mm256_set1_ps((float)k0), _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7));
   __m256 f[3];
@@ -127,7 +126,7 @@ inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off,
                                                _mm256_cmpgt_epi32(ti, _mm256_set1_epi32(c.last_nz)));
   int mask = ~_mm256_movemask_ps(_mm256_castsi256_ps(out_of_range));
   mask &= (1 << lanes) - 1;
-  if (kSkipEmpty && mask == 0) return 0;
+  if (kEarlyOutEmpty && mask == 0) return 0;
   const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(kCompress.lanes[mask])));
   const __m256i off = _mm256_add_epi32(_mm256_set1_epi32(first_off), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(out.ti + n), _mm256_permutevar8x32_epi32(ti, perm));
@@ -140,7 +139,7 @@ inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off,
 // chunk are classified first, then the listed samples composited in order (the same
 // operations, in the same order, as one sample at a time). Returns true if the alpha
 // reached et; `stop` is the sample after the last one used.
-template <bool kSkipEmpty>
+template <bool kEarlyOutEmpty>
 inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, __m128& acc, int64_t& stop) {
   Classified cl;
   const __m128 one = _mm_set1_ps(1.0f), etv = _mm_set1_ps(et);
@@ -148,7 +147,7 @@ inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, __
     const int64_t chunk_end = std::min(end, j + Classified::kChunk);
     int n = 0;
     for (int64_t p = j; p < chunk_end; p += kLanes)
-      n += classifyPacket<kSkipEmpty>(c, p, (int)std::min<int64_t>(kLanes, chunk_end - p), (int)(p - j), cl, n);
+      n += classifyPacket<kEarlyOutEmpty>(c, p, (int)std::min<int64_t>(kLanes, chunk_end - p), (int)(p - j), cl, n);
     for (int i = 0; i < n; ++i) {
       const float* e = c.rgba + 4 * cl.ti[i];
       const __m128 e0 = _mm_load_ps(e), e1 = _mm_load_ps(e + 4);
@@ -199,89 +198,6 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4]
 }
 #endif
 
-// Empty-space leaps over the level-0 block grid, using the chessboard distance map.
-// Double precision; samples are only leapt over when they lie kSkipMargin inside a cube of
-// empty blocks, so their float positions (the kernel's) are inside it too.
-struct Leaper {
-  double u0[3]{}, du[3]{}, inv[3]{}, umax[3]{};
-  int imax[3]{}, nb[3]{};
-  bool fwd[3]{}, moving[3]{};
-  int nbx = 0, nbxy = 0;
-  int64_t block_run = 1;  // samples after which the ray has surely left any block
-  const uint8_t* dist = nullptr;
-
-  Leaper() = default;
-
-  Leaper(const RaySpan& s, const Volume& v, const MinMaxHierarchy& h, const MinMaxHierarchy::Emptiness& e) {
-    const auto d0 = h.dims(0);
-    for (int a = 0; a < 3; ++a) {
-      u0[a] = s.u0[a];
-      du[a] = s.du[a];
-      moving[a] = s.du[a] != 0;
-      fwd[a] = s.du[a] > 0;
-      inv[a] = moving[a] ? 1.0 / s.du[a] : 0.0;
-      umax[a] = v.dims[a] - 1;
-      imax[a] = std::max(0, v.dims[a] - 2);
-      nb[a] = d0[a];
-    }
-    nbx = d0[0];
-    nbxy = d0[0] * d0[1];
-    // A ray crosses a block's extent B along its fastest axis within B / max|du| samples.
-    const double fastest = std::max({std::fabs(s.du[0]), std::fabs(s.du[1]), std::fabs(s.du[2])});
-    block_run = (int64_t)std::min(1e9, std::ceil(MinMaxHierarchy::kBlock / fastest)) + 1;
-    const int octant = (s.du[0] < 0 ? 1 : 0) | (s.du[1] < 0 ? 2 : 0) | (s.du[2] < 0 ? 4 : 0);
-    dist = e.octant_distance[octant].data();
-  }
-
-  // Where the ray (from sample k) leaves the cube of r^3 blocks that starts at block b and
-  // extends forward (the ray's octant), shrunk by `margin`; `inside` tells whether sample
-  // k itself is in the shrunk cube.
-  double exit(const double u[3], const int b[3], int r, double margin, bool& inside) const {
-    constexpr double B = MinMaxHierarchy::kBlock;
-    double e = kInf;
-    inside = true;
-    for (int a = 0; a < 3; ++a) {
-      const bool neg = du[a] < 0;
-      const int first = neg ? b[a] - r + 1 : b[a], last = neg ? b[a] + 1 : b[a] + r;
-      const double lo = first <= 0 ? -kInf : first * B + margin;
-      const double hi = last >= nb[a] ? kInf : last * B - margin;
-      inside = inside & (u[a] >= lo) & (u[a] <= hi);
-      const double ea = moving[a] ? ((fwd[a] ? hi : lo) - u0[a]) * inv[a] : kInf;
-      e = std::min(e, ea);
-    }
-    return e;
-  }
-
-  // Returns the first sample not leapt over (== k if sample k must be taken) and sets
-  // run_end to a sample index where the ray has left k's block (the next decision point).
-  int64_t step(int64_t k, int64_t k_end, int64_t& run_end) const {
-    double u[3];
-    int b[3];
-    for (int a = 0; a < 3; ++a) {
-      u[a] = u0[a] + (double)k * du[a];
-      const double uc = std::min(std::max(u[a], 0.0), umax[a]);
-      b[a] = std::min((int)uc, imax[a]) / MinMaxHierarchy::kBlock;
-    }
-    const int d = dist[b[0] + nbx * b[1] + nbxy * b[2]];
-    bool inside;
-    if (d > 0) {
-      const double e = std::min(exit(u, b, d, kSkipMargin, inside), (double)k_end);
-      // Samples k..floor(e) lie inside the shrunk cube; double rounding of e (~1e-13 of a
-      // step) is far below the margin, so the last of them is still safe to leap over.
-      const int64_t next = std::min(k_end, (int64_t)e + 1);
-      if (inside && next > k) return next;
-    }
-    // Sample k must be taken; the run has to reach past k's block. Runs are at least
-    // kMinRun samples, so when a block takes fewer (coarse steps) its exact exit is moot.
-    if (block_run <= kMinRun) {
-      run_end = k + block_run;
-    } else {
-      const double e = std::min(exit(u, b, 1, 0.0, inside), (double)k_end);
-      run_end = (int64_t)e + 1;
-    }
-    return k;
-  }
-};
 
 }  // namespace
 

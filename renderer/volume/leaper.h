@@ -1,0 +1,104 @@
+// Private to fast_kernel.cpp: the fast kernel's empty-space leaper, which walks a ray over
+// the min-max hierarchy's level-0 block grid and says how many samples it may leap over.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "renderer/volume/kernels.h"
+
+namespace tessera::renderer::fast {
+
+// Skipped samples must lie this far (voxels) inside an empty node: float positions differ
+// from the exact ones by < 1e-3 voxel for volumes up to 2048^3, so they stay inside.
+inline constexpr double kSkipMargin = 1.0 / 64;
+// The fewest samples the kernel takes between two leap decisions.
+inline constexpr int64_t kMinRun = 16;
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Empty-space leaps over the level-0 block grid, using the chessboard distance map.
+// Double precision; samples are only leapt over when they lie kSkipMargin inside a cube of
+// empty blocks, so their float positions (the kernel's) are inside it too.
+struct Leaper {
+  double u0[3]{}, du[3]{}, inv[3]{}, umax[3]{};
+  int imax[3]{}, nb[3]{};
+  bool fwd[3]{}, moving[3]{};
+  int nbx = 0, nbxy = 0;
+  int64_t block_run = 1;  // samples after which the ray has surely left any block
+  const uint8_t* dist = nullptr;
+
+  Leaper() = default;
+
+  Leaper(const RaySpan& s, const Volume& v, const MinMaxHierarchy& h, const MinMaxHierarchy::Emptiness& e) {
+    const auto d0 = h.dims(0);
+    for (int a = 0; a < 3; ++a) {
+      u0[a] = s.u0[a];
+      du[a] = s.du[a];
+      moving[a] = s.du[a] != 0;
+      fwd[a] = s.du[a] > 0;
+      inv[a] = moving[a] ? 1.0 / s.du[a] : 0.0;
+      umax[a] = v.dims[a] - 1;
+      imax[a] = std::max(0, v.dims[a] - 2);
+      nb[a] = d0[a];
+    }
+    nbx = d0[0];
+    nbxy = d0[0] * d0[1];
+    // A ray crosses a block's extent B along its fastest axis within B / max|du| samples.
+    const double fastest = std::max({std::fabs(s.du[0]), std::fabs(s.du[1]), std::fabs(s.du[2])});
+    block_run = (int64_t)std::min(1e9, std::ceil(MinMaxHierarchy::kBlock / fastest)) + 1;
+    const int octant = (s.du[0] < 0 ? 1 : 0) | (s.du[1] < 0 ? 2 : 0) | (s.du[2] < 0 ? 4 : 0);
+    dist = e.octant_distance[octant].data();
+  }
+
+  // Where the ray (from sample k) leaves the cube of r^3 blocks that starts at block b and
+  // extends forward (the ray's octant), shrunk by `margin`; `inside` tells whether sample
+  // k itself is in the shrunk cube.
+  double exit(const double u[3], const int b[3], int r, double margin, bool& inside) const {
+    constexpr double B = MinMaxHierarchy::kBlock;
+    double e = kInf;
+    inside = true;
+    for (int a = 0; a < 3; ++a) {
+      const bool neg = du[a] < 0;
+      const int first = neg ? b[a] - r + 1 : b[a], last = neg ? b[a] + 1 : b[a] + r;
+      const double lo = first <= 0 ? -kInf : first * B + margin;
+      const double hi = last >= nb[a] ? kInf : last * B - margin;
+      inside = inside & (u[a] >= lo) & (u[a] <= hi);
+      const double ea = moving[a] ? ((fwd[a] ? hi : lo) - u0[a]) * inv[a] : kInf;
+      e = std::min(e, ea);
+    }
+    return e;
+  }
+
+  // Returns the first sample not leapt over (== k if sample k must be taken) and sets
+  // run_end to a sample index where the ray has left k's block (the next decision point).
+  int64_t step(int64_t k, int64_t k_end, int64_t& run_end) const {
+    double u[3];
+    int b[3];
+    for (int a = 0; a < 3; ++a) {
+      u[a] = u0[a] + (double)k * du[a];
+      const double uc = std::min(std::max(u[a], 0.0), umax[a]);
+      b[a] = std::min((int)uc, imax[a]) / MinMaxHierarchy::kBlock;
+    }
+    const int d = dist[b[0] + nbx * b[1] + nbxy * b[2]];
+    bool inside;
+    if (d > 0) {
+      const double e = std::min(exit(u, b, d, kSkipMargin, inside), (double)k_end);
+      // Samples k..floor(e) lie inside the shrunk cube; double rounding of e (~1e-13 of a
+      // step) is far below the margin, so the last of them is still safe to leap over.
+      const int64_t next = std::min(k_end, (int64_t)e + 1);
+      if (inside && next > k) return next;
+    }
+    // Sample k must be taken; the run has to reach past k's block. Runs are at least
+    // kMinRun samples, so when a block takes fewer (coarse steps) its exact exit is moot.
+    if (block_run <= kMinRun) {
+      run_end = k + block_run;
+    } else {
+      const double e = std::min(exit(u, b, 1, 0.0, inside), (double)k_end);
+      run_end = (int64_t)e + 1;
+    }
+    return k;
+  }
+};
+
+}  // namespace tessera::renderer::fast
