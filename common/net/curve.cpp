@@ -1,0 +1,136 @@
+// Farm keys and the ZAP handler (see curve.h).
+#include "common/net/curve.h"
+
+#include <sys/stat.h>
+
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include <spdlog/spdlog.h>
+
+#include "common/net/transport.h"
+
+namespace tessera {
+namespace {
+
+constexpr size_t kZ85KeyLength = 40;
+constexpr const char* kZapEndpoint = "inproc://zeromq.zap.01";  // fixed by the ZAP specification (RFC 27)
+
+std::string readKeyFile(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  if (!in) throw std::runtime_error(p.string() + ": cannot read the farm key (create it with tessera-keys)");
+  std::string key;
+  in >> key;
+  if (key.size() != kZ85KeyLength)
+    throw std::runtime_error(p.string() + ": expected a 40-character Z85 key, found " + std::to_string(key.size()) +
+                             " characters");
+  std::array<uint8_t, 32> raw{};
+  if (!zmq_z85_decode(raw.data(), key.c_str())) throw std::runtime_error(p.string() + ": not a Z85 key");
+  return key;
+}
+
+void writeFile(const std::filesystem::path& p, const std::string& text, mode_t mode) {
+  {
+    std::ofstream out(p, std::ios::trunc);
+    if (!out || !(out << text << '\n')) throw std::runtime_error(p.string() + ": cannot write the farm key");
+  }
+  if (chmod(p.c_str(), mode) != 0) throw std::runtime_error(p.string() + ": cannot set its permissions");
+}
+
+}  // namespace
+
+FarmKeys generateFarmKeys() {
+  char pub[41] = {}, sec[41] = {};
+  if (zmq_curve_keypair(pub, sec) != 0)
+    throw std::runtime_error("libzmq cannot make CURVE keys (built without CURVE support?)");
+  return {pub, sec};
+}
+
+void writeFarmKeys(const std::string& dir, const FarmKeys& keys) {
+  std::filesystem::create_directories(dir);
+  writeFile(std::filesystem::path(dir) / "farm.key", keys.secret_z85, 0600);
+  writeFile(std::filesystem::path(dir) / "farm.pub", keys.public_z85, 0644);
+}
+
+FarmKeys readFarmKeys(const std::string& dir) {
+  FarmKeys k{readKeyFile(std::filesystem::path(dir) / "farm.pub"), readKeyFile(std::filesystem::path(dir) / "farm.key")};
+  char derived[41] = {};
+  if (zmq_curve_public(derived, k.secret_z85.c_str()) != 0 || k.public_z85 != derived)
+    throw std::runtime_error(dir + "/farm.pub does not belong to " + dir + "/farm.key");
+  return k;
+}
+
+FarmKeys loadOrCreateFarmKeys(const std::string& dir) {
+  if (!std::filesystem::exists(std::filesystem::path(dir) / "farm.key")) {
+    writeFarmKeys(dir, generateFarmKeys());
+    spdlog::info("created farm keys in {}/ (farm.key is the secret every process of the farm needs)", dir);
+  }
+  return readFarmKeys(dir);
+}
+
+bool endpointLeavesHost(const std::string& endpoint) {
+  if (endpoint.rfind("tcp://", 0) != 0) return false;
+  std::string host = endpoint.substr(6, endpoint.rfind(':') - 6);
+  if (host.size() > 1 && host.front() == '[') host = host.substr(1, host.size() - 2);  // [::1]
+  return !(host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0);
+}
+
+CurveAuth::CurveAuth(zmq::context_t& ctx, FarmKeys keys) : ctx_(ctx), keys_(std::move(keys)) {
+  // Bind before any CURVE server exists, or its first handshakes would find no handler.
+  auto rep = std::make_shared<zmq::socket_t>(ctx_, zmq::socket_type::rep);
+  rep->set(zmq::sockopt::linger, 0);
+  rep->bind(kZapEndpoint);
+  zap_ = std::thread([this, rep] {
+    zmq::socket_t s = std::move(*rep);
+    std::array<uint8_t, 32> farm{};
+    zmq_z85_decode(farm.data(), keys_.public_z85.c_str());
+    zmq::pollitem_t items[] = {{s.handle(), 0, ZMQ_POLLIN, 0}};
+    while (!quit_) {
+      pollFor(items, 1, std::chrono::milliseconds(100));
+      if (!(items[0].revents & ZMQ_POLLIN)) continue;
+      // Request: version, request id, domain, address, identity, mechanism, credentials...
+      std::vector<zmq::message_t> frames;
+      do {
+        frames.emplace_back();
+        if (!s.recv(frames.back(), zmq::recv_flags::dontwait)) break;
+      } while (frames.back().more() && frames.size() < 16);
+      const bool curve = frames.size() >= 7 && frames[5].to_string() == "CURVE";
+      const bool member = curve && frames[6].size() == farm.size() &&
+                          std::equal(farm.begin(), farm.end(), static_cast<const uint8_t*>(frames[6].data()));
+      if (!member) {
+        uint64_t n = ++refused_;
+        if (n <= 3 || (n & (n - 1)) == 0)
+          spdlog::warn("refused peer address={} reason=\"{}\" refused_total={}",
+                       frames.size() > 3 ? frames[3].to_string() : "?", curve ? "not the farm key" : "not CURVE", n);
+      }
+      const std::string id = frames.size() > 1 ? frames[1].to_string() : "";
+      s.send(zmq::str_buffer("1.0"), zmq::send_flags::sndmore);
+      s.send(zmq::buffer(id), zmq::send_flags::sndmore);
+      s.send(zmq::buffer(std::string(member ? "200" : "400")), zmq::send_flags::sndmore);
+      s.send(zmq::buffer(std::string(member ? "OK" : "not a member of this farm")), zmq::send_flags::sndmore);
+      s.send(zmq::str_buffer(""), zmq::send_flags::sndmore);  // user id
+      s.send(zmq::str_buffer(""), zmq::send_flags::none);     // metadata
+    }
+  });
+}
+
+CurveAuth::~CurveAuth() {
+  quit_ = true;
+  if (zap_.joinable()) zap_.join();
+}
+
+void CurveAuth::makeServer(zmq::socket_t& s) const {
+  s.set(zmq::sockopt::curve_server, 1);
+  s.set(zmq::sockopt::curve_secretkey, keys_.secret_z85);
+  s.set(zmq::sockopt::zap_domain, "tessera");
+}
+
+void CurveAuth::makeClient(zmq::socket_t& s) const {
+  s.set(zmq::sockopt::curve_serverkey, keys_.public_z85);
+  s.set(zmq::sockopt::curve_publickey, keys_.public_z85);
+  s.set(zmq::sockopt::curve_secretkey, keys_.secret_z85);
+}
+
+}  // namespace tessera

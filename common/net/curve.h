@@ -1,0 +1,54 @@
+// CURVE authentication and encryption for TCP between hosts (libzmq's CurveZMQ). A farm has
+// one keypair, kept in a folder that every process of the farm reads (compose mounts it);
+// holding its secret key is what makes a process a member. Sockets that bind are CURVE
+// servers with the farm secret key; sockets that connect are CURVE clients that present the
+// farm keypair and expect the farm public key from the server. A ZAP handler on the context
+// admits only clients that proved the farm key; everyone else is refused and counted.
+// CurveAuth is thread-safe once constructed; one per zmq::context_t.
+#pragma once
+#include <atomic>
+#include <cstdint>
+#include <string>
+#include <thread>
+
+#include <zmq.hpp>
+
+namespace tessera {
+
+struct FarmKeys {
+  std::string public_z85, secret_z85;  // 40 Z85 characters each
+};
+
+FarmKeys generateFarmKeys();
+// <dir>/farm.pub and <dir>/farm.key (the secret, mode 0600). Throws naming the file.
+void writeFarmKeys(const std::string& dir, const FarmKeys& keys);
+// Throws std::runtime_error naming the file and what is wrong with it.
+FarmKeys readFarmKeys(const std::string& dir);
+// The folder's keys, created on first use (the first process to start writes them).
+FarmKeys loadOrCreateFarmKeys(const std::string& dir);
+
+// True when traffic to or from this endpoint may leave the machine: tcp to any host that is
+// not a loopback address or "localhost" (ipc:// and inproc:// never leave it).
+bool endpointLeavesHost(const std::string& endpoint);
+
+class CurveAuth {
+ public:
+  CurveAuth(zmq::context_t& ctx, FarmKeys keys);
+  ~CurveAuth();
+  CurveAuth(const CurveAuth&) = delete;
+  CurveAuth& operator=(const CurveAuth&) = delete;
+
+  void makeServer(zmq::socket_t& s) const;  // call before bind
+  void makeClient(zmq::socket_t& s) const;  // call before connect
+  uint64_t refused() const { return refused_; }  // handshakes refused for a wrong key
+
+ private:
+  void serve();
+  zmq::context_t& ctx_;
+  FarmKeys keys_;
+  std::atomic<bool> quit_{false};
+  std::atomic<uint64_t> refused_{0};
+  std::thread zap_;
+};
+
+}  // namespace tessera

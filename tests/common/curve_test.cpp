@@ -1,0 +1,110 @@
+// CURVE between farm processes: the farm key admits, any other key is refused and counted,
+// keys on disk are checked, and only endpoints that leave the host need it.
+#include "common/net/curve.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include <unistd.h>
+
+#include "common/net/transport.h"
+
+namespace tessera {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+// A free loopback port: bind to port 0 and read back what the kernel chose.
+std::string loopbackEndpoint(zmq::socket_t& s) {
+  s.bind("tcp://127.0.0.1:*");
+  return s.get(zmq::sockopt::last_endpoint);
+}
+
+bool receiveWithin(zmq::socket_t& s, std::chrono::milliseconds limit, std::string& got) {
+  zmq::pollitem_t items[] = {{s.handle(), 0, ZMQ_POLLIN, 0}};
+  for (auto end = std::chrono::steady_clock::now() + limit; std::chrono::steady_clock::now() < end;) {
+    pollFor(items, 1, 50ms);
+    if (!(items[0].revents & ZMQ_POLLIN)) continue;
+    zmq::message_t m;
+    (void)s.recv(m);
+    got = m.to_string();
+    return true;
+  }
+  return false;
+}
+
+TEST(Curve, FarmKeyIsAdmittedAndAnyOtherKeyRefusedAndCounted) {
+  zmq::context_t ctx;
+  const FarmKeys farm = generateFarmKeys();
+  CurveAuth auth(ctx, farm);
+  zmq::socket_t server(ctx, zmq::socket_type::pull);
+  server.set(zmq::sockopt::linger, 0);
+  auth.makeServer(server);
+  const std::string endpoint = loopbackEndpoint(server);
+
+  // A stranger that knows the farm's public key but not its secret key.
+  zmq::socket_t stranger(ctx, zmq::socket_type::push);
+  stranger.set(zmq::sockopt::linger, 0);
+  const FarmKeys other = generateFarmKeys();
+  stranger.set(zmq::sockopt::curve_serverkey, farm.public_z85);
+  stranger.set(zmq::sockopt::curve_publickey, other.public_z85);
+  stranger.set(zmq::sockopt::curve_secretkey, other.secret_z85);
+  stranger.connect(endpoint);
+  (void)stranger.send(zmq::str_buffer("forged"), zmq::send_flags::dontwait);
+  for (int i = 0; i < 100 && auth.refused() == 0; ++i) std::this_thread::sleep_for(20ms);  // bounded: 2 s
+  EXPECT_GE(auth.refused(), 1u) << "the stranger's handshake was not refused";
+  std::string got;
+  EXPECT_FALSE(receiveWithin(server, 200ms, got)) << "a message from a stranger arrived: " << got;
+
+  zmq::socket_t member(ctx, zmq::socket_type::push);
+  member.set(zmq::sockopt::linger, 0);
+  auth.makeClient(member);
+  member.connect(endpoint);
+  (void)member.send(zmq::str_buffer("frame"), zmq::send_flags::none);
+  ASSERT_TRUE(receiveWithin(server, 5000ms, got)) << "the member's message did not arrive";
+  EXPECT_EQ(got, "frame");
+}
+
+TEST(Curve, KeysRoundTripThroughTheirFolderAndBadFilesAreNamed) {
+  const fs::path dir = fs::temp_directory_path() / ("tessera-curve-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const FarmKeys made = loadOrCreateFarmKeys(dir.string());
+  const FarmKeys again = loadOrCreateFarmKeys(dir.string());
+  EXPECT_EQ(made.secret_z85, again.secret_z85) << "a second start must reuse the folder's keys";
+  EXPECT_EQ(fs::status(dir / "farm.key").permissions() & fs::perms::others_read, fs::perms::none);
+
+  std::ofstream(dir / "farm.pub") << generateFarmKeys().public_z85 << "\n";
+  try {
+    readFarmKeys(dir.string());
+    FAIL() << "a public key from another farm was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("does not belong"), std::string::npos) << e.what();
+  }
+  std::ofstream(dir / "farm.key") << "short\n";
+  try {
+    readFarmKeys(dir.string());
+    FAIL() << "a truncated key was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("farm.key"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Curve, OnlyEndpointsThatLeaveTheHostNeedIt) {
+  EXPECT_FALSE(endpointLeavesHost("ipc:///tmp/farm/master-pub"));
+  EXPECT_FALSE(endpointLeavesHost("inproc://farm-display"));
+  EXPECT_FALSE(endpointLeavesHost("tcp://127.0.0.1:5550"));
+  EXPECT_FALSE(endpointLeavesHost("tcp://localhost:5550"));
+  EXPECT_FALSE(endpointLeavesHost("tcp://[::1]:5550"));
+  EXPECT_TRUE(endpointLeavesHost("tcp://10.0.0.2:5550"));
+  EXPECT_TRUE(endpointLeavesHost("tcp://master:5550"));
+  EXPECT_TRUE(endpointLeavesHost("tcp://0.0.0.0:5550"));
+}
+
+}  // namespace
+}  // namespace tessera
