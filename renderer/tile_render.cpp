@@ -4,6 +4,7 @@
 #include <cstring>
 #include <map>
 
+#include "common/clock.h"
 #include "common/wire/strips.h"
 
 namespace tessera::renderer {
@@ -37,7 +38,7 @@ std::vector<TileRenderer::Output> TileRenderer::render(const proto::FrameParams&
       const PackedTile& pt = packing.tiles[i];
       for (int y = 0; y < tile.height; ++y)
         std::memcpy(fb.at(pt.fb_x, pt.fb_y + y), tile.at(0, y), 4 * (size_t)tile.width);
-      double tile_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      double tile_ms = msSince(t0);
       ms[compositor].push_back(tile_ms);
       group_ms += tile_ms;
       st.chunks_drawn += draw.size();

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/clock.h"
 #include "renderer/gl/gl_functions.h"
 
 namespace tessera::renderer {
@@ -252,7 +253,7 @@ Image8 GlRenderer::render(const Camera& cam, int width, int height, const Rect& 
       }
   }
   if (stats) {
-    stats->ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    stats->ms = msSince(t0);
     stats->triangles = tris;
     stats->chunks = (int)draw.size();
   }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "common/clock.h"
 #include "common/io/image_io.h"
 #include "renderer/tools/fft_filter.h"
 #include "renderer/gl/gl_renderer.h"
@@ -15,9 +16,6 @@ namespace tessera::renderer {
 
 namespace {
 
-double msSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 struct Frame {
   Image8 image;

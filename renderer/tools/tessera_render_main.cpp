@@ -14,6 +14,7 @@
 #include <string>
 
 #include "common/bricks.h"
+#include "common/clock.h"
 #include "common/io/image_io.h"
 #include "common/scene.h"
 #include "renderer/volume/backend.h"
@@ -148,7 +149,7 @@ int run(int argc, char** argv) {
     const std::clock_t c0 = std::clock();
     img = renderScene(*chosen, *vol, scene.tf, cam, w, h, bricks, opt, stats);
     best_cpu_ms = std::min(best_cpu_ms, 1000.0 * (double)(std::clock() - c0) / CLOCKS_PER_SEC);
-    best_ms = std::min(best_ms, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    best_ms = std::min(best_ms, msSince(t0));
   }
   writePng(out, img, bg);
   std::printf("wrote %s (%dx%d, quality %s, %d brick%s, frame %d, backend %s)\n", out.c_str(), w, h,

@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/clock.h"
 #include "common/parallel.h"
 #include "renderer/gl/gl_context.h"
 #include "renderer/gl/gl_functions.h"
@@ -305,7 +306,7 @@ ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const 
       stats->samples_skipped += (uint64_t)counts[i + 1];
       stats->samples_terminated += (uint64_t)counts[i + 2];
     }
-    stats->ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    stats->ms = msSince(start);
   }
   return img;
 }

@@ -2,6 +2,7 @@
 // image tiles pulled by worker threads from an atomic counter, per-pixel ray spans.
 #include "renderer/volume/raycaster.h"
 
+#include "common/clock.h"
 #include "common/parallel.h"
 
 #include <algorithm>
@@ -277,7 +278,7 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
     stats->samples = total.taken;
     stats->samples_skipped = total.skipped;
     stats->samples_terminated = total.terminated;
-    stats->ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    stats->ms = msSince(start);
   }
   return img;
 }
