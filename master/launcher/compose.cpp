@@ -24,7 +24,7 @@ const std::set<std::string, std::less<>> kIgnoredServiceKeys = {
     "label_file", "links", "logging", "mac_address", "mem_limit", "mem_reservation",
     "mem_swappiness", "memswap_limit", "models", "network_mode", "networks", "oom_kill_disable",
     "oom_score_adj", "pid", "pids_limit", "platform", "ports", "post_start", "pre_stop",
-    "privileged", "provider", "pull_policy", "read_only", "restart", "runtime", "secrets",
+    "privileged", "provider", "pull_policy", "read_only", "runtime", "secrets",
     "security_opt", "shm_size", "stdin_open", "stop_grace_period", "stop_signal", "storage_opt",
     "sysctls", "tmpfs", "tty", "ulimits", "use_api_socket", "user", "userns_mode", "uts",
     "volumes", "volumes_from", "working_dir"};
@@ -209,6 +209,7 @@ std::optional<ComposeService> readService(const Context& cx, const std::string& 
     else if (key == "env_file") readEnvFiles(cx, v, at, file_env);
     else if (key == "deploy") deploy_replicas = readDeploy(cx, v, at, s);
     else if (key == "scale") scale = cx.integer(v, at, 0, 1024);
+    else if (key == "restart") s.restart = parseRestartPolicy(cx.scalar(v, at), cx.file + ": " + at);
     else if (key == "depends_on") s.depends_on = readDependsOn(cx, v, at);
     else if (key == "profiles") { if (!profileActive(cx, v, at)) return std::nullopt; }
     else if (key == "extends") cx.fail(at, "not supported by tessera-up; write the service out");

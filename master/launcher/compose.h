@@ -19,6 +19,21 @@ class ComposeError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Compose `restart:` policy. Locally "unless-stopped" is "always" (nothing stops a single
+// service by hand); max_retries (on-failure:N) counts restarts, 0 = no limit.
+struct RestartPolicy {
+  enum class Mode { No, OnFailure, Always, UnlessStopped };
+  Mode mode = Mode::No;
+  int max_retries = 0;
+  // Whether a child that ended with `status` (a waitpid status) is started again.
+  bool restartsAfter(int status) const;
+  std::string text() const;  // as written in compose.yaml: "on-failure:3"
+  bool operator==(const RestartPolicy&) const = default;
+};
+
+// Parses no | on-failure[:N] | always | unless-stopped; throws ComposeError naming `where`.
+RestartPolicy parseRestartPolicy(const std::string& value, const std::string& where);
+
 struct ComposeService {
   std::string name;
   // entrypoint + command, or x-tessera.local_command (which replaces both: container
@@ -31,6 +46,7 @@ struct ComposeService {
   int replicas = 1;
   std::vector<std::string> depends_on;
   bool exit_leader = false;  // its exit 0 ends the farm successfully
+  RestartPolicy restart;
   bool operator==(const ComposeService&) const = default;
 };
 

@@ -1,5 +1,6 @@
 // Supervises the farm's child processes: spawn in start order, forward prefixed output
-// lines, stop everything (SIGTERM, grace period, SIGKILL) on leader exit, signal or death.
+// lines, restart children as their service's `restart:` policy says, and stop everything
+// (SIGTERM, grace period, SIGKILL) on leader exit, signal or a death nothing restarts.
 #include "master/launcher/launcher.h"
 
 #include <fcntl.h>
@@ -12,6 +13,9 @@
 #include <cerrno>
 #include <cstring>
 #include <memory>
+#include <optional>
+
+#include "master/launcher/child_process.h"
 
 extern char** environ;
 
@@ -21,17 +25,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr size_t kMaxLine = 64 * 1024;  // a longer run without '\n' is forwarded in pieces
 constexpr auto kKillWait = std::chrono::seconds(2);  // after SIGKILL; the kernel is quick
-
-volatile sig_atomic_t g_signal = 0;
-int g_wake_fd = -1;
-
-void onSignal(int signo) {
-  if (signo != SIGCHLD) g_signal = signo;
-  const int saved = errno;
-  const char c = 1;
-  [[maybe_unused]] ssize_t n = ::write(g_wake_fd, &c, 1);  // full pipe: already awake
-  errno = saved;
-}
 
 struct Stream {
   int fd = -1;
@@ -43,73 +36,15 @@ struct Child {
   pid_t pid = -1;
   bool running = false;
   Stream streams[2];  // stdout, stderr: separate so partial lines never mix
+  Clock::time_point started{};
+  RestartHistory history;
+  std::optional<Clock::time_point> restart_at;  // set while it waits out its backoff
 };
 
 std::string describe(int status) {
   if (WIFSIGNALED(status)) return "signal " + std::to_string(WTERMSIG(status));
   return "exit code " + std::to_string(WEXITSTATUS(status));
 }
-
-// Runs in the forked child: only async-signal-safe calls. Reports exec failure's errno
-// through `status_fd` (closed on exec success by O_CLOEXEC, so the parent reads EOF).
-[[noreturn]] void execChild(pid_t parent, const char* dir, const char* exe, char* const* argv,
-                            char* const* envp, int out_fd, int err_fd, int status_fd) {
-  setpgid(0, 0);  // own group: Ctrl-C reaches only the launcher, which stops whole groups
-  prctl(PR_SET_PDEATHSIG, SIGTERM);
-  if (getppid() != parent) _exit(126);  // the launcher died before prctl took effect
-  struct sigaction dfl {};
-  dfl.sa_handler = SIG_DFL;  // SIG_IGN (SIGPIPE) would otherwise survive exec
-  for (int s : {SIGINT, SIGTERM, SIGCHLD, SIGPIPE, SIGQUIT, SIGHUP}) sigaction(s, &dfl, nullptr);
-  sigset_t none;
-  sigemptyset(&none);
-  sigprocmask(SIG_SETMASK, &none, nullptr);
-  const int devnull = open("/dev/null", O_RDONLY | O_CLOEXEC);  // a background group must not read the tty
-  if (devnull >= 0) dup2(devnull, STDIN_FILENO);
-  dup2(out_fd, STDOUT_FILENO);
-  dup2(err_fd, STDERR_FILENO);
-  int e = 0;
-  if (chdir(dir) != 0) e = errno;
-  if (e == 0) {
-    execve(exe, argv, envp);
-    e = errno;
-  }
-  [[maybe_unused]] ssize_t n = ::write(status_fd, &e, sizeof e);
-  _exit(127);
-}
-
-// Installs the launcher's handlers for its lifetime and restores the previous ones.
-class SignalScope {
- public:
-  SignalScope(int wake_fd, bool handle_stop) {
-    g_signal = 0;
-    g_wake_fd = wake_fd;
-    struct sigaction sa {};
-    sa.sa_handler = onSignal;
-    sigemptyset(&sa.sa_mask);
-    install(SIGCHLD, sa);
-    if (handle_stop) {
-      install(SIGINT, sa);
-      install(SIGTERM, sa);
-    }
-    struct sigaction ignore {};
-    ignore.sa_handler = SIG_IGN;  // a closed stdout must not kill the supervisor
-    install(SIGPIPE, ignore);
-  }
-  ~SignalScope() {
-    for (auto& [signo, old] : saved_) sigaction(signo, &old, nullptr);
-    g_wake_fd = -1;
-  }
-  SignalScope(const SignalScope&) = delete;
-  SignalScope& operator=(const SignalScope&) = delete;
-
- private:
-  void install(int signo, const struct sigaction& sa) {
-    struct sigaction old {};
-    sigaction(signo, &sa, &old);
-    saved_.emplace_back(signo, old);
-  }
-  std::vector<std::pair<int, struct sigaction>> saved_;
-};
 
 class Supervisor {
  public:
@@ -144,9 +79,9 @@ class Supervisor {
     for (const auto& c : children_) have_leader_ = have_leader_ || c->plan.exit_leader;
     for (auto& c : children_) {
       if (!c->plan.note.empty()) say(c->plan.label + ": " + c->plan.note);
-      if (g_signal != 0 || !spawn(*c)) break;
+      if (pendingStopSignal() != 0 || !spawn(*c)) break;
     }
-    if (!stopping_ && g_signal == 0) {
+    if (!stopping_ && pendingStopSignal() == 0) {
       say("started " + std::to_string(children_.size()) + " processes in " + project_.directory.string());
     }
     supervise();
@@ -196,6 +131,7 @@ class Supervisor {
     setpgid(pid, pid);  // also here, so the group exists before we might signal it
     c.pid = pid;
     c.running = true;
+    c.started = Clock::now();
     c.streams[0].fd = out[0];
     c.streams[1].fd = err[0];
     for (auto& s : c.streams) fcntl(s.fd, F_SETFL, O_NONBLOCK);
@@ -224,6 +160,10 @@ class Supervisor {
   void beginStop() {
     if (stopping_) return;
     stopping_ = true;
+    for (auto& c : children_) {
+      if (c->restart_at) say(c->plan.label + " will not be restarted: the farm is stopping");
+      c->restart_at.reset();
+    }
     deadline_ = Clock::now() + options_.stop_timeout;
     signalGroups(SIGTERM);
   }
@@ -277,16 +217,44 @@ class Supervisor {
     if (clean && c.plan.exit_leader) {
       say(c.plan.label + " finished; stopping the farm");
       exit_code_ = 0;
-      beginStop();
+      return beginStop();
+    }
+    const auto ran_for = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - c.started);
+    const RestartVerdict v = judgeEnd(c.plan.restart, options_.restart, c.history, status, ran_for);
+    const std::string ended = c.plan.label + (clean ? " exited (" : " died (") + describe(status) + ")";
+    if (v.kind == RestartVerdict::Kind::Restart) {
+      say(ended + "; restarting (restart: " + c.plan.restart.text() + ", attempt " + std::to_string(v.attempt) + ")");
+      // Like a container, a restarted child starts with an empty group: no stray helpers.
+      if (kill(-c.pid, 0) == 0) kill(-c.pid, SIGKILL);
+      c.restart_at = Clock::now() + v.delay;
     } else if (clean) {
       // Stages finish on the master's Shutdown in any order; the farm is done when the
       // leader is (or, without a leader, when everything has finished).
       if (have_leader_) say(c.plan.label + " finished");
-      return;
-    } else {
-      say(c.plan.label + " died (" + describe(status) + "); stopping the farm");
+    } else if (v.kind == RestartVerdict::Kind::GiveUp) {
+      say(ended + "; giving up on it: " + v.reason + "; stopping the farm");
       exit_code_ = 1;
       beginStop();
+    } else {
+      say(ended + ": the farm cannot continue without it; stopping");
+      exit_code_ = 1;
+      beginStop();
+    }
+  }
+
+  // Starts children whose backoff is over, with their original plan.
+  void restartDue() {
+    for (auto& c : children_) {
+      if (stopping_ || !c->restart_at || Clock::now() < *c->restart_at) continue;
+      c->restart_at.reset();
+      for (auto& s : c->streams) {
+        if (s.fd >= 0) {  // a helper of the old process may still hold its end open
+          emit(*c, s, true);
+          close(s.fd);
+          s.fd = -1;
+        }
+      }
+      if (spawn(*c)) say(c->plan.label + " restarted (pid " + std::to_string(c->pid) + ")");
     }
   }
 
@@ -316,8 +284,9 @@ class Supervisor {
         }
       }
       reap();
-      if (g_signal != 0 && g_signal != seen_signal) {
-        seen_signal = g_signal;
+      restartDue();
+      if (pendingStopSignal() != 0 && pendingStopSignal() != seen_signal) {
+        seen_signal = pendingStopSignal();
         if (!stopping_) {
           say(std::string("received SIG") + sigabbrev_np(seen_signal) + "; stopping the farm");
           exit_code_ = 128 + seen_signal;
@@ -325,11 +294,11 @@ class Supervisor {
         } else if (!killed) {
           deadline_ = Clock::now();  // a second Ctrl-C: no more patience
         }
-        g_signal = 0;
+        clearStopSignal();
         seen_signal = 0;
       }
       bool any_running = false;
-      for (auto& c : children_) any_running = any_running || c->running;
+      for (auto& c : children_) any_running = any_running || c->running || c->restart_at;
       if (!any_running) {
         if (!groupsAlive()) return;
         beginStop();  // helpers a finished child left behind in its group
@@ -403,7 +372,7 @@ class Supervisor {
 }  // namespace
 
 int launch(const ComposeProject& project, const LaunchOptions& options) {
-  if (g_wake_fd >= 0) throw LaunchError("launch() is already running in this process");
+  if (SignalScope::active()) throw LaunchError("launch() is already running in this process");
   Supervisor supervisor(project, options);
   return supervisor.run();
 }

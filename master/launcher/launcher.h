@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "master/launcher/compose.h"
+#include "master/launcher/restart.h"
 
 namespace tessera::launcher {
 
@@ -31,6 +32,8 @@ struct LaunchOptions {
   bool use_default_binary_dirs = true;
   // Stop the farm on SIGINT/SIGTERM to this process (exit 128 + signal).
   bool handle_signals = true;
+  // Backoff and crash-loop bound for services with a `restart:` policy.
+  RestartLimits restart;
 };
 
 // One child process to start.
@@ -39,6 +42,7 @@ struct PlannedProcess {
   std::string service;
   int replica = 1;      // 1-based, as TESSERA_REPLICA
   bool exit_leader = false;
+  RestartPolicy restart;
   std::string executable;  // resolved path of argv[0]
   std::vector<std::string> argv;
   // Added on top of the launcher's own environment: the service's variables, PATH with
@@ -64,8 +68,11 @@ std::vector<PlannedProcess> planProcesses(const ComposeProject& project, const L
 // Starts the farm and supervises it until it ends; returns the exit code:
 // 0 when an exit leader exits 0 (others exiting 0 before it is normal: stages end on
 // the master's Shutdown in any order), or, with no leader, when every process exited 0;
-// 128+signal when stopped by SIGINT/SIGTERM; 1 when a process died unexpectedly or a
-// process could not be started. Every child is stopped and reaped before returning.
+// 128+signal when stopped by SIGINT/SIGTERM; 1 when a process died that its service's
+// `restart:` policy does not restart (or that gave up: retry limit, crash loop) or a
+// process could not be started. A child its policy restarts is started again with the
+// same plan after a backoff, never once the farm is stopping. Every child is stopped and
+// reaped before returning.
 int launch(const ComposeProject& project, const LaunchOptions& options);
 
 }  // namespace tessera::launcher

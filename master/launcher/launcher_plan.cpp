@@ -76,6 +76,7 @@ std::vector<PlannedProcess> planProcesses(const ComposeProject& project, const L
       p.replica = r;
       p.label = s.replicas > 1 ? s.name + "-" + std::to_string(r) : s.name;
       p.exit_leader = s.exit_leader;
+      p.restart = s.restart;
       p.executable = exe;
       p.argv = s.argv;
       p.environment = s.environment;

@@ -17,7 +17,9 @@ bool printPlan(const tessera::launcher::ComposeProject& project,
   if (!plan.empty()) std::cout << "PATH=" << plan.front().environment.at("PATH") << "\n";
   bool all_found = true;
   for (const auto& p : plan) {
-    std::cout << p.label << (p.exit_leader ? " [exit leader]" : "") << "\n";
+    std::cout << p.label << (p.exit_leader ? " [exit leader]" : "");
+    if (p.restart.mode != tessera::launcher::RestartPolicy::Mode::No) std::cout << " [restart: " << p.restart.text() << "]";
+    std::cout << "\n";
     std::cout << "  argv: " << tessera::launcher::quoteCommand(p.argv) << "\n";
     std::cout << "  executable: " << (p.executable.empty() ? "NOT FOUND on PATH" : p.executable) << "\n";
     if (!p.note.empty()) std::cout << "  note: " << p.note << "\n";

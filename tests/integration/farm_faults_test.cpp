@@ -1,12 +1,17 @@
 // A running farm under bad input and failures: garbage, truncated and out-of-date
-// messages are dropped and counted while the frames stay correct; a killed stage is
-// named and the launcher stops the farm cleanly, leaving no process behind.
+// messages are dropped and counted while the frames stay correct; a killed or frozen
+// renderer or compositor is replaced (compose.yaml: restart: on-failure) or resumes and
+// every frame is still done once and correctly; losing the master or the display stops
+// the farm with a message that says so, leaving no process behind.
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <functional>
 #include <future>
+#include <numeric>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -110,22 +115,157 @@ TEST(FarmFaults, BadMessagesAreDroppedCountedAndFramesStayCorrect) {
   EXPECT_NE(run.output.find("dropped message"), std::string::npos) << "drops were not logged";
 }
 
-TEST(FarmFaults, KilledStageIsNamedAndFarmStopsCleanly) {
-  FarmDir dir("kill");
+// ---- losing a stage (issue 8): compose.yaml restarts renderers and compositors ------
+
+constexpr int kFaultFrames = 150;
+
+// Frame ids of out/metrics.jsonl in file order, and the last line.
+struct MetricsLines {
+  std::vector<int> frames;
+  std::vector<nlohmann::json> lines;
+};
+
+MetricsLines readMetrics(const FarmDir& dir) {
+  MetricsLines m;
+  std::ifstream in(dir.path() / "out" / "metrics.jsonl");
+  for (std::string line; std::getline(in, line);) {
+    m.lines.push_back(nlohmann::json::parse(line));
+    m.frames.push_back(m.lines.back()["frame"].get<int>());
+  }
+  return m;
+}
+
+// The farm finished every frame exactly once and correctly: one metrics line and one PNG
+// per frame, and frames before, right after and long after the fault match tessera-render.
+void expectEveryFrameOnceAndCorrect(const FarmDir& dir, const fs::path& scene, const MetricsLines& m) {
+  std::vector<int> sorted = m.frames;
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<int> expected(kFaultFrames);
+  std::iota(expected.begin(), expected.end(), 0);
+  EXPECT_EQ(sorted, expected) << "each frame id must appear once in metrics.jsonl";
+  for (int k = 0; k < kFaultFrames; ++k) EXPECT_TRUE(fs::exists(dir.frame(k))) << "frame " << k;
+  // The first frame issued under the last epoch was rendered after the fault.
+  int after = kFaultFrames - 1;
+  const auto last_epoch = m.lines.back()["epoch"].get<int>();
+  for (const auto& j : m.lines) {
+    if (j["epoch"].get<int>() == last_epoch) after = std::min(after, j["frame"].get<int>());
+  }
+  for (int k : {0, after, (after + kFaultFrames) / 2, kFaultFrames - 1}) {
+    if (!fs::exists(dir.frame(k))) continue;
+    EXPECT_LE(maxAbsDiff(readPng(dir.frame(k).string()), dir.reference(scene, k)), 1) << "frame " << k;
+  }
+}
+
+// Runs the default farm (2 renderers, 1 compositor) and calls `fault` once frame 1 is out.
+CommandResult runWithFault(FarmDir& dir, const fs::path& scene, const std::function<void()>& fault) {
+  auto farm = std::async(std::launch::async, [&] { return dir.runFarm(scene, 2, 1, kFaultFrames, 240); });
+  if (!waitFor([&] { return fs::exists(dir.frame(1)); }, 60s)) {
+    ADD_FAILURE() << "the farm produced no frame";
+  } else {
+    fault();
+  }
+  return farm.get();
+}
+
+// Every renderer reports stats for every frame, even one given no brick (0 active
+// pixels). Two reports with pixel imbalance (max/mean) below 2 mean both drew something.
+void expectTwoRenderersWorked(const nlohmann::json& frame) {
+  EXPECT_EQ(frame["render_reports"].get<int>(), 2) << frame.dump();
+  EXPECT_LT(frame["render_imbalance_pixels"].get<double>(), 1.9) << "a renderer drew nothing: " << frame.dump();
+}
+
+bool logHas(const FarmDir& dir, const std::string& text) { return dir.farmLog().find(text) != std::string::npos; }
+
+TEST(FarmFaults, KilledRendererIsRestartedAndEveryFrameIsDoneOnce) {
+  FarmDir dir("kill-renderer");
+  auto scene = dir.writeScene(kFaultFrames, 40, 160, 120);
+  const fs::path sockets = dir.path() / "sockets";
+  auto run = runWithFault(dir, scene, [&] {
+    auto victims = farmPids(sockets, "tessera-renderer");
+    ASSERT_EQ(victims.size(), 2u);
+    ASSERT_EQ(kill(victims[0], SIGKILL), 0);
+  });
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("died (signal 9); restarting (restart: on-failure, attempt 1)"), std::string::npos)
+      << run.output;
+  // Today's master marks the killed one lost and gives the restarted one a new rank.
+  EXPECT_NE(run.output.find("renderer 2 joined"), std::string::npos) << run.output;
+  const auto m = readMetrics(dir);
+  ASSERT_FALSE(m.lines.empty());
+  expectEveryFrameOnceAndCorrect(dir, scene, m);
+  // The last frame was rendered by two renderers again: the survivor and the restarted one.
+  expectTwoRenderersWorked(m.lines.back());
+  EXPECT_GT(m.lines.back()["epoch"].get<int>(), 0);
+}
+
+TEST(FarmFaults, KilledCompositorIsRestartedAndEveryFrameIsDoneOnce) {
+  FarmDir dir("kill-compositor");
+  auto scene = dir.writeScene(kFaultFrames, 40, 160, 120);
+  const fs::path sockets = dir.path() / "sockets";
+  auto run = runWithFault(dir, scene, [&] {
+    auto victims = farmPids(sockets, "tessera-compositor");
+    ASSERT_EQ(victims.size(), 1u);
+    ASSERT_EQ(kill(victims[0], SIGKILL), 0);
+  });
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("compositor died (signal 9); restarting (restart: on-failure, attempt 1)"),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("compositor 1 joined"), std::string::npos) << run.output;
+  const auto m = readMetrics(dir);
+  ASSERT_FALSE(m.lines.empty());
+  expectEveryFrameOnceAndCorrect(dir, scene, m);
+  // The only compositor alive at the end is the restarted one, and it composited.
+  EXPECT_EQ(m.lines.back()["composite_reports"].get<int>(), 1) << m.lines.back().dump();
+  EXPECT_GT(m.lines.back()["epoch"].get<int>(), 0);
+}
+
+// A renderer frozen past the master's heartbeat timeout (3 s) is marked lost; once it
+// resumes it must be given work again. Needs the master to re-admit a lost stage.
+TEST(FarmFaults, FrozenRendererResumesAndGetsWorkAgain) {
+  FarmDir dir("stop-renderer");
+  auto scene = dir.writeScene(kFaultFrames, 40, 160, 120);
+  const fs::path sockets = dir.path() / "sockets";
+  auto run = runWithFault(dir, scene, [&] {
+    auto victims = farmPids(sockets, "tessera-renderer");
+    ASSERT_EQ(victims.size(), 2u);
+    ASSERT_EQ(kill(victims[0], SIGSTOP), 0);
+    const bool lost = waitFor([&] { return logHas(dir, "lost: no heartbeat"); }, 60s);
+    ASSERT_EQ(kill(victims[0], SIGCONT), 0);
+    ASSERT_TRUE(lost) << "the master never marked the frozen renderer lost";
+  });
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(run.output.find("restarting"), std::string::npos) << "nothing died: " << run.output;
+  const auto m = readMetrics(dir);
+  ASSERT_FALSE(m.lines.empty());
+  expectEveryFrameOnceAndCorrect(dir, scene, m);
+  SCOPED_TRACE("the resumed renderer must get work again");
+  expectTwoRenderersWorked(m.lines.back());
+}
+
+// Without the master or the display the farm cannot go on: tessera-up says so and stops
+// everything, leaving no process behind.
+void expectFatalLoss(const std::string& name, const std::string& program) {
+  FarmDir dir("kill-" + name);
   auto scene = dir.writeScene(1000, 40, 200, 200);
   const fs::path sockets = dir.path() / "sockets";
   auto farm = std::async(std::launch::async, [&] { return dir.runFarm(scene, 2, 1, 1000, 120); });
   ASSERT_TRUE(waitFor([&] { return fs::exists(dir.frame(1)); }, 60s)) << "the farm produced no frame";
-  auto victims = farmPids(sockets, "tessera-renderer");
-  ASSERT_EQ(victims.size(), 2u);
+  auto victims = farmPids(sockets, program);
+  ASSERT_EQ(victims.size(), 1u);
   ASSERT_EQ(kill(victims[0], SIGKILL), 0);
   ASSERT_EQ(farm.wait_for(60s), std::future_status::ready) << "the launcher did not stop the farm";
   auto run = farm.get();
-  EXPECT_NE(run.exit_code, 0) << run.output;
-  EXPECT_NE(run.output.find("renderer"), std::string::npos);
-  EXPECT_NE(run.output.find("died"), std::string::npos) << run.output;
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("tessera-up | " + name + " died (signal 9): the farm cannot continue without it; stopping"),
+            std::string::npos)
+      << run.output;
+  EXPECT_EQ(run.output.find("restarting"), std::string::npos) << "nothing is restarted while stopping: " << run.output;
   EXPECT_TRUE(waitFor([&] { return farmPids(sockets).empty(); }, 10s)) << "farm processes left behind";
 }
+
+TEST(FarmFaults, KilledMasterStopsTheFarmCleanly) { expectFatalLoss("master", "tessera-master"); }
+TEST(FarmFaults, KilledDisplayStopsTheFarmCleanly) { expectFatalLoss("display", "tessera-display"); }
 
 }  // namespace
 }  // namespace tessera::test

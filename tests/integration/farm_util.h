@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <random>
 #include <string>
@@ -64,7 +65,8 @@ class FarmDir {
   }
 
   // tessera-up on the project's compose.yaml, sockets and output in this folder.
-  // `endpoints` "" = ipc sockets in this folder.
+  // `endpoints` "" = ipc sockets in this folder. Its output goes to farmLog() as it
+  // happens (tests react to what the farm says) and is returned whole.
   CommandResult runFarm(const fs::path& scene, int renderers, int compositors, int frames, int timeout_s = 120,
                         const std::string& extra = "", const std::string& endpoints = "") const {
     std::string cmd = bin("tessera-up") + " " + TESSERA_SOURCE_DIR "/compose.yaml" +
@@ -72,8 +74,16 @@ class FarmDir {
                       " --env TESSERA_COMPOSITORS=" + std::to_string(compositors) +
                       " --env TESSERA_FRAMES=" + std::to_string(frames) + " --env TESSERA_OUT=" + (dir_ / "out").string() +
                       " --env TESSERA_ENDPOINTS=" + (endpoints.empty() ? "ipc://" + (dir_ / "sockets").string() : endpoints) +
-                      " --env TESSERA_WINDOW=off " + extra;
-    return runCommand(cmd, timeout_s);
+                      " --env TESSERA_WINDOW=off " + extra + " > " + (dir_ / "farm.log").string();
+    CommandResult r = runCommand(cmd, timeout_s);
+    r.output = farmLog() + r.output;  // r.output: what timeout itself said, if anything
+    return r;
+  }
+
+  // What the farm of runFarm() has written so far.
+  std::string farmLog() const {
+    std::ifstream in(dir_ / "farm.log");
+    return std::string(std::istreambuf_iterator<char>(in), {});
   }
 
   fs::path frame(int k) const {

@@ -1,5 +1,6 @@
 // tessera-up launcher with real processes (/bin/sh): replicas and their environment,
 // prefixed output, stopping the farm on leader exit / death / signal, no orphans left.
+// Restart policies: launcher_restart_test.cpp.
 #include "master/launcher/launcher.h"
 
 #include <fcntl.h>
@@ -12,64 +13,12 @@
 #include <fstream>
 #include <thread>
 
+#include "tests/launcher/launcher_fixture.h"
+
 namespace tessera::launcher {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-class LauncherTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    char tmpl[] = "/tmp/tessera-launcher-XXXXXX";
-    ASSERT_NE(mkdtemp(tmpl), nullptr);
-    dir_ = tmpl;
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
-  ComposeProject project(const std::string& yaml) {
-    ComposeOptions options;
-    options.overrides["DIR"] = dir_.string();
-    return parseCompose(yaml, dir_, options, "compose.yaml");
-  }
-
-  // Runs the farm through the library; returns the exit code and fills lines_/seconds_.
-  int run(const std::string& yaml, std::chrono::milliseconds stop_timeout = std::chrono::milliseconds(5000)) {
-    LaunchOptions options;
-    options.handle_signals = false;
-    options.stop_timeout = stop_timeout;
-    options.output = [this](std::string_view line) { lines_.emplace_back(line); };
-    const auto start = Clock::now();
-    const int code = launch(project(yaml), options);
-    seconds_ = std::chrono::duration<double>(Clock::now() - start).count();
-    return code;
-  }
-
-  bool hasLine(const std::string& line) const {
-    return std::find(lines_.begin(), lines_.end(), line) != lines_.end();
-  }
-  std::string allLines() const {
-    std::string s;
-    for (const auto& l : lines_) s += l + "\n";
-    return s;
-  }
-
-  // Pids the children wrote into DIR/*.pid.
-  std::vector<pid_t> recordedPids() const {
-    std::vector<pid_t> pids;
-    for (const auto& e : std::filesystem::directory_iterator(dir_)) {
-      if (e.path().extension() != ".pid") continue;
-      pid_t pid = 0;
-      std::ifstream(e.path()) >> pid;
-      if (pid > 0) pids.push_back(pid);
-    }
-    return pids;
-  }
-  static bool alive(pid_t pid) { return kill(pid, 0) == 0; }
-
-  std::filesystem::path dir_;
-  std::vector<std::string> lines_;
-  double seconds_ = 0;
-};
 
 // Each renderer records its pid and a background helper's pid, then waits for the stop.
 constexpr const char* kRenderer = R"(
@@ -102,27 +51,32 @@ TEST_F(LauncherTest, ReplicasRunPrefixedAndStopWhenTheLeaderFinishes) {
   const auto pids = recordedPids();
   EXPECT_EQ(pids.size(), 6u);  // 3 renderers + 3 background helpers
   for (pid_t pid : pids) EXPECT_FALSE(alive(pid)) << "orphan pid " << pid;
-  // The display needs ~0.5 s; sh stops on SIGTERM at once, far below the 5 s grace.
-  EXPECT_LT(seconds_, 4.0);
+  // sh stops on SIGTERM at once: the grace period is never used up.
+  EXPECT_FALSE(hasLineStarting("tessera-up | renderer-1 did not stop")) << allLines();
 }
 
+// A service without a restart policy (the master) is one the farm cannot do without,
+// even while others would be restarted.
 TEST_F(LauncherTest, KilledChildStopsTheFarmAndIsNamed) {
   const int code = run(R"(
 services:
   master:
-    command: sh -c 'echo $$$$ > ${DIR}/m.pid; exec sleep 30'
+    command: sh -c 'echo $$$$ > ${DIR}/m.pid; for i in $$(seq 400); do [ $$(ls ${DIR} | wc -l) -ge 3 ] && break; sleep 0.05; done; kill -9 $$$$'
   renderer:
-    command: sh -c 'echo $$$$ > ${DIR}/r$$TESSERA_REPLICA.pid; if [ $$TESSERA_REPLICA = 2 ]; then sleep 0.3; kill -9 $$$$; fi; exec sleep 30'
+    command: sh -c 'echo $$$$ > ${DIR}/r$$TESSERA_REPLICA.pid; exec sleep 30'
+    restart: on-failure
     deploy: {replicas: 2}
   display:
-    command: sh -c 'echo $$$$ > ${DIR}/d.pid; exec sleep 30'
+    command: sh -c 'exec sleep 30'
 )");
   EXPECT_EQ(code, 1) << allLines();
-  EXPECT_TRUE(hasLine("tessera-up | renderer-2 died (signal 9); stopping the farm")) << allLines();
+  EXPECT_TRUE(hasLine("tessera-up | master died (signal 9): the farm cannot continue without it; stopping"))
+      << allLines();
+  // The renderers ended by the stop are not restarted.
+  EXPECT_FALSE(hasLineStarting("tessera-up | renderer-1 died")) << allLines();
   const auto pids = recordedPids();
-  EXPECT_EQ(pids.size(), 4u);
+  EXPECT_EQ(pids.size(), 3u);
   for (pid_t pid : pids) EXPECT_FALSE(alive(pid)) << "orphan pid " << pid;
-  EXPECT_LT(seconds_, 3.0);  // 0.3 s until the kill, then SIGTERM stops sleep at once
 }
 
 TEST_F(LauncherTest, StubbornChildIsKilledAfterTheGracePeriod) {
@@ -134,10 +88,12 @@ services:
     command: sh -c 'sleep 0.3'
 )", std::chrono::milliseconds(400));
   EXPECT_EQ(code, 0) << allLines();
-  EXPECT_TRUE(hasLine("tessera-up | stubborn did not stop in time; sending SIGKILL")) << allLines();
+  const size_t finished = indexOf("tessera-up | display finished; stopping the farm");
+  const size_t killed = indexOf("tessera-up | stubborn did not stop in time; sending SIGKILL");
+  EXPECT_LT(finished, lines_.size()) << allLines();
+  EXPECT_LT(killed, lines_.size()) << allLines();
+  EXPECT_LT(finished, killed) << allLines();
   for (pid_t pid : recordedPids()) EXPECT_FALSE(alive(pid)) << "orphan pid " << pid;
-  // 0.3 s run + 0.4 s grace; well under the 5 s default, which must not be used here.
-  EXPECT_LT(seconds_, 2.5);
 }
 
 TEST_F(LauncherTest, NonLeaderExitingIsAFailure) {
@@ -147,16 +103,18 @@ services:
   display: {command: sleep 30}
 )");
   EXPECT_EQ(code, 1);
-  EXPECT_TRUE(hasLine("tessera-up | master died (exit code 3); stopping the farm")) << allLines();
-  EXPECT_LT(seconds_, 3.0);
+  EXPECT_TRUE(hasLine("tessera-up | master died (exit code 3): the farm cannot continue without it; stopping"))
+      << allLines();
+  EXPECT_FALSE(hasLineStarting("tessera-up | display did not stop")) << allLines();
 }
 
 TEST_F(LauncherTest, NonLeaderFinishingCleanlyLetsTheLeaderFinish) {
   // Stages end on the master's Shutdown in any order: only the leader's exit ends the farm.
-  EXPECT_EQ(run("services: {master: {command: 'true'}, display: {command: sh -c 'sleep 0.4'}}"), 0);
+  EXPECT_EQ(run("services: {master: {command: 'true'}, display: {command: sh -c 'sleep 0.4; echo done'}}"), 0);
   EXPECT_TRUE(hasLine("tessera-up | master finished")) << allLines();
-  EXPECT_TRUE(hasLine("tessera-up | display finished; stopping the farm")) << allLines();
-  EXPECT_GT(seconds_, 0.3);  // it waited for the leader
+  EXPECT_TRUE(hasLine("display | done")) << allLines();  // it was not stopped early
+  EXPECT_LT(indexOf("tessera-up | master finished"), indexOf("tessera-up | display finished; stopping the farm"))
+      << allLines();
 }
 
 TEST_F(LauncherTest, WithoutLeaderTheFarmEndsWhenAllFinish) {
