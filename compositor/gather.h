@@ -26,7 +26,11 @@ class Gather {
   // The master's --window is at most 64 frames in flight, so no real part is further
   // ahead of the newest FrameParams this compositor has seen.
   static constexpr uint64_t kAheadWithoutParams = 64;
-  static constexpr size_t kDefaultWaitingBudget = 32u << 20;  // bytes
+  static constexpr size_t kDefaultWaitingBudget = 32u << 20;  // bytes: waitingBudget(512, 512)
+  // Parts beat their FrameParams only by the PUB-vs-PUSH race: about one frame's parts.
+  // Budget: 8 parts the size of the whole image in rgba32f (16 bytes a pixel): a frame of
+  // 8 bricks whose pieces all cover the image in the largest format, far more in practice.
+  static size_t waitingBudget(int width, int height) { return 8 * 16 * size_t(width) * size_t(height); }
 
   explicit Gather(uint32_t rank, size_t waiting_budget = kDefaultWaitingBudget)
       : rank_(rank), waiting_budget_(waiting_budget) {}
