@@ -3,6 +3,17 @@
 #include <utility>
 
 namespace tessera::compositor {
+namespace {
+
+template <class Frame>
+size_t partBytes(const Frame& f) {
+  size_t n = 0;
+  for (const auto& [key, piece] : f.pieces) n += piece.pixels.size();
+  for (const auto& [key, fb] : f.framebuffers) n += fb.pixels.size();
+  return n;
+}
+
+}  // namespace
 
 std::string Gather::check(const proto::FrameParams& p, const proto::Piece& piece) const {
   if (piece.epoch != p.epoch) return "piece epoch differs from FrameParams";
@@ -21,6 +32,54 @@ std::string Gather::check(const proto::FrameParams& p, const proto::Framebuffer&
   if (!routedRenderers(p).count(fb.renderer))
     return "framebuffer from renderer " + std::to_string(fb.renderer) + " whose tiles are not routed here";
   return "";
+}
+
+// Membership of a waiting part is known only when it belongs to the newest FrameParams'
+// epoch; a newer epoch's parts may name members that are not known yet.
+std::string Gather::checkWaiting(const proto::Piece& piece) const {
+  if (newest_ && piece.epoch == newest_->epoch && piece.brick >= newest_->bricks)
+    return "piece waiting for FrameParams names brick " + std::to_string(piece.brick) + " of " +
+           std::to_string(newest_->bricks);
+  return "";
+}
+
+std::string Gather::checkWaiting(const proto::Framebuffer& fb) const {
+  if (newest_ && fb.epoch == newest_->epoch && !newest_->routed.count(fb.renderer))
+    return "framebuffer waiting for FrameParams from renderer " + std::to_string(fb.renderer) +
+           " whose tiles are not routed here";
+  return "";
+}
+
+// Makes room for `bytes` of a part of `frame` that waits for its FrameParams, evicting
+// the farthest waiting frames beyond it; "" when admitted.
+std::string Gather::admitWaiting(uint64_t frame, size_t bytes) {
+  if (newest_ && frame > newest_->frame + kAheadWithoutParams)
+    return "part for frame " + std::to_string(frame) + " too far ahead of the newest FrameParams frame=" +
+           std::to_string(newest_->frame);
+  size_t held = waitingBytes();
+  while (held + bytes > waiting_budget_) {
+    auto far = frames_.end();
+    for (auto it = frames_.upper_bound(frame); it != frames_.end(); ++it)
+      if (!it->second.params) far = it;
+    if (far == frames_.end())
+      return "parts waiting for FrameParams would exceed the budget of " + std::to_string(waiting_budget_) + " bytes";
+    held -= partBytes(far->second);
+    dropWaiting(far, "evicted while waiting for FrameParams: a nearer frame needed the room");
+  }
+  return "";
+}
+
+void Gather::dropWaiting(std::map<uint64_t, Frame>::iterator it, const std::string& why) {
+  const size_t parts = it->second.pieces.size() + it->second.framebuffers.size();
+  for (size_t i = 0; i < parts; ++i) late_drops_.push_back("frame " + std::to_string(it->first) + ": " + why);
+  frames_.erase(it);
+}
+
+size_t Gather::waitingBytes() const {
+  size_t n = 0;
+  for (const auto& [frame, f] : frames_)
+    if (!f.params) n += partBytes(f);
+  return n;
 }
 
 std::set<uint32_t> Gather::routedRenderers(const proto::FrameParams& p) const {
@@ -48,6 +107,8 @@ std::string Gather::addParams(proto::FrameParams p) {
     if (p.frame < next_expected_) next_expected_ = p.frame;  // frames in flight are issued again
   }
   if (p.frame < next_expected_) return "FrameParams for a finished frame";
+  if (!newest_ || p.epoch > newest_->epoch || p.frame > newest_->frame)
+    newest_ = Membership{p.frame, p.epoch, p.bricks.size(), routedRenderers(p)};
   Frame& f = frames_[p.frame];
   f.params = std::move(p);
   auto recheck = [&](auto& parts) {  // parts that came before their parameters
@@ -63,7 +124,11 @@ std::string Gather::addParams(proto::FrameParams p) {
   };
   recheck(f.pieces);
   recheck(f.framebuffers);
-  while (frames_.size() > kMaxPending) frames_.erase(frames_.begin());
+  for (auto it = frames_.upper_bound(newest_->frame + kAheadWithoutParams); it != frames_.end();) {
+    auto next = std::next(it);
+    if (!it->second.params) dropWaiting(it, "waited too far ahead of the newest FrameParams");
+    it = next;
+  }
   return "";
 }
 
@@ -71,14 +136,17 @@ template <class Part>
 std::string Gather::add(Part part, uint32_t key, std::map<uint32_t, Part> Frame::*parts, const char* what) {
   if (part.epoch < epoch_) return std::string(what) + " of an older epoch";
   if (part.frame < next_expected_ && part.epoch == epoch_) return std::string(what) + " for a finished frame";
-  Frame& f = frames_[part.frame];
-  if (f.params) {
-    std::string why = check(*f.params, part);
-    if (!why.empty()) return why;
+  auto it = frames_.find(part.frame);
+  if (it != frames_.end() && (it->second.*parts).count(key)) return std::string("duplicate ") + what + " " + std::to_string(key);
+  std::string why;
+  if (it != frames_.end() && it->second.params) {
+    why = check(*it->second.params, part);
+  } else {
+    why = checkWaiting(part);
+    if (why.empty()) why = admitWaiting(part.frame, part.pixels.size());  // may evict farther frames
   }
-  if ((f.*parts).count(key)) return std::string("duplicate ") + what + " " + std::to_string(key);
-  (f.*parts).emplace(key, std::move(part));
-  while (frames_.size() > kMaxPending) frames_.erase(frames_.begin());
+  if (!why.empty()) return why;
+  (frames_[part.frame].*parts).emplace(key, std::move(part));
   return "";
 }
 
@@ -109,7 +177,13 @@ std::optional<Gather::Ready> Gather::pop() {
     for (auto& [brick, piece] : f.pieces) r.pieces.push_back(std::move(piece));
     for (auto& [renderer, fb] : f.framebuffers) r.framebuffers.push_back(std::move(fb));
     next_expected_ = it->first + 1;
-    frames_.erase(frames_.begin(), std::next(it));  // older incomplete frames can never finish now
+    // Older incomplete frames can never finish now; their waiting parts count as drops.
+    for (auto old = frames_.begin(); old != it;) {
+      auto next = std::next(old);
+      if (!old->second.params) dropWaiting(old, "its FrameParams never came");
+      old = next;
+    }
+    frames_.erase(frames_.begin(), std::next(it));
     return r;
   }
   return std::nullopt;

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 
 #include "common/net/log.h"
+#include "common/scene.h"
 #include "common/net/stop.h"
 #include "compositor/stage.h"
 
@@ -13,7 +14,8 @@ int main(int argc, char** argv) {
   CLI::App app{"Tessera compositor: composites one screen region of every frame"};
   std::string base, scene;
   compositor::StageOptions opt;
-  app.add_option("scene", scene, "accepted so every process takes the same arguments; unused");
+  app.add_option("scene", scene, "scene file (default: the built-in scene); only its image size is used")
+      ->envname("TESSERA_SCENE");
   app.add_option("--endpoints", base, "endpoint base (ipc://DIR | tcp://HOST:PORT)")->envname("TESSERA_ENDPOINTS");
   app.add_option("--advertise-host", opt.advertise_host,
                  "tcp: host renderers use to reach this compositor ('hostname' = this machine's name)")
@@ -25,6 +27,11 @@ int main(int argc, char** argv) {
       gethostname(name, sizeof name - 1);
       opt.advertise_host = name;
     }
+    // Parses the scene only (its volume is never loaded): the image size bounds what
+    // peers may send to this stage.
+    Scene parsed = scene.empty() ? defaultScene() : loadScene(scene);
+    opt.width = parsed.width;
+    opt.height = parsed.height;
     opt.endpoints = makeEndpoints(base.empty() ? defaultEndpointBase() : base);
     zmq::context_t ctx(1);
     return compositor::runStage(opt, ctx, &installStopSignals());

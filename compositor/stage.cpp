@@ -21,7 +21,7 @@ class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
       : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Compositor, opt.advertise_host),
-        pull_(makeSocket(ctx, zmq::socket_type::pull)), gather_(0) {}
+        pull_(makeSocket(ctx, zmq::socket_type::pull, maxPixelMessageBytes(opt.width, opt.height))), gather_(0) {}
 
   int run(const std::atomic<bool>* stop) {
     if (!link_.join(stop)) {
@@ -29,7 +29,7 @@ class Stage {
       return 1;
     }
     uint32_t rank = link_.rank();
-    gather_ = Gather(rank);
+    gather_ = Gather(rank, Gather::waitingBudget(opt_.width, opt_.height));
     std::string bind = opt_.endpoints.compositorBind(rank);
     pull_.set(zmq::sockopt::rcvhwm, 0);  // pieces are bounded by the master's frame window
     pull_.bind(bind);

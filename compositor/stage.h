@@ -13,6 +13,8 @@ namespace tessera::compositor {
 struct StageOptions {
   Endpoints endpoints;
   std::string advertise_host;  // tcp: host renderers use to reach this compositor ("" = the base host)
+  // The scene's image size (every process loads the same scene): bounds what peers may send.
+  int width = 512, height = 512;
 };
 
 int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);

@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 
 #include "common/net/log.h"
+#include "common/scene.h"
 #include "common/net/stop.h"
 #include "display/stage.h"
 
@@ -12,7 +13,8 @@ int main(int argc, char** argv) {
   std::string base, scene;
   std::vector<double> bg;
   display::StageOptions opt;
-  app.add_option("scene", scene, "accepted so every process takes the same arguments; unused");
+  app.add_option("scene", scene, "scene file (default: the built-in scene); only its image size is used")
+      ->envname("TESSERA_SCENE");
   app.add_option("--endpoints", base, "endpoint base (ipc://DIR | tcp://HOST:PORT)")->envname("TESSERA_ENDPOINTS");
   app.add_option("--out", opt.out_dir, "folder for PNG frames (no window)")->envname("TESSERA_OUT");
   app.add_option("--window", opt.window, "auto | on | off")->envname("TESSERA_WINDOW")
@@ -21,6 +23,11 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (!bg.empty()) opt.background = std::array<double, 3>{bg[0], bg[1], bg[2]};
+    // Parses the scene only (its volume is never loaded): the image size bounds what
+    // peers may send to this stage.
+    Scene parsed = scene.empty() ? defaultScene() : loadScene(scene);
+    opt.width = parsed.width;
+    opt.height = parsed.height;
     opt.endpoints = makeEndpoints(base.empty() ? defaultEndpointBase() : base);
     zmq::context_t ctx(1);
     return display::runStage(opt, ctx, &installStopSignals());

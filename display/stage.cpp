@@ -21,7 +21,9 @@ double msSince(Clock::time_point t) { return std::chrono::duration<double, std::
 class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
-      : opt_(opt), link_(ctx, opt.endpoints, proto::Role::Display), pull_(makeSocket(ctx, zmq::socket_type::pull)) {
+      : opt_(opt), link_(ctx, opt.endpoints, proto::Role::Display),
+        pull_(makeSocket(ctx, zmq::socket_type::pull, maxPixelMessageBytes(opt.width, opt.height))),
+        waiting_budget_(kWaitingFrames * 4 * size_t(opt.width + kStripHeaderPixels) * size_t(opt.height)) {
     pull_.set(zmq::sockopt::rcvhwm, 0);  // bounded by the master's frame window
     pull_.bind(opt_.endpoints.bind(opt_.endpoints.display()));
   }
@@ -40,7 +42,8 @@ class Stage {
       if (items[1].revents & ZMQ_POLLIN) readStrips();
       presentReady();
       if (sink_ && pollInput()) return 0;
-      if (shutdown_ && !frames_.count(next_)) break;
+      auto next = frames_.find(next_);  // strips without FrameParams never hold the display up
+      if (shutdown_ && (next == frames_.end() || !next->second.params)) break;
     }
     spdlog::info("display done: frames={} strips_rejected={} dropped={}", presented_, rejected_, drops_.total());
     return 0;
@@ -63,8 +66,58 @@ class Stage {
         for (auto& [f, pend] : frames_) std::erase_if(pend.strips, [&](auto& kv) { return kv.second.epoch < epoch_; });
       }
       if (p.frame < next_) continue;
-      frames_[p.frame].params = std::move(p);
+      if (!newest_ || p.epoch > newest_->epoch || p.frame > newest_->frame) newest_ = p;
+      auto& pend = frames_[p.frame];
+      pend.params = std::move(p);
+      for (auto it = pend.strips.begin(); it != pend.strips.end();) {  // strips that came first
+        std::string why = checkMember(*pend.params, it->second);
+        if (!why.empty()) drops_.drop(it->first, why);
+        it = why.empty() ? std::next(it) : pend.strips.erase(it);
+      }
     }
+    if (!newest_) return;
+    for (auto it = frames_.upper_bound(newest_->frame + kAheadWithoutParams); it != frames_.end();)
+      it = it->second.params ? std::next(it) : dropWaiting(it, "strips waited too far ahead of the newest FrameParams");
+  }
+
+  static std::string checkMember(const proto::FrameParams& p, const proto::Strips& s) {
+    if (s.epoch != p.epoch) return "strips epoch differs from FrameParams";
+    for (const auto& r : p.regions)
+      if (r.compositor == s.compositor) return "";
+    return "strips from compositor " + std::to_string(s.compositor) + " that has no region in the frame";
+  }
+
+  // Strips that beat their FrameParams (the PUB-vs-PUSH race): accepted only a bounded
+  // number of frames ahead of the newest FrameParams, from members of its epoch, within a
+  // byte budget; nearer frames evict farther ones. "" when admitted.
+  std::string admitWaiting(const proto::Strips& s) {
+    if (newest_ && s.frame > newest_->frame + kAheadWithoutParams) return "strips for a frame too far ahead";
+    if (newest_ && s.epoch == newest_->epoch) {
+      if (auto why = checkMember(*newest_, s); !why.empty()) return why + " (waiting for its FrameParams)";
+    }
+    size_t held = waitingBytes();
+    while (held + s.stream.size() > waiting_budget_) {
+      auto far = frames_.end();
+      for (auto it = frames_.upper_bound(s.frame); it != frames_.end(); ++it)
+        if (!it->second.params) far = it;
+      if (far == frames_.end()) return "strips waiting for FrameParams would exceed the budget";
+      for (const auto& [c, st] : far->second.strips) held -= st.stream.size();
+      dropWaiting(far, "strips evicted while waiting for FrameParams: a nearer frame needed the room");
+    }
+    return "";
+  }
+
+  size_t waitingBytes() const {
+    size_t n = 0;
+    for (const auto& [f, pend] : frames_)
+      if (!pend.params)
+        for (const auto& [c, st] : pend.strips) n += st.stream.size();
+    return n;
+  }
+
+  std::map<uint64_t, Pending>::iterator dropWaiting(std::map<uint64_t, Pending>::iterator it, const std::string& why) {
+    for (const auto& [c, st] : it->second.strips) drops_.drop(c, "frame " + std::to_string(it->first) + ": " + why);
+    return frames_.erase(it);
   }
 
   void readStrips() {
@@ -82,17 +135,17 @@ class Stage {
         drops_.drop(s->compositor, "strips for a frame already shown");
         continue;
       }
-      if (frames_.size() > 64 && !frames_.count(s->frame)) {
-        drops_.drop(s->compositor, "strips for a frame too far ahead");
+      auto it = frames_.find(s->frame);
+      std::string why;
+      if (it != frames_.end() && it->second.strips.count(s->compositor)) why = "duplicate strips";
+      else if (it != frames_.end() && it->second.params) why = checkMember(*it->second.params, *s);
+      else why = admitWaiting(*s);
+      if (!why.empty()) {
+        drops_.drop(s->compositor, why);
         continue;
       }
       bytes_in_ += m.size();
-      auto& pend = frames_[s->frame];
-      if (pend.strips.count(s->compositor)) {
-        drops_.drop(s->compositor, "duplicate strips");
-        continue;
-      }
-      pend.strips.emplace(s->compositor, std::move(*s));
+      frames_[s->frame].strips.emplace(s->compositor, std::move(*s));
     }
   }
 
@@ -186,7 +239,15 @@ class Stage {
   StageLink link_;
   zmq::socket_t pull_;
   std::unique_ptr<Sink> sink_;
+  // Frames with FrameParams are bounded by the master's window; strips by their regions.
   std::map<uint64_t, Pending> frames_;
+  // The master's --window is at most 64 frames in flight: no real strips are further ahead.
+  static constexpr uint64_t kAheadWithoutParams = 64;
+  // Strips waiting for FrameParams: at most this many whole frames of strips (every pixel
+  // once at 4 bytes, plus 2 header pixels per row); the race needs about one.
+  static constexpr size_t kWaitingFrames = 8;
+  std::optional<proto::FrameParams> newest_;
+  size_t waiting_budget_;
   uint64_t next_ = 0, presented_ = 0, rejected_ = 0, bytes_in_ = 0;
   uint32_t epoch_ = 0;
   bool shutdown_ = false;

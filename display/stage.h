@@ -18,6 +18,8 @@ struct StageOptions {
   std::string out_dir = "out";  // PNG frames when there is no window
   std::string window = "auto";  // auto | on | off
   std::optional<std::array<double, 3>> background;  // PNG: composite over this colour
+  // The scene's image size (every process loads the same scene): bounds what peers may send.
+  int width = 512, height = 512;
 };
 
 int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);

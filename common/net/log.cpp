@@ -16,14 +16,39 @@ std::shared_ptr<spdlog::logger> setupLogging(const std::string& name) {
   return logger;
 }
 
+DropCounter::~DropCounter() { summarise(); }
+
 void DropCounter::drop(uint32_t sender, const std::string& reason) {
   ++total_;
-  int& n = logged_[sender];
-  if (n < kLoggedPerSender) {
+  auto now = std::chrono::steady_clock::now();
+  if (now - interval_start_ >= kInterval) {
+    summarise();
+    interval_start_ = now;
+    lines_ = 0;
+  }
+  auto it = logged_.find(sender);
+  if (it == logged_.end() && logged_.size() < kSendersTracked) it = logged_.emplace(sender, 0).first;
+  const bool sender_quiet = it != logged_.end() && it->second >= kLoggedPerSender;
+  if (!sender_quiet && lines_ < kLinesPerInterval) {
+    ++lines_;
+    const bool last = it != logged_.end() && ++it->second == kLoggedPerSender;
     spdlog::warn("dropped message sender={} reason=\"{}\" dropped_total={}{}",
                  sender == ~0u ? std::string("?") : std::to_string(sender), reason, total_,
-                 ++n == kLoggedPerSender ? " (further drops from this sender are counted only)" : "");
+                 last ? " (further drops from this sender are counted, summarised only)" : "");
+    return;
   }
+  ++unlogged_;
+  if (unlogged_reasons_.count(reason) || unlogged_reasons_.size() < kReasonsSummarised) ++unlogged_reasons_[reason];
+  else ++unlogged_reasons_["(other reasons)"];
+}
+
+void DropCounter::summarise() {
+  if (!unlogged_) return;
+  std::string reasons;
+  for (const auto& [reason, n] : unlogged_reasons_) reasons += (reasons.empty() ? "\"" : ", \"") + reason + "\" x" + std::to_string(n);
+  spdlog::warn("{} further drops not logged: reasons {} dropped_total={}", unlogged_, reasons, total_);
+  unlogged_ = 0;
+  unlogged_reasons_.clear();
 }
 
 }  // namespace tessera

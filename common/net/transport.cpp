@@ -1,5 +1,7 @@
 #include "common/net/transport.h"
 
+#include <algorithm>
+
 namespace tessera {
 
 bool sendBytes(zmq::socket_t& s, std::vector<std::byte>&& bytes, bool more, bool dontwait) {
@@ -25,12 +27,18 @@ void pollFor(zmq::pollitem_t* items, size_t n, std::chrono::milliseconds timeout
   }
 }
 
-zmq::socket_t makeSocket(zmq::context_t& ctx, zmq::socket_type type) {
+zmq::socket_t makeSocket(zmq::context_t& ctx, zmq::socket_type type, int64_t max_message_bytes) {
   zmq::socket_t s(ctx, type);
+  s.set(zmq::sockopt::maxmsgsize, max_message_bytes);
   s.set(zmq::sockopt::linger, 0);
   s.set(zmq::sockopt::sndhwm, 64);
   s.set(zmq::sockopt::rcvhwm, 64);
   return s;
+}
+
+int64_t maxPixelMessageBytes(int width, int height) {
+  const int64_t pixels = int64_t(std::max(width, 1)) * std::max(height, 1);
+  return 34 * pixels + (64 << 10);
 }
 
 }  // namespace tessera

@@ -4,6 +4,7 @@
 #pragma once
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -24,7 +25,19 @@ inline std::span<const std::byte> view(const zmq::message_t& m) {
 void pollFor(zmq::pollitem_t* items, size_t n, std::chrono::milliseconds timeout);
 
 // A socket with the options every Tessera socket wants: no linger at close, and bounded
-// queues so no queue grows without bound.
-zmq::socket_t makeSocket(zmq::context_t& ctx, zmq::socket_type type);
+// queues so no queue grows without bound. An input socket also passes the largest message
+// it can legitimately receive: ZeroMQ then refuses longer ones while reading their size
+// (it drops that peer's connection, so they are never seen nor counted by the stage).
+// -1 = no limit.
+zmq::socket_t makeSocket(zmq::context_t& ctx, zmq::socket_type type, int64_t max_message_bytes = -1);
+
+// The largest pixel message (Piece, Framebuffer, Strips) for a width x height image.
+// Largest raw payload: a Piece of the whole image in rgba32f, 16 bytes a pixel. Rgba8
+// framebuffers and strip streams (4 bytes a pixel) add 2 header pixels per strip row and,
+// sort-first, shelf-packing gaps; doubling the rgba32f size covers them with room to
+// spare (8x the image's pixels at rgba8). Codecs expand incompressible data by at most
+// 1/16 (LZO: n + n/16 + 67; LZ4 and zstd less); 64 KiB covers the header and metadata.
+// So: 32*w*h + 2*w*h + 64 KiB (about 8.6 MiB for 512 x 512).
+int64_t maxPixelMessageBytes(int width, int height);
 
 }  // namespace tessera

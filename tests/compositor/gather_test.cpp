@@ -107,9 +107,56 @@ TEST(Gather, ResultIsIndependentOfArrivalOrder) {
 }
 
 TEST(Gather, PendingFramesAreBounded) {
+  const size_t one = piece(0, 0).pixels.size();
+  Gather g(0, 10 * one);
+  for (uint64_t f = 0; f < 3 * Gather::kAheadWithoutParams; ++f) g.addPiece(piece(f, 0));
+  EXPECT_LE(g.waitingBytes(), 10 * one);
+  EXPECT_LE(g.pending(), 10u);
+}
+
+// Defect: well-formed pieces for many future frames evicted the real pending frames.
+TEST(Gather, FutureJunkNeverEvictsFramesWithParams) {
   Gather g(0);
-  for (uint64_t f = 0; f < 3 * Gather::kMaxPending; ++f) g.addPiece(piece(f, 0));
-  EXPECT_LE(g.pending(), Gather::kMaxPending);
+  ASSERT_EQ(g.addParams(params(0, 2)), "");
+  ASSERT_EQ(g.addPiece(piece(0, 0)), "");
+  for (uint64_t f = 1; f <= 3 * Gather::kAheadWithoutParams; ++f) g.addPiece(piece(1000 + f, 0));
+  ASSERT_EQ(g.addPiece(piece(0, 1)), "");
+  auto r = g.pop();
+  ASSERT_TRUE(r) << "the real frame was evicted";
+  EXPECT_EQ(r->params.frame, 0u);
+}
+
+TEST(Gather, PartsWithoutParamsAreBoundedAheadOfNewestParams) {
+  Gather g(0);
+  ASSERT_EQ(g.addParams(params(5, 2)), "");
+  EXPECT_EQ(g.addPiece(piece(6, 0)), "") << "a piece may beat its FrameParams";
+  EXPECT_EQ(g.addPiece(piece(5 + Gather::kAheadWithoutParams, 0)), "");
+  EXPECT_NE(g.addPiece(piece(6 + Gather::kAheadWithoutParams, 0)), "") << "too far ahead";
+  EXPECT_NE(g.addPiece(piece(1000000, 0)), "");
+  EXPECT_EQ(g.addParams(params(6, 2)), "");
+  EXPECT_EQ(g.addPiece(piece(6, 1)), "");
+  auto r = g.pop();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->params.frame, 6u);
+}
+
+TEST(Gather, PartsWithoutParamsAreBoundedByMembershipAndBytes) {
+  const size_t one = piece(0, 0).pixels.size();
+  Gather g(0, 3 * one);
+  ASSERT_EQ(g.addParams(params(0, 2)), "");
+  EXPECT_NE(g.addPiece(piece(1, 2)), "") << "brick beyond the newest FrameParams' bricks";
+  EXPECT_NE(g.addPiece(piece(1, 7)), "");
+  EXPECT_EQ(g.addPiece(piece(3, 0)), "");
+  EXPECT_EQ(g.addPiece(piece(3, 1)), "");
+  EXPECT_EQ(g.addPiece(piece(4, 0)), "");
+  EXPECT_EQ(g.waitingBytes(), 3 * one);
+  EXPECT_NE(g.addPiece(piece(5, 0)), "") << "over the byte budget";
+  // A nearer frame makes room by evicting the farthest waiting parts (counted as drops).
+  EXPECT_EQ(g.addPiece(piece(1, 0)), "");
+  EXPECT_EQ(g.waitingBytes(), 3 * one);
+  EXPECT_EQ(g.takeLateDrops().size(), 1u);
+  // A newer epoch's parts may name bricks the known membership lacks: the budget bounds them.
+  EXPECT_EQ(g.addPiece(piece(2, 5, 1)), "");
 }
 
 }  // namespace
