@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/scene.h"
 #include "common/net/stop.h"
@@ -34,6 +35,7 @@ int main(int argc, char** argv) {
     opt.height = parsed.height;
     opt.endpoints = makeEndpoints(base.empty() ? defaultEndpointBase() : base);
     zmq::context_t ctx(1);
+    setupCurve(ctx, opt.endpoints.base);  // on when endpoints leave this host
     return compositor::runStage(opt, ctx, &installStopSignals());
   } catch (const std::exception& e) {
     log->error("{}", e.what());

@@ -4,6 +4,7 @@
 #include <cstring>
 #include <map>
 
+#include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/net/stage_link.h"
 #include "common/wire/strips.h"
@@ -32,7 +33,7 @@ class Stage {
     gather_ = Gather(rank, Gather::waitingBudget(opt_.width, opt_.height));
     std::string bind = opt_.endpoints.compositorBind(rank);
     pull_.set(zmq::sockopt::rcvhwm, 0);  // pieces are bounded by the master's frame window
-    pull_.bind(bind);
+    bindTo(pull_, bind);
     spdlog::info("compositor rank={} joined, pieces at {}", rank, bind);
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}, {pull_.handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
@@ -142,7 +143,7 @@ class Stage {
     if (endpoint != display_endpoint_) {
       display_ = makeSocket(ctx_, zmq::socket_type::push);
       display_.set(zmq::sockopt::linger, 1000);
-      display_.connect(endpoint);
+      connectTo(display_, endpoint);
       display_endpoint_ = endpoint;
     }
     return display_;

@@ -1,6 +1,7 @@
 // tessera-display: shows the farm's frames in a window, or writes them as PNG files.
 #include <CLI/CLI.hpp>
 
+#include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/scene.h"
 #include "common/net/stop.h"
@@ -30,6 +31,7 @@ int main(int argc, char** argv) {
     opt.height = parsed.height;
     opt.endpoints = makeEndpoints(base.empty() ? defaultEndpointBase() : base);
     zmq::context_t ctx(1);
+    setupCurve(ctx, opt.endpoints.base);  // on when endpoints leave this host
     return display::runStage(opt, ctx, &installStopSignals());
   } catch (const std::exception& e) {
     log->error("{}", e.what());

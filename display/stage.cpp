@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/net/stage_link.h"
 #include "common/wire/strips.h"
@@ -25,7 +26,7 @@ class Stage {
         pull_(makeSocket(ctx, zmq::socket_type::pull, maxPixelMessageBytes(opt.width, opt.height))),
         waiting_budget_(kWaitingFrames * 4 * size_t(opt.width + kStripHeaderPixels) * size_t(opt.height)) {
     pull_.set(zmq::sockopt::rcvhwm, 0);  // bounded by the master's frame window
-    pull_.bind(opt_.endpoints.bind(opt_.endpoints.display()));
+    bindTo(pull_, opt_.endpoints.bind(opt_.endpoints.display()));
   }
 
   int run(const std::atomic<bool>* stop) {

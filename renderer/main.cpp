@@ -1,6 +1,7 @@
 // tessera-renderer: one renderer stage of the farm (ranks come from the master).
 #include <CLI/CLI.hpp>
 
+#include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/net/stop.h"
 #include "renderer/stage.h"
@@ -24,6 +25,7 @@ int main(int argc, char** argv) {
     opt.scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
     opt.endpoints = makeEndpoints(base.empty() ? defaultEndpointBase() : base);
     zmq::context_t ctx(1);
+    setupCurve(ctx, opt.endpoints.base);  // on when endpoints leave this host
     return renderer::runStage(opt, ctx, &installStopSignals());
   } catch (const std::exception& e) {
     log->error("{}", e.what());

@@ -5,6 +5,7 @@
 #include <map>
 #include <optional>
 
+#include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/wire/pixels.h"
 #include "common/wire/protocol.h"
@@ -147,7 +148,7 @@ class Stage {
     if (it == pushes_.end()) {
       zmq::socket_t s = makeSocket(ctx_, zmq::socket_type::push);
       s.set(zmq::sockopt::linger, 1000);  // let the last pieces leave at shutdown
-      s.connect(endpoint);
+      connectTo(s, endpoint);
       it = pushes_.emplace(endpoint, std::move(s)).first;
     }
     return it->second;

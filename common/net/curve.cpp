@@ -2,8 +2,12 @@
 #include "common/net/curve.h"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <array>
+#include <cerrno>
+#include <cstdlib>
+#include <memory>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -31,13 +35,15 @@ std::string readKeyFile(const std::filesystem::path& p) {
   return key;
 }
 
-void writeFile(const std::filesystem::path& p, const std::string& text, mode_t mode) {
+void writeText(const std::filesystem::path& p, const std::string& text, mode_t mode) {
   {
     std::ofstream out(p, std::ios::trunc);
     if (!out || !(out << text << '\n')) throw std::runtime_error(p.string() + ": cannot write the farm key");
   }
   if (chmod(p.c_str(), mode) != 0) throw std::runtime_error(p.string() + ": cannot set its permissions");
 }
+
+std::unique_ptr<CurveAuth> g_curve;  // set once by a process's main (setupCurve)
 
 }  // namespace
 
@@ -48,25 +54,35 @@ FarmKeys generateFarmKeys() {
   return {pub, sec};
 }
 
-void writeFarmKeys(const std::string& dir, const FarmKeys& keys) {
-  std::filesystem::create_directories(dir);
-  writeFile(std::filesystem::path(dir) / "farm.key", keys.secret_z85, 0600);
-  writeFile(std::filesystem::path(dir) / "farm.pub", keys.public_z85, 0644);
+bool writeFarmKeys(const std::string& dir, const FarmKeys& keys) {
+  namespace fs = std::filesystem;
+  fs::create_directories(dir);
+  const fs::path key = fs::path(dir) / "farm.key", tmp = fs::path(dir) / (".farm.key." + std::to_string(getpid()));
+  writeText(tmp, keys.secret_z85, 0600);
+  const bool created = link(tmp.c_str(), key.c_str()) == 0;  // atomic: exactly one writer wins
+  const int err = errno;
+  fs::remove(tmp);
+  if (!created && err != EEXIST) throw std::runtime_error(key.string() + ": cannot create the farm key");
+  if (created) writeText(fs::path(dir) / "farm.pub", keys.public_z85, 0644);
+  return created;
 }
 
 FarmKeys readFarmKeys(const std::string& dir) {
-  FarmKeys k{readKeyFile(std::filesystem::path(dir) / "farm.pub"), readKeyFile(std::filesystem::path(dir) / "farm.key")};
+  namespace fs = std::filesystem;
+  FarmKeys k;
+  k.secret_z85 = readKeyFile(fs::path(dir) / "farm.key");
   char derived[41] = {};
-  if (zmq_curve_public(derived, k.secret_z85.c_str()) != 0 || k.public_z85 != derived)
+  if (zmq_curve_public(derived, k.secret_z85.c_str()) != 0)
+    throw std::runtime_error(dir + "/farm.key: not a CURVE secret key");
+  k.public_z85 = derived;
+  if (fs::exists(fs::path(dir) / "farm.pub") && readKeyFile(fs::path(dir) / "farm.pub") != k.public_z85)
     throw std::runtime_error(dir + "/farm.pub does not belong to " + dir + "/farm.key");
   return k;
 }
 
 FarmKeys loadOrCreateFarmKeys(const std::string& dir) {
-  if (!std::filesystem::exists(std::filesystem::path(dir) / "farm.key")) {
-    writeFarmKeys(dir, generateFarmKeys());
+  if (!std::filesystem::exists(std::filesystem::path(dir) / "farm.key") && writeFarmKeys(dir, generateFarmKeys()))
     spdlog::info("created farm keys in {}/ (farm.key is the secret every process of the farm needs)", dir);
-  }
   return readFarmKeys(dir);
 }
 
@@ -87,33 +103,40 @@ CurveAuth::CurveAuth(zmq::context_t& ctx, FarmKeys keys) : ctx_(ctx), keys_(std:
     std::array<uint8_t, 32> farm{};
     zmq_z85_decode(farm.data(), keys_.public_z85.c_str());
     zmq::pollitem_t items[] = {{s.handle(), 0, ZMQ_POLLIN, 0}};
-    while (!quit_) {
-      pollFor(items, 1, std::chrono::milliseconds(100));
-      if (!(items[0].revents & ZMQ_POLLIN)) continue;
-      // Request: version, request id, domain, address, identity, mechanism, credentials...
-      std::vector<zmq::message_t> frames;
-      do {
-        frames.emplace_back();
-        if (!s.recv(frames.back(), zmq::recv_flags::dontwait)) break;
-      } while (frames.back().more() && frames.size() < 16);
-      const bool curve = frames.size() >= 7 && frames[5].to_string() == "CURVE";
-      const bool member = curve && frames[6].size() == farm.size() &&
-                          std::equal(farm.begin(), farm.end(), static_cast<const uint8_t*>(frames[6].data()));
-      if (!member) {
-        uint64_t n = ++refused_;
-        if (n <= 3 || (n & (n - 1)) == 0)
-          spdlog::warn("refused peer address={} reason=\"{}\" refused_total={}",
-                       frames.size() > 3 ? frames[3].to_string() : "?", curve ? "not the farm key" : "not CURVE", n);
-      }
-      const std::string id = frames.size() > 1 ? frames[1].to_string() : "";
-      s.send(zmq::str_buffer("1.0"), zmq::send_flags::sndmore);
-      s.send(zmq::buffer(id), zmq::send_flags::sndmore);
-      s.send(zmq::buffer(std::string(member ? "200" : "400")), zmq::send_flags::sndmore);
-      s.send(zmq::buffer(std::string(member ? "OK" : "not a member of this farm")), zmq::send_flags::sndmore);
-      s.send(zmq::str_buffer(""), zmq::send_flags::sndmore);  // user id
-      s.send(zmq::str_buffer(""), zmq::send_flags::none);     // metadata
+    try {
+      serveRequests(s, farm, items);
+    } catch (const zmq::error_t&) {  // the context is terminating: the process is ending
     }
   });
+}
+
+void CurveAuth::serveRequests(zmq::socket_t& s, const std::array<uint8_t, 32>& farm, zmq::pollitem_t* items) {
+  while (!quit_) {
+    pollFor(items, 1, std::chrono::milliseconds(100));
+    if (!(items[0].revents & ZMQ_POLLIN)) continue;
+    // Request: version, request id, domain, address, identity, mechanism, credentials...
+    std::vector<zmq::message_t> frames;
+    do {
+      frames.emplace_back();
+      if (!s.recv(frames.back(), zmq::recv_flags::dontwait)) break;
+    } while (frames.back().more() && frames.size() < 16);
+    const bool curve = frames.size() >= 7 && frames[5].to_string() == "CURVE";
+    const bool member = curve && frames[6].size() == farm.size() &&
+                        std::equal(farm.begin(), farm.end(), static_cast<const uint8_t*>(frames[6].data()));
+    if (!member) {
+      uint64_t n = ++refused_;
+      if (n <= 3 || (n & (n - 1)) == 0)
+        spdlog::warn("refused peer address={} reason=\"{}\" refused_total={}",
+                     frames.size() > 3 ? frames[3].to_string() : "?", curve ? "not the farm key" : "not CURVE", n);
+    }
+    const std::string id = frames.size() > 1 ? frames[1].to_string() : "";
+    s.send(zmq::str_buffer("1.0"), zmq::send_flags::sndmore);
+    s.send(zmq::buffer(id), zmq::send_flags::sndmore);
+    s.send(zmq::buffer(std::string(member ? "200" : "400")), zmq::send_flags::sndmore);
+    s.send(zmq::buffer(std::string(member ? "OK" : "not a member of this farm")), zmq::send_flags::sndmore);
+    s.send(zmq::str_buffer(""), zmq::send_flags::sndmore);  // user id
+    s.send(zmq::str_buffer(""), zmq::send_flags::none);     // metadata
+  }
 }
 
 CurveAuth::~CurveAuth() {
@@ -132,5 +155,38 @@ void CurveAuth::makeClient(zmq::socket_t& s) const {
   s.set(zmq::sockopt::curve_publickey, keys_.public_z85);
   s.set(zmq::sockopt::curve_secretkey, keys_.secret_z85);
 }
+
+bool setupCurve(zmq::context_t& ctx, const std::string& base_endpoint) {
+  const char* mode_env = std::getenv("TESSERA_CURVE");
+  const std::string mode = mode_env && *mode_env ? mode_env : "auto";
+  if (mode != "auto" && mode != "on" && mode != "off")
+    throw std::invalid_argument("TESSERA_CURVE=" + mode + ": expected auto, on or off");
+  const char* bind_host = std::getenv("TESSERA_BIND_HOST");
+  const bool leaves = endpointLeavesHost(base_endpoint) ||
+                      (bind_host && *bind_host && endpointLeavesHost("tcp://" + std::string(bind_host) + ":1"));
+  if (mode == "off" || (mode == "auto" && !leaves)) {
+    if (leaves) spdlog::warn("TESSERA_CURVE=off: traffic to {} leaves this host unauthenticated and unencrypted", base_endpoint);
+    return false;
+  }
+  const char* keys_env = std::getenv("TESSERA_KEYS");
+  const std::string dir = keys_env && *keys_env ? keys_env : "keys";
+  g_curve = std::make_unique<CurveAuth>(ctx, loadOrCreateFarmKeys(dir));
+  spdlog::info("CURVE on: peers must hold the farm key in {}/", dir);
+  return true;
+}
+
+void bindTo(zmq::socket_t& s, const std::string& endpoint) {
+  if (g_curve && endpoint.rfind("tcp://", 0) == 0) g_curve->makeServer(s);
+  s.bind(endpoint);
+}
+
+void connectTo(zmq::socket_t& s, const std::string& endpoint) {
+  if (g_curve && endpoint.rfind("tcp://", 0) == 0) g_curve->makeClient(s);
+  s.connect(endpoint);
+}
+
+uint64_t curveRefused() { return g_curve ? g_curve->refused() : 0; }
+
+void resetCurve() { g_curve.reset(); }
 
 }  // namespace tessera

@@ -6,6 +6,7 @@
 // admits only clients that proved the farm key; everyone else is refused and counted.
 // CurveAuth is thread-safe once constructed; one per zmq::context_t.
 #pragma once
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <string>
@@ -20,8 +21,11 @@ struct FarmKeys {
 };
 
 FarmKeys generateFarmKeys();
-// <dir>/farm.pub and <dir>/farm.key (the secret, mode 0600). Throws naming the file.
-void writeFarmKeys(const std::string& dir, const FarmKeys& keys);
+// <dir>/farm.key (the secret, mode 0600) and <dir>/farm.pub. farm.key appears atomically, so
+// processes that start together agree on one key. Returns false (writing nothing) if the
+// folder already has a farm.key. Throws naming the file when it cannot write.
+bool writeFarmKeys(const std::string& dir, const FarmKeys& keys);
+// The keys from farm.key (the public key derives from it; farm.pub, if present, must match).
 // Throws std::runtime_error naming the file and what is wrong with it.
 FarmKeys readFarmKeys(const std::string& dir);
 // The folder's keys, created on first use (the first process to start writes them).
@@ -43,12 +47,25 @@ class CurveAuth {
   uint64_t refused() const { return refused_; }  // handshakes refused for a wrong key
 
  private:
-  void serve();
+  void serveRequests(zmq::socket_t& s, const std::array<uint8_t, 32>& farm, zmq::pollitem_t* items);
   zmq::context_t& ctx_;
   FarmKeys keys_;
   std::atomic<bool> quit_{false};
   std::atomic<uint64_t> refused_{0};
   std::thread zap_;
 };
+
+// Process-wide CURVE, decided once by a process's main: on when TESSERA_CURVE=on, or when it
+// is unset/auto and `base_endpoint` or TESSERA_BIND_HOST leaves the host; off with
+// TESSERA_CURVE=off (logged as a warning if traffic leaves the host). Keys come from the
+// folder TESSERA_KEYS (default ./keys), created there on first use. Returns whether it is on.
+bool setupCurve(zmq::context_t& ctx, const std::string& base_endpoint);
+// Bind / connect a socket, as a CURVE server / client when CURVE is on for this process.
+void bindTo(zmq::socket_t& s, const std::string& endpoint);
+void connectTo(zmq::socket_t& s, const std::string& endpoint);
+// Handshakes this process refused for a wrong key (0 when CURVE is off).
+uint64_t curveRefused();
+// Turns process-wide CURVE off again (tests that run several farms in one process).
+void resetCurve();
 
 }  // namespace tessera

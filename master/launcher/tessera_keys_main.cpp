@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
       std::printf("%s/farm.key exists and is valid; keeping it (--force replaces it)\n", dir.c_str());
       return 0;
     }
+    if (force) std::filesystem::remove(std::filesystem::path(dir) / "farm.key");
     tessera::writeFarmKeys(dir, tessera::generateFarmKeys());
     std::printf("wrote %s/farm.key (secret) and %s/farm.pub\n", dir.c_str(), dir.c_str());
     return 0;

@@ -78,6 +78,8 @@ TEST(Curve, KeysRoundTripThroughTheirFolderAndBadFilesAreNamed) {
   EXPECT_EQ(made.secret_z85, again.secret_z85) << "a second start must reuse the folder's keys";
   EXPECT_EQ(fs::status(dir / "farm.key").permissions() & fs::perms::others_read, fs::perms::none);
 
+  EXPECT_FALSE(writeFarmKeys(dir.string(), generateFarmKeys())) << "an existing farm.key was replaced";
+  EXPECT_EQ(readFarmKeys(dir.string()).secret_z85, made.secret_z85);
   std::ofstream(dir / "farm.pub") << generateFarmKeys().public_z85 << "\n";
   try {
     readFarmKeys(dir.string());
