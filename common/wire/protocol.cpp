@@ -112,6 +112,7 @@ const char* typeName(Type t) {
     case Type::Stats: return "Stats";
     case Type::Shutdown: return "Shutdown";
     case Type::Framebuffer: return "Framebuffer";
+    case Type::Roster: return "Roster";
   }
   return "unknown";
 }
@@ -222,6 +223,31 @@ std::vector<std::byte> encode(const Shutdown& m, uint32_t sender) {
 Result<Shutdown> decodeShutdown(std::span<const std::byte> msg) {
   return decodeStructured<Shutdown>(msg, Type::Shutdown,
                                     [](ByteReader& r, const Header&, Shutdown& m) { m.reason = r.str("reason"); });
+}
+
+std::vector<std::byte> encode(const Roster& m, uint32_t sender) {
+  return encodeStructured(Type::Roster, 0, sender, [&](ByteWriter& w) {
+    w.u32(m.epoch);
+    w.u32(static_cast<uint32_t>(m.members.size()));
+    for (const RosterEntry& e : m.members) {
+      w.u8(static_cast<uint8_t>(e.role));
+      w.u32(e.rank);
+      w.str(e.identity);
+    }
+  });
+}
+Result<Roster> decodeRoster(std::span<const std::byte> msg) {
+  return decodeStructured<Roster>(msg, Type::Roster, [](ByteReader& r, const Header&, Roster& m) {
+    m.epoch = r.u32("epoch");
+    m.members.resize(r.count("members", 1u << 16, 1 + 4 + 4));
+    for (RosterEntry& e : m.members) {
+      e.role = readRole(r);
+      e.rank = r.u32("members.rank");
+      e.identity = r.str("members.identity");
+      if (r.ok() && (e.identity.empty() || e.identity.size() > 255))
+        r.fail("members.identity: " + std::to_string(e.identity.size()) + " bytes, not 1..255 (a ZeroMQ routing id)");
+    }
+  });
 }
 
 // ---- per-frame reports ----------------------------------------------------------------

@@ -30,9 +30,10 @@ inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
 enum class Type : uint16_t {
-  Hello = 1, Welcome, FrameParams, Piece, Strips, FrameDone, Heartbeat, Input, Stats, Shutdown, Framebuffer
+  Hello = 1, Welcome, FrameParams, Piece, Strips, FrameDone, Heartbeat, Input, Stats, Shutdown, Framebuffer, Roster,
+  Last = Roster  // keep last: the decoder's range check derives from it
 };
-inline constexpr uint16_t kTypeCount = 11;
+inline constexpr uint16_t kTypeCount = static_cast<uint16_t>(Type::Last);
 const char* typeName(Type t);
 
 enum class Role : uint8_t { Renderer = 1, Compositor = 2, Display = 3 };
@@ -62,6 +63,18 @@ struct Welcome {                                                           // ma
 struct Heartbeat {                                                         // stage -> master
   Role role = Role::Renderer; uint32_t rank = 0;
   bool operator==(const Heartbeat&) const = default;
+};
+// Who may send on a stage's data socket: the data-connection routing ids of the members
+// (16 random bytes + 'd', see StageLink), sent privately over each stage's control
+// connection, never on the PUB socket, so a peer that did not join cannot learn them.
+struct RosterEntry {
+  Role role = Role::Renderer; uint32_t rank = 0; std::string identity;
+  bool operator==(const RosterEntry&) const = default;
+};
+struct Roster {                                                            // master -> compositor, display
+  uint32_t epoch = 0;
+  std::vector<RosterEntry> members;
+  bool operator==(const Roster&) const = default;
 };
 struct Shutdown {                                                          // master -> all
   std::string reason;
@@ -164,6 +177,7 @@ std::vector<std::byte> encode(const Hello&, uint32_t sender);
 std::vector<std::byte> encode(const Welcome&, uint32_t sender);
 std::vector<std::byte> encode(const Heartbeat&, uint32_t sender);
 std::vector<std::byte> encode(const Shutdown&, uint32_t sender);
+std::vector<std::byte> encode(const Roster&, uint32_t sender);
 std::vector<std::byte> encode(const FrameParams&, uint32_t sender);
 std::vector<std::byte> encode(const Piece&, uint32_t sender, Codec codec);
 std::vector<std::byte> encode(const Strips&, uint32_t sender, Codec codec);
@@ -178,6 +192,7 @@ Result<Hello> decodeHello(std::span<const std::byte> msg);
 Result<Welcome> decodeWelcome(std::span<const std::byte> msg);
 Result<Heartbeat> decodeHeartbeat(std::span<const std::byte> msg);
 Result<Shutdown> decodeShutdown(std::span<const std::byte> msg);
+Result<Roster> decodeRoster(std::span<const std::byte> msg);
 Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg);
 Result<Piece> decodePiece(std::span<const std::byte> msg);     // checks active within region, pixel count
 Result<Strips> decodeStrips(std::span<const std::byte> msg);

@@ -126,6 +126,8 @@ TEST(Protocol, EveryStructuredMessageRoundTrips) {
   expectRoundTrip(Welcome{Role::Display, 3}, encode(Welcome{Role::Display, 3}, 11), decodeWelcome, Type::Welcome);
   expectRoundTrip(Heartbeat{Role::Renderer, 9}, encode(Heartbeat{Role::Renderer, 9}, 11), decodeHeartbeat, Type::Heartbeat);
   expectRoundTrip(Shutdown{"master exiting"}, encode(Shutdown{"master exiting"}, 11), decodeShutdown, Type::Shutdown);
+  Roster roster{7, {{Role::Renderer, 0, std::string(16, '\x5a') + "d"}, {Role::Compositor, 3, "x"}}};
+  expectRoundTrip(roster, encode(roster, 11), decodeRoster, Type::Roster);
   FrameParams fp = sampleParams();
   expectRoundTrip(fp, encode(fp, 11), decodeFrameParams, Type::FrameParams);
   StageStats st{Role::Compositor, 2, 99, 4.5, 1.25, 4000000, 700000, 12345, {1, 2, 300, 400}, 6, {1.5, 0.25}, 7, 3, 99};
@@ -224,7 +226,7 @@ TEST(Protocol, GarbageBytesFailEveryDecoder) {
     int accepted = bool(decodeHello(g)) + bool(decodeWelcome(g)) + bool(decodeHeartbeat(g)) +
                    bool(decodeShutdown(g)) + bool(decodeFrameParams(g)) + bool(decodePiece(g)) +
                    bool(decodeStrips(g)) + bool(decodeStageStats(g)) + bool(decodeFrameDone(g)) +
-                   bool(decodeInput(g));
+                   bool(decodeInput(g)) + bool(decodeRoster(g));
     EXPECT_LE(accepted, 1);
   }
 }
@@ -334,6 +336,24 @@ TEST(Protocol, StructuredMessagesMustUseCodecNone) {
   auto r = decodeShutdown(m);
   ASSERT_FALSE(r);
   EXPECT_NE(r.error().find("codec"), std::string::npos) << r.error();
+}
+
+}  // namespace
+}  // namespace tessera::proto
+
+namespace tessera::proto {
+namespace {
+
+TEST(Protocol, RosterRejectsImpossibleRoutingIds) {
+  auto empty = encode(Roster{1, {{Role::Renderer, 0, ""}}}, 1);
+  auto r = decodeRoster(empty);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("members.identity"), std::string::npos) << r.error();
+  auto huge = encode(Roster{1, {{Role::Renderer, 0, std::string(256, 'a')}}}, 1);
+  EXPECT_FALSE(decodeRoster(huge));
+  auto truncated = encode(Roster{1, {{Role::Renderer, 0, "abc"}}}, 1);
+  truncated.resize(truncated.size() - 1);
+  EXPECT_FALSE(decodeRoster(truncated));
 }
 
 }  // namespace

@@ -70,6 +70,7 @@ void writeSeeds(const std::string& dir) {
   writeSeed(dir, n, encode(Welcome{Role::Renderer, 2}, 1));
   writeSeed(dir, n, encode(Heartbeat{Role::Display, 0}, 1));
   writeSeed(dir, n, encode(Shutdown{"bye"}, 1));
+  writeSeed(dir, n, encode(Roster{3, {{Role::Renderer, 1, "0123456789abcdefd"}}}, 1));
   FrameParams fp;
   fp.width = 64;
   fp.height = 32;
@@ -120,6 +121,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   check<Welcome>(msg, decodeWelcome, [&](const Welcome& v) { return encode(v, sender); });
   check<Heartbeat>(msg, decodeHeartbeat, [&](const Heartbeat& v) { return encode(v, sender); });
   check<Shutdown>(msg, decodeShutdown, [&](const Shutdown& v) { return encode(v, sender); });
+  check<Roster>(msg, decodeRoster, [&](const Roster& v) { return encode(v, sender); });
   check<FrameParams>(msg, decodeFrameParams, [&](const FrameParams& v) { return encode(v, sender); });
   check<Piece>(msg, decodePiece, [&](const Piece& v) { return encode(v, sender, codec); });
   check<Strips>(msg, decodeStrips, [&](const Strips& v) { return encode(v, sender, codec); });
