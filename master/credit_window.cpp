@@ -54,6 +54,11 @@ double CreditWindow::typicalMs() const {
   return v[v.size() / 2];
 }
 
+double CreditWindow::stallMs() const {
+  if (latencies_.empty()) return std::min(2000.0, deadlineMs() / 2);
+  return std::max(1000.0, 3 * typicalMs());
+}
+
 double CreditWindow::deadlineMs() const {
   if (latencies_.empty()) return deadline_.start_s * 1000;
   return std::max(deadline_.floor_s * 1000, deadline_.factor * typicalMs());

@@ -59,6 +59,9 @@ class CreditWindow {
   double deadlineMs() const;
   // A typical frame time (the median latency; the deadline's start value before any).
   double typicalMs() const;
+  // How long the oldest frame may wait before the master says who it waits for: several
+  // frame times (before any frame completed, well inside the start deadline).
+  double stallMs() const;
 
  private:
   int in_flight_;

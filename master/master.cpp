@@ -4,6 +4,9 @@
 #include <memory>
 #include <thread>
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include "common/net/log.h"
 #include "common/net/transport.h"
 #include "master/interaction.h"
@@ -51,13 +54,15 @@ class Master {
     plan_->reassign(workers());
     started_ = true;
     auto last_tick = Clock::now();
-    while (!(stop && *stop)) {
+    while (!(stop && *stop) && !display_lost_) {
       issueFrames();
       if (finished()) break;
       pollControl(50);
       if (msSince(last_tick) > 250) {
         probe();  // lets late joiners (spares) join
         checkHeartbeats();
+        warnIfStalled();
+        checkDeadline();
         last_tick = Clock::now();
       }
       metrics_.flushOlderThan(Clock::now() - std::chrono::milliseconds(500));
@@ -65,8 +70,9 @@ class Master {
     // Stats travel apart from FrameDone: give the last frames' reports a moment to land.
     for (auto t = Clock::now(); metrics_.pending() > 0 && msSince(t) < 1000;) pollControl(20);
     metrics_.flushAll();
-    shutdown(stop && *stop ? "stopped" : "all frames done");
-    return 0;
+    shutdown(display_lost_ ? "display lost" : stop && *stop ? "stopped" : "all frames done");
+    // Interactive runs end when the display goes; a fixed run without it is a failure.
+    return display_lost_ && total_frames_ != 0 ? 1 : 0;
   }
 
  private:
@@ -110,7 +116,67 @@ class Master {
     for (const Member* m : lost)
       spdlog::warn("{} {} (pid {}) lost: no heartbeat for {:.1f} s; reassigning its work", roleName(m->role),
                    m->rank, m->pid, msSince(m->last_seen) / 1000);
-    if (!lost.empty()) membershipChanged();
+    if (!lost.empty()) afterLoss();
+  }
+
+  // Frames go to one display; nobody else holds its half-routed frames, so its loss ends the run.
+  void afterLoss() {
+    if (members_.count(Role::Display) == 0) {
+      display_lost_ = true;
+      spdlog::error("the display is lost: frames cannot be completed without it; stopping ({})",
+                    total_frames_ == 0 ? "interactive run ends" : "run incomplete");
+      return;
+    }
+    membershipChanged();
+  }
+
+  void readmit(const Member& m) {
+    spdlog::info("{} {} (pid {}) heard from again: re-admitted", roleName(m.role), m.rank, m.pid);
+    if (started_) membershipChanged();
+  }
+
+  // Who the oldest frame still waits for, e.g. "stats from renderer 1 (pid 1234) and strips
+  // from compositor 0 (pid 99)"; `culprit` is the first of them.
+  std::string waitingFor(uint64_t frame, const Member** culprit) const {
+    auto w = window_.waiting(frame);
+    std::vector<std::string> parts;
+    *culprit = nullptr;
+    auto name = [&](Role role, uint32_t rank, const char* what) {
+      const Member* m = members_.find(role, rank);
+      if (!*culprit) *culprit = m;
+      return fmt::format("{} {} {} (pid {})", what, roleName(role), rank, m ? m->pid : 0);
+    };
+    for (uint32_t r : w.renderers) parts.push_back(name(Role::Renderer, r, "stats from"));
+    for (uint32_t c : w.compositors) parts.push_back(name(Role::Compositor, c, "strips from"));
+    if (w.display) {
+      const Member* d = members_.display();
+      if (d) parts.push_back(name(Role::Display, d->rank, "FrameDone from"));
+    }
+    return fmt::format("{}", fmt::join(parts, " and "));
+  }
+
+  void warnIfStalled() {
+    auto oldest = window_.oldest(Clock::now());
+    if (!oldest || oldest->second < window_.stallMs() || msSince(last_stall_warning_) < 2000) return;
+    last_stall_warning_ = Clock::now();
+    const Member* culprit = nullptr;
+    spdlog::warn("frame={} waited_ms={:.0f} deadline_ms={:.0f} epoch={}: frame {} waits for {}", oldest->first,
+                 oldest->second, window_.deadlineMs(), members_.epoch(), oldest->first,
+                 waitingFor(oldest->first, &culprit));
+  }
+
+  // A frame past its deadline: the first stage that has not delivered for it is lost (its
+  // heartbeat may be fine: a stage can be alive and useless), its work goes to the others.
+  void checkDeadline() {
+    auto oldest = window_.oldest(Clock::now());
+    if (!oldest || oldest->second < window_.deadlineMs()) return;
+    const Member* culprit = nullptr;
+    std::string who = waitingFor(oldest->first, &culprit);
+    if (!culprit || !culprit->alive) return;  // already handled: frames are re-issued when it changes
+    spdlog::warn("frame={} missed its deadline of {:.0f} ms waiting for {}: {} {} (pid {}) lost; reassigning its work",
+                 oldest->first, window_.deadlineMs(), who, roleName(culprit->role), culprit->rank, culprit->pid);
+    members_.missedDeadline(*const_cast<Member*>(culprit), Clock::now());
+    afterLoss();
   }
 
   Workers workers() const {
@@ -196,9 +262,11 @@ class Master {
         continue;
       }
       (void)ctl_.recv(body, zmq::recv_flags::none);
-      while (body.more()) {  // a peer sent extra frames: keep only the first
+      // A peer sent extra frames: keep only the first (a multi-part message arrives whole).
+      for (bool more = body.more(); more;) {
         zmq::message_t extra;
-        (void)ctl_.recv(extra, zmq::recv_flags::none);
+        if (!ctl_.recv(extra, zmq::recv_flags::dontwait)) break;
+        more = extra.more();
       }
       handle(id.to_string(), body);
     }
@@ -206,40 +274,54 @@ class Master {
 
   void handle(const std::string& identity, const zmq::message_t& body) {
     auto header = proto::decodeHeader(view(body));
-    if (!header) return drops_.drop(~0u, header.error());
+    Member* from = members_.byIdentity(identity);
+    const uint32_t key = from ? from->id : ~0u;  // drops are logged per connection, not per claimed rank
+    if (!header) return drops_.drop(key, header.error());
+    if (header->type == proto::Type::Hello) {
+      auto h = proto::decodeHello(view(body));
+      if (!h) return drops_.drop(key, h.error());
+      return onHello(identity, *h);
+    }
+    // Everything else only from a connection that joined as a member.
+    if (!from) return refuse(std::string("unknown peer sent ") + proto::typeName(header->type));
+    if (members_.heard(*from, Clock::now())) readmit(*from);
+    const bool control = from->identity == identity;
     switch (header->type) {
-      case proto::Type::Hello: {
-        auto h = proto::decodeHello(view(body));
-        if (!h) return drops_.drop(header->sender, h.error());
-        return onHello(identity, *h);
-      }
       case proto::Type::Heartbeat: {
         auto h = proto::decodeHeartbeat(view(body));
-        if (!h) return drops_.drop(header->sender, h.error());
-        if (const Member* m = members_.find(h->role, h->rank))  // own socket: no identity match
-          const_cast<Member*>(m)->last_seen = Clock::now();
+        if (!h) return drops_.drop(key, h.error());
+        if (h->role != from->role || h->rank != from->rank) return drops_.drop(key, "Heartbeat for another member");
         return;
       }
       case proto::Type::Stats: {
         auto s = proto::decodeStageStats(view(body));
-        if (!s) return drops_.drop(header->sender, s.error());
-        if (Member* m = members_.byIdentity(identity)) m->last_seen = Clock::now();
+        if (!s) return drops_.drop(key, s.error());
+        if (!control || s->role != from->role || s->rank != from->rank)
+          return drops_.drop(key, "Stats claiming another member");
         return onStats(*s);
       }
       case proto::Type::FrameDone: {
         auto d = proto::decodeFrameDone(view(body));
-        if (!d) return drops_.drop(header->sender, d.error());
-        if (Member* m = members_.byIdentity(identity)) m->last_seen = Clock::now();
-        return onFrameDone(*d, header->sender);
+        if (!d) return drops_.drop(key, d.error());
+        if (!control || from != members_.display()) return drops_.drop(key, "FrameDone not from the display");
+        return onFrameDone(*d, key);
       }
       case proto::Type::Input: {
         auto in = proto::decodeInput(view(body));
-        if (!in) return drops_.drop(header->sender, in.error());
-        return onInput(*in);
+        if (!in) return drops_.drop(key, in.error());
+        if (!control || from->role != Role::Display) return drops_.drop(key, "Input not from a display");
+        // A fixed-length run renders the orbit it was asked for: input would change every later frame.
+        if (total_frames_ != 0) return drops_.drop(key, "Input refused: not an interactive run (frames > 0)");
+        return onInput(*in, key);
       }
       default:
-        return drops_.drop(header->sender, std::string("unexpected ") + proto::typeName(header->type));
+        return drops_.drop(key, std::string("unexpected ") + proto::typeName(header->type));
     }
+  }
+
+  void refuse(const std::string& why) {
+    metrics_.refused();
+    drops_.drop(~0u, why);
   }
 
   void onStats(const proto::StageStats& s) {
@@ -248,18 +330,18 @@ class Master {
     metrics_.stats(s);
   }
 
-  void onFrameDone(const proto::FrameDone& d, uint32_t sender) {
+  void onFrameDone(const proto::FrameDone& d, uint32_t key) {
     auto latency = window_.done(d.frame, Clock::now());
-    if (!latency) return drops_.drop(sender, "FrameDone for a frame not in flight");
+    if (!latency) return drops_.drop(key, "FrameDone for a frame not in flight");
     metrics_.done(d, *latency, drops_.total());
   }
 
-  void onInput(const proto::Input& in) {
+  void onInput(const proto::Input& in, uint32_t key) {
     try {
       base_camera_ = applyInput(base_camera_, in);
       if (!in.quality.empty()) quality_ = namedQuality(in.quality);
     } catch (const std::invalid_argument& e) {
-      drops_.drop(~0u, e.what());
+      drops_.drop(key, e.what());
     }
   }
 
@@ -284,7 +366,8 @@ class Master {
   Membership members_;
   CreditWindow window_;
   std::unique_ptr<Plan> plan_;
-  bool started_ = false;
+  bool started_ = false, display_lost_ = false;
+  Clock::time_point last_stall_warning_;
   uint64_t next_frame_ = 0;
   int total_frames_ = 0;
   Camera base_camera_, last_camera_;
