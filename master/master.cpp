@@ -175,7 +175,7 @@ class Master {
     if (!culprit || !culprit->alive) return;  // already handled: frames are re-issued when it changes
     spdlog::warn("frame={} missed its deadline of {:.0f} ms waiting for {}: {} {} (pid {}) lost; reassigning its work",
                  oldest->first, window_.deadlineMs(), who, roleName(culprit->role), culprit->rank, culprit->pid);
-    members_.missedDeadline(*const_cast<Member*>(culprit), Clock::now());
+    members_.missedDeadline(*members_.find(culprit->role, culprit->rank), Clock::now());
     afterLoss();
   }
 

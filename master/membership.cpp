@@ -97,6 +97,11 @@ const Member* Membership::find(Role r, uint32_t rank) const {
   return it == members_.end() ? nullptr : &it->second;
 }
 
+Member* Membership::find(Role r, uint32_t rank) {
+  auto it = members_.find({r, rank});
+  return it == members_.end() ? nullptr : &it->second;
+}
+
 const Member* Membership::display() const {
   auto d = alive(Role::Display);
   return d.empty() ? nullptr : d.front();

@@ -57,6 +57,7 @@ class Membership {
   int count(proto::Role r) const;  // alive members of role r
   std::vector<const Member*> alive(proto::Role r) const;  // by rank
   const Member* find(proto::Role r, uint32_t rank) const;
+  Member* find(proto::Role r, uint32_t rank);
   // The display the frames go to: the alive display of lowest rank, or nullptr.
   const Member* display() const;
   uint32_t epoch() const { return epoch_; }
