@@ -15,7 +15,7 @@ int main(int argc, char** argv) {
   app.add_option("--renderers", opt.renderers, "renderers to wait for")->envname("TESSERA_RENDERERS")->check(CLI::Range(1, 1024));
   app.add_option("--compositors", opt.compositors, "compositors to wait for")->envname("TESSERA_COMPOSITORS")->check(CLI::Range(1, 256));
   app.add_option("--frames", opt.frames, "frames to render (-1: the scene's orbit; 0: interactive)")->envname("TESSERA_FRAMES");
-  app.add_option("--window", opt.window, "frames in flight")->envname("TESSERA_IN_FLIGHT")->check(CLI::Range(1, 64));
+  app.add_option("--in-flight", opt.in_flight, "frames in flight")->envname("TESSERA_IN_FLIGHT")->check(CLI::Range(1, 64));
   app.add_option("--codec", codec, "none | lzo | lz4 | zstd")->envname("TESSERA_CODEC");
   app.add_option("--format", format, "pixel format of pieces: rgba16f (default, within 1/255) | rgba8 | rgba32f")->envname("TESSERA_FORMAT");
   app.add_option("--metrics", opt.metrics_path, "JSON-lines metrics file")->envname("TESSERA_METRICS");

@@ -1,82 +1,78 @@
 #include "master/master.h"
 
 #include <chrono>
-#include <map>
+#include <memory>
 #include <thread>
 
-#include "master/balance.h"
-#include "master/interaction.h"
-#include "master/tiling.h"
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include "common/net/log.h"
 #include "common/net/transport.h"
+#include "master/interaction.h"
+#include "master/membership.h"
 #include "master/metrics.h"
+#include "master/sort_first_plan.h"
+#include "master/sort_last_plan.h"
 
 namespace tessera::master {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 using proto::Role;
 
 double msSince(Clock::time_point t) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
 }
 
-const char* roleName(Role r) {
-  switch (r) {
-    case Role::Renderer: return "renderer";
-    case Role::Compositor: return "compositor";
-    case Role::Display: return "display";
-  }
-  return "?";
-}
-
-struct Member {
-  Role role;
-  uint32_t rank = 0, pid = 0;
-  std::string identity;     // ROUTER routing id
-  std::string endpoint;     // compositors: where renderers send pieces
-  Clock::time_point last_seen;
-  bool alive = true;
-};
-
+// The thin loop: wires the PUB and ROUTER sockets to membership, the credit window, the
+// plan of the scene's mode and the metrics.
 class Master {
  public:
   Master(const MasterOptions& opt, zmq::context_t& ctx)
       : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router)),
-        base_camera_(opt.scene.camera), quality_(opt.scene.quality), metrics_(opt.metrics_path) {
+        window_(opt.in_flight, opt.deadline), base_camera_(opt.scene.camera), quality_(opt.scene.quality),
+        metrics_(opt.metrics_path) {
     pub_.bind(opt_.endpoints.bind(opt_.endpoints.masterPub()));
     ctl_.bind(opt_.endpoints.bind(opt_.endpoints.masterControl()));
     total_frames_ = opt_.frames < 0 ? opt_.scene.orbit.frames : opt_.frames;
-    spdlog::info("master listening pub={} control={} renderers={} compositors={} frames={} window={}",
+    spdlog::info("master listening pub={} control={} renderers={} compositors={} frames={} in_flight={}",
                  opt_.endpoints.masterPub(), opt_.endpoints.masterControl(), opt_.renderers, opt_.compositors,
-                 total_frames_ == 0 ? std::string("interactive") : std::to_string(total_frames_), opt_.window);
+                 total_frames_ == 0 ? std::string("interactive") : std::to_string(total_frames_), opt_.in_flight);
     if (sortFirst() && opt_.scene.antialiasing.method == "fft")
       spdlog::warn("antialiasing fft is a post filter of the whole image, applied by tessera-render; the farm "
                    "renders this scene without it (use msaa or ssaa for identical farm frames)");
     // Sort-first (geometry) scenes need no volume here: renderers own the mesh.
-    if (!sortFirst()) volume_ = std::make_shared<Volume>(loadVolume(opt_.scene));
+    if (sortFirst())
+      plan_ = std::make_unique<SortFirstPlan>(width(), height(), opt_.balance, opt_.tiles_per_renderer);
+    else
+      plan_ = std::make_unique<SortLastPlan>(std::make_shared<const Volume>(loadVolume(opt_.scene)), opt_.scene.tf,
+                                             width(), height(), opt_.balance);
   }
 
   int run(const std::atomic<bool>* stop) {
     if (!gatherMembers(stop)) return 1;
-    assignBricks();
-    auto last_probe = Clock::now();
-    while (!(stop && *stop)) {
+    plan_->reassign(workers());
+    started_ = true;
+    auto last_tick = Clock::now();
+    while (!(stop && *stop) && !display_lost_) {
       issueFrames();
       if (finished()) break;
       pollControl(50);
-      if (msSince(last_probe) > 250) {  // the probe lets late joiners (spares) join
-        sendBytes(pub_, proto::encode(proto::Heartbeat{Role::Display, 0}, kMasterRank));
+      if (msSince(last_tick) > 250) {
+        probe();  // lets late joiners (spares) join
         checkHeartbeats();
-        last_probe = Clock::now();
+        warnIfStalled();
+        checkDeadline();
+        last_tick = Clock::now();
       }
       metrics_.flushOlderThan(Clock::now() - std::chrono::milliseconds(500));
     }
     // Stats travel apart from FrameDone: give the last frames' reports a moment to land.
     for (auto t = Clock::now(); metrics_.pending() > 0 && msSince(t) < 1000;) pollControl(20);
     metrics_.flushAll();
-    shutdown(stop && *stop ? "stopped" : "all frames done");
-    return 0;
+    shutdown(display_lost_ ? "display lost" : stop && *stop ? "stopped" : "all frames done");
+    // Interactive runs end when the display goes; a fixed run without it is a failure.
+    return display_lost_ && total_frames_ != 0 ? 1 : 0;
   }
 
  private:
@@ -84,18 +80,17 @@ class Master {
   bool gatherMembers(const std::atomic<bool>* stop) {
     auto start = Clock::now(), last_probe = Clock::now() - std::chrono::seconds(1);
     while (!(stop && *stop)) {
-      if (count(Role::Renderer) >= opt_.renderers && count(Role::Compositor) >= opt_.compositors &&
-          count(Role::Display) >= 1)
+      if (members_.count(Role::Renderer) >= opt_.renderers && members_.count(Role::Compositor) >= opt_.compositors &&
+          members_.count(Role::Display) >= 1)
         return true;
       if (msSince(last_probe) > 100) {
-        // Stages say Hello only after this probe reaches them, so their subscription is live.
-        sendBytes(pub_, proto::encode(proto::Heartbeat{Role::Display, 0}, kMasterRank));
+        probe();  // stages say Hello only after this reaches them, so their subscription is live
         last_probe = Clock::now();
       }
       if (msSince(start) > opt_.start_timeout_s * 1000) {
         spdlog::error("stages missing after {:.0f} s: renderers {}/{} compositors {}/{} display {}/1",
-                      opt_.start_timeout_s, count(Role::Renderer), opt_.renderers, count(Role::Compositor),
-                      opt_.compositors, count(Role::Display));
+                      opt_.start_timeout_s, members_.count(Role::Renderer), opt_.renderers,
+                      members_.count(Role::Compositor), opt_.compositors, members_.count(Role::Display));
         return false;
       }
       pollControl(20);
@@ -103,100 +98,113 @@ class Master {
     return false;
   }
 
-  int count(Role r) const {
-    int n = 0;
-    for (const auto& [key, m] : members_) n += m.role == r && m.alive;
-    return n;
-  }
+  void probe() { sendBytes(pub_, proto::encode(proto::Heartbeat{Role::Display, 0}, kMasterRank)); }
 
   void onHello(const std::string& identity, const proto::Hello& h) {
-    uint32_t rank = 0;
-    while (members_.count({h.role, rank})) ++rank;
-    Member m{h.role, rank, h.pid, identity, "", Clock::now(), true};
-    if (h.role == Role::Compositor) m.endpoint = opt_.endpoints.compositorOn(rank, h.endpoint);
-    members_[{h.role, rank}] = m;
-    sendTo(identity, proto::encode(proto::Welcome{h.role, rank}, kMasterRank));
-    spdlog::info("{} {} joined pid={}{}", roleName(h.role), rank, h.pid,
+    bool joined = false;
+    Member& m = members_.join(identity, h, Clock::now(), &joined);
+    if (joined && h.role == Role::Compositor) m.endpoint = opt_.endpoints.compositorOn(m.rank, h.endpoint);
+    sendTo(identity, proto::encode(proto::Welcome{m.role, m.rank}, kMasterRank));
+    if (!joined) return;
+    spdlog::info("{} {} joined pid={}{}", roleName(h.role), m.rank, h.pid,
                  m.endpoint.empty() ? "" : " endpoint=" + m.endpoint);
     if (started_) membershipChanged();
   }
 
   void checkHeartbeats() {
-    for (auto& [key, m] : members_) {
-      if (!m.alive || msSince(m.last_seen) < opt_.heartbeat_timeout_s * 1000) continue;
-      m.alive = false;
-      spdlog::warn("{} {} (pid {}) lost: no heartbeat for {:.1f} s; reassigning its work", roleName(m.role), m.rank,
-                   m.pid, msSince(m.last_seen) / 1000);
-      membershipChanged();
+    auto lost = members_.expire(Clock::now(), opt_.heartbeat_timeout_s);
+    for (const Member* m : lost)
+      spdlog::warn("{} {} (pid {}) lost: no heartbeat for {:.1f} s; reassigning its work", roleName(m->role),
+                   m->rank, m->pid, msSince(m->last_seen) / 1000);
+    if (!lost.empty()) afterLoss();
+  }
+
+  // Frames go to one display; nobody else holds its half-routed frames, so its loss ends the run.
+  void afterLoss() {
+    if (members_.count(Role::Display) == 0) {
+      display_lost_ = true;
+      spdlog::error("the display is lost: frames cannot be completed without it; stopping ({})",
+                    total_frames_ == 0 ? "interactive run ends" : "run incomplete");
+      return;
     }
+    membershipChanged();
+  }
+
+  void readmit(const Member& m) {
+    spdlog::info("{} {} (pid {}) heard from again: re-admitted", roleName(m.role), m.rank, m.pid);
+    if (started_) membershipChanged();
+  }
+
+  // Who the oldest frame still waits for, e.g. "stats from renderer 1 (pid 1234) and strips
+  // from compositor 0 (pid 99)"; `culprit` is the first of them.
+  std::string waitingFor(uint64_t frame, const Member** culprit) const {
+    auto w = window_.waiting(frame);
+    std::vector<std::string> parts;
+    *culprit = nullptr;
+    auto name = [&](Role role, uint32_t rank, const char* what) {
+      const Member* m = members_.find(role, rank);
+      if (!*culprit) *culprit = m;
+      return fmt::format("{} {} {} (pid {})", what, roleName(role), rank, m ? m->pid : 0);
+    };
+    for (uint32_t r : w.renderers) parts.push_back(name(Role::Renderer, r, "stats from"));
+    for (uint32_t c : w.compositors) parts.push_back(name(Role::Compositor, c, "strips from"));
+    if (w.display) {
+      const Member* d = members_.display();
+      if (d) parts.push_back(name(Role::Display, d->rank, "FrameDone from"));
+    }
+    return fmt::format("{}", fmt::join(parts, " and "));
+  }
+
+  void warnIfStalled() {
+    auto oldest = window_.oldest(Clock::now());
+    if (!oldest || oldest->second < window_.stallMs() || msSince(last_stall_warning_) < 2000) return;
+    last_stall_warning_ = Clock::now();
+    const Member* culprit = nullptr;
+    spdlog::warn("frame={} waited_ms={:.0f} deadline_ms={:.0f} epoch={}: frame {} waits for {}", oldest->first,
+                 oldest->second, window_.deadlineMs(), members_.epoch(), oldest->first,
+                 waitingFor(oldest->first, &culprit));
+  }
+
+  // A frame past its deadline: the first stage that has not delivered for it is lost (its
+  // heartbeat may be fine: a stage can be alive and useless), its work goes to the others.
+  void checkDeadline() {
+    auto oldest = window_.oldest(Clock::now());
+    if (!oldest || oldest->second < window_.deadlineMs()) return;
+    const Member* culprit = nullptr;
+    std::string who = waitingFor(oldest->first, &culprit);
+    if (!culprit || !culprit->alive) return;  // already handled: frames are re-issued when it changes
+    spdlog::warn("frame={} missed its deadline of {:.0f} ms waiting for {}: {} {} (pid {}) lost; reassigning its work",
+                 oldest->first, window_.deadlineMs(), who, roleName(culprit->role), culprit->rank, culprit->pid);
+    members_.missedDeadline(*members_.find(culprit->role, culprit->rank), Clock::now());
+    afterLoss();
+  }
+
+  Workers workers() const {
+    Workers w;
+    for (const Member* m : members_.alive(Role::Renderer)) w.renderers.push_back(m->rank);
+    for (const Member* m : members_.alive(Role::Compositor)) w.compositors.push_back({m->rank, m->endpoint});
+    return w;
   }
 
   // A stage came or went: new assignment, and frames in flight are issued again under a
   // new epoch (stages drop work of older epochs), so no frame waits forever for a dead stage.
   void membershipChanged() {
-    ++epoch_;
-    assignBricks();
-    if (renderer_ranks_.empty() || compositors_.empty()) {
-      spdlog::warn("no {} left: waiting for one to join", renderer_ranks_.empty() ? "renderer" : "compositor");
+    members_.bumpEpoch();
+    metrics_.reassigned();
+    Workers w = workers();
+    plan_->reassign(w);
+    if (w.renderers.empty() || w.compositors.empty()) {
+      spdlog::warn("no {} left: waiting for one to join", w.renderers.empty() ? "renderer" : "compositor");
       return;  // frames in flight are issued again when one joins (its Hello bumps the epoch)
     }
-    for (auto& [frame, f] : inflight_) publish(frame, f.camera);
+    std::vector<std::pair<uint64_t, Camera>> again;
+    for (const auto& [frame, f] : window_.frames()) again.emplace_back(frame, f.camera);
+    for (const auto& [frame, cam] : again) publish(frame, cam, w);
+    metrics_.reissued(again.size());
   }
 
-  // ---- work assignment ---------------------------------------------------------------
-  void assignBricks() {
-    renderer_ranks_.clear();
-    for (const auto& [key, m] : members_)
-      if (m.role == Role::Renderer && m.alive) renderer_ranks_.push_back(m.rank);
-    compositors_.clear();
-    for (const auto& [key, m] : members_)
-      if (m.role == Role::Compositor && m.alive) compositors_.push_back(&m);
-    int n = std::max<int>(1, (int)renderer_ranks_.size());
-    if (!sortFirst()) tree_ = splitBricks(*volume_, n, &opt_.scene.tf);
-    started_ = true;
-  }
-
+  // ---- frames ---------------------------------------------------------------------------
   bool sortFirst() const { return opt_.scene.mesh.has_value(); }
-
-  // Sort-first: tiles for this frame (balanced from the last fully reported frame's
-  // per-tile costs, or static equal tiles) dealt to renderers; renderer i's tiles are
-  // routed by compositor i mod M, so each renderer sends one framebuffer.
-  void assignTiles(proto::FrameParams& p) {
-    const int r = (int)renderer_ranks_.size(), m = (int)compositors_.size();
-    auto tiles = opt_.balance ? balancedTiles(width(), height(), r * opt_.tiles_per_renderer, cost_)
-                              : equalTiles(width(), height(), r * opt_.tiles_per_renderer);
-    std::map<uint32_t, Rect> bounds;  // compositor -> bounds of its tiles
-    for (size_t i = 0; i < tiles.size(); ++i) {
-      int renderer = (int)(i % r);
-      const Member* c = compositors_[renderer % m];
-      p.tiles.push_back({renderer_ranks_[renderer], c->rank, tiles[i]});
-      bounds[c->rank] = unite(bounds[c->rank], tiles[i]);
-    }
-    for (const Member* c : compositors_)
-      if (bounds.count(c->rank)) p.regions.push_back({c->rank, bounds[c->rank], c->endpoint});
-  }
-
-  // A renderer's per-tile times, in FrameParams::tiles order; a frame's costs replace the
-  // model once every renderer has reported.
-  void tileCosts(const proto::StageStats& s) {
-    auto it = inflight_tiles_.find(s.frame);
-    if (it == inflight_tiles_.end()) return;
-    auto& [reports, grid, tiles] = it->second;
-    size_t k = 0;
-    for (const auto& t : tiles)
-      if (t.renderer == s.rank && k < s.tile_ms.size()) grid.add(t.tile, s.tile_ms[k++]);
-    if (++reports >= (int)renderer_ranks_.size()) {
-      cost_ = grid;
-      inflight_tiles_.erase(inflight_tiles_.begin(), std::next(it));
-    }
-  }
-
-  std::vector<Rect> regions() const {
-    int m = (int)compositors_.size();
-    if (opt_.balance) return balancedBands(width(), height(), m, last_active_);
-    return balancedBands(width(), height(), m, {});
-  }
-
   int width() const { return opt_.scene.width; }
   int height() const { return opt_.scene.height; }
 
@@ -206,47 +214,41 @@ class Master {
   }
 
   void issueFrames() {
-    while ((int)inflight_.size() < opt_.window && !renderer_ranks_.empty() && !compositors_.empty()) {
+    Workers w = workers();
+    while (window_.hasRoom() && !w.renderers.empty() && !w.compositors.empty()) {
       if (total_frames_ > 0 && next_frame_ >= (uint64_t)total_frames_) return;
       Camera cam = cameraFor(next_frame_);
       // Interactive: a frame whose inputs did not change is not rendered again.
       if (total_frames_ == 0 && next_frame_ > 0 && cam == last_camera_ && quality_ == last_quality_) return;
-      publish(next_frame_, cam);
+      publish(next_frame_, cam, w);
       last_camera_ = cam;
       last_quality_ = quality_;
       ++next_frame_;
     }
   }
 
-  void publish(uint64_t frame, const Camera& cam) {
+  void publish(uint64_t frame, const Camera& cam, const Workers& w) {
     proto::FrameParams p;
     p.frame = frame;
-    p.epoch = epoch_;
+    p.epoch = members_.epoch();
     p.camera = cam;
     p.quality = quality_;
     p.width = width();
     p.height = height();
     p.codec = opt_.codec;
     p.format = opt_.format;
-    if (sortFirst()) {
-      assignTiles(p);
-      inflight_tiles_[frame] = {0, CostGrid(width(), height()), p.tiles};
-    } else {
-      for (size_t i = 0; i < tree_.bricks.size(); ++i) p.bricks.push_back({renderer_ranks_[i], tree_.bricks[i]});
-      p.order = tree_.visibilityOrder(*volume_, cam);
-      auto bands = regions();
-      for (size_t i = 0; i < bands.size(); ++i)
-        p.regions.push_back({compositors_[i]->rank, bands[i], compositors_[i]->endpoint});
-    }
+    plan_->fill(p, w);
     p.display_endpoint = opt_.endpoints.display();
-    inflight_[frame] = {Clock::now(), cam};
-    metrics_.issued(frame, epoch_, (int)renderer_ranks_.size(), (int)p.regions.size());
+    std::set<uint32_t> renderers, compositors;
+    for (const auto& b : p.bricks) renderers.insert(b.renderer);
+    for (const auto& t : p.tiles) renderers.insert(t.renderer);
+    for (const auto& r : p.regions) compositors.insert(r.compositor);
+    window_.issue(frame, cam, renderers, compositors, Clock::now());
+    metrics_.issued(frame, p.epoch, (int)w.renderers.size(), (int)p.regions.size());
     sendBytes(pub_, proto::encode(p, kMasterRank));
   }
 
-  bool finished() const {
-    return total_frames_ > 0 && next_frame_ >= (uint64_t)total_frames_ && inflight_.empty();
-  }
+  bool finished() const { return total_frames_ > 0 && next_frame_ >= (uint64_t)total_frames_ && window_.empty(); }
 
   // ---- control messages ---------------------------------------------------------------
   void pollControl(int timeout_ms) {
@@ -260,9 +262,11 @@ class Master {
         continue;
       }
       (void)ctl_.recv(body, zmq::recv_flags::none);
-      while (body.more()) {  // a peer sent extra frames: keep only the first
+      // A peer sent extra frames: keep only the first (a multi-part message arrives whole).
+      for (bool more = body.more(); more;) {
         zmq::message_t extra;
-        (void)ctl_.recv(extra, zmq::recv_flags::none);
+        if (!ctl_.recv(extra, zmq::recv_flags::dontwait)) break;
+        more = extra.more();
       }
       handle(id.to_string(), body);
     }
@@ -270,63 +274,74 @@ class Master {
 
   void handle(const std::string& identity, const zmq::message_t& body) {
     auto header = proto::decodeHeader(view(body));
-    if (!header) return drops_.drop(~0u, header.error());
+    Member* from = members_.byIdentity(identity);
+    const uint32_t key = from ? from->id : ~0u;  // drops are logged per connection, not per claimed rank
+    if (!header) return drops_.drop(key, header.error());
+    if (header->type == proto::Type::Hello) {
+      auto h = proto::decodeHello(view(body));
+      if (!h) return drops_.drop(key, h.error());
+      return onHello(identity, *h);
+    }
+    // Everything else only from a connection that joined as a member.
+    if (!from) return refuse(std::string("unknown peer sent ") + proto::typeName(header->type));
+    if (members_.heard(*from, Clock::now())) readmit(*from);
+    const bool control = from->identity == identity;
     switch (header->type) {
-      case proto::Type::Hello: {
-        auto h = proto::decodeHello(view(body));
-        if (!h) return drops_.drop(header->sender, h.error());
-        return onHello(identity, *h);
-      }
       case proto::Type::Heartbeat: {
         auto h = proto::decodeHeartbeat(view(body));
-        if (!h) return drops_.drop(header->sender, h.error());
-        if (auto it = members_.find({h->role, h->rank}); it != members_.end())  // own socket: no identity match
-          it->second.last_seen = Clock::now();
+        if (!h) return drops_.drop(key, h.error());
+        if (h->role != from->role || h->rank != from->rank) return drops_.drop(key, "Heartbeat for another member");
         return;
       }
       case proto::Type::Stats: {
         auto s = proto::decodeStageStats(view(body));
-        if (!s) return drops_.drop(header->sender, s.error());
-        touch(identity);
-        if (s->role == Role::Renderer && s->frame + 1 >= latest_active_frame_) {
-          if (s->frame + 1 > latest_active_frame_) last_active_.clear();
-          latest_active_frame_ = s->frame + 1;
-          last_active_.push_back(s->active);
-        }
-        if (s->role == Role::Renderer && sortFirst()) tileCosts(*s);
-        return metrics_.stats(*s);
+        if (!s) return drops_.drop(key, s.error());
+        if (!control || s->role != from->role || s->rank != from->rank)
+          return drops_.drop(key, "Stats claiming another member");
+        return onStats(*s);
       }
       case proto::Type::FrameDone: {
         auto d = proto::decodeFrameDone(view(body));
-        if (!d) return drops_.drop(header->sender, d.error());
-        touch(identity);
-        auto it = inflight_.find(d->frame);
-        if (it == inflight_.end()) return drops_.drop(header->sender, "FrameDone for a frame not in flight");
-        metrics_.done(*d, msSince(it->second.issued), drops_.total());
-        inflight_.erase(it);
-        return;
+        if (!d) return drops_.drop(key, d.error());
+        if (!control || from != members_.display()) return drops_.drop(key, "FrameDone not from the display");
+        return onFrameDone(*d, key);
       }
       case proto::Type::Input: {
         auto in = proto::decodeInput(view(body));
-        if (!in) return drops_.drop(header->sender, in.error());
-        return onInput(*in);
+        if (!in) return drops_.drop(key, in.error());
+        if (!control || from->role != Role::Display) return drops_.drop(key, "Input not from a display");
+        // A fixed-length run renders the orbit it was asked for: input would change every later frame.
+        if (total_frames_ != 0) return drops_.drop(key, "Input refused: not an interactive run (frames > 0)");
+        return onInput(*in, key);
       }
       default:
-        return drops_.drop(header->sender, std::string("unexpected ") + proto::typeName(header->type));
+        return drops_.drop(key, std::string("unexpected ") + proto::typeName(header->type));
     }
   }
 
-  void touch(const std::string& identity) {
-    for (auto& [key, m] : members_)
-      if (m.identity == identity) m.last_seen = Clock::now();
+  void refuse(const std::string& why) {
+    metrics_.refused();
+    drops_.drop(~0u, why);
   }
 
-  void onInput(const proto::Input& in) {
+  void onStats(const proto::StageStats& s) {
+    window_.stats(s.role, s.rank, s.frame);
+    plan_->stats(s, workers());
+    metrics_.stats(s);
+  }
+
+  void onFrameDone(const proto::FrameDone& d, uint32_t key) {
+    auto latency = window_.done(d.frame, Clock::now());
+    if (!latency) return drops_.drop(key, "FrameDone for a frame not in flight");
+    metrics_.done(d, *latency, drops_.total());
+  }
+
+  void onInput(const proto::Input& in, uint32_t key) {
     try {
       base_camera_ = applyInput(base_camera_, in);
       if (!in.quality.empty()) quality_ = namedQuality(in.quality);
     } catch (const std::invalid_argument& e) {
-      drops_.drop(~0u, e.what());
+      drops_.drop(key, e.what());
     }
   }
 
@@ -346,34 +361,17 @@ class Master {
 
   static constexpr uint32_t kMasterRank = 0xFFFF;
 
-  struct InFlight {
-    Clock::time_point issued;
-    Camera camera;
-  };
-
   const MasterOptions& opt_;
   zmq::socket_t pub_, ctl_;
-  std::shared_ptr<Volume> volume_;
-  std::map<std::pair<Role, uint32_t>, Member> members_;
-  std::vector<uint32_t> renderer_ranks_;
-  std::vector<const Member*> compositors_;
-  BrickTree tree_;
-  CostGrid cost_{1, 1};
-  struct TileReports {
-    int reports = 0;
-    CostGrid grid{1, 1};
-    std::vector<proto::TileAssignment> tiles;
-  };
-  std::map<uint64_t, TileReports> inflight_tiles_;
-  bool started_ = false;
-  uint32_t epoch_ = 0;
+  Membership members_;
+  CreditWindow window_;
+  std::unique_ptr<Plan> plan_;
+  bool started_ = false, display_lost_ = false;
+  Clock::time_point last_stall_warning_;
   uint64_t next_frame_ = 0;
   int total_frames_ = 0;
-  std::map<uint64_t, InFlight> inflight_;
   Camera base_camera_, last_camera_;
   Quality quality_, last_quality_;
-  std::vector<Rect> last_active_;
-  uint64_t latest_active_frame_ = 0;
   DropCounter drops_;
   Metrics metrics_;
 };

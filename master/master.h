@@ -1,6 +1,7 @@
 // The master: owns the scene, camera and work assignment; registers stages (membership,
-// heartbeats), broadcasts FrameParams, keeps at most `window` frames in flight, and writes
+// heartbeats), broadcasts FrameParams, keeps at most `in_flight` frames in flight, and writes
 // one JSON line of metrics per frame. run() blocks until the last frame is done.
+// The parts: membership.h, credit_window.h, sort_last_plan.h / sort_first_plan.h, metrics.h.
 #pragma once
 #include <atomic>
 #include <string>
@@ -11,6 +12,7 @@
 #include "common/net/endpoints.h"
 #include "common/wire/protocol.h"
 #include "common/scene.h"
+#include "master/credit_window.h"
 
 namespace tessera::master {
 
@@ -19,7 +21,7 @@ struct MasterOptions {
   Endpoints endpoints;
   int renderers = 1, compositors = 1;
   int frames = -1;          // -1: the scene's orbit frames; 0: interactive (until the display quits)
-  int window = 3;           // frames in flight
+  int in_flight = 3;        // frames in flight
   Codec codec = Codec::Lzo;
   // rgba16f: rgba8 pieces round twice before the final rounding (up to 1.5 levels),
   // which breaks the 1/255 sort-last contract; half floats keep it (see README).
@@ -29,6 +31,7 @@ struct MasterOptions {
   std::string metrics_path; // JSON lines; "" = none
   double heartbeat_timeout_s = 3.0;
   double start_timeout_s = 60.0;
+  DeadlineOptions deadline;  // a frame late past this blames the stage that did not deliver
 };
 
 // Returns the process exit code. `stop` (optional) ends it early (signals, tests).

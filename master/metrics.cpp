@@ -113,6 +113,9 @@ void Metrics::write(uint64_t frame, Frame& f) {
   j["frame"] = frame;
   j["epoch"] = f.epoch;
   j["master_dropped"] = f.master_dropped;
+  j["reassignments"] = reassignments_;
+  j["reissued_frames"] = reissued_;
+  j["refused_peers"] = refused_;
   // When FrameDone arrived, from the first frame's: throughput = frames / span.
   j["done_ms"] = std::chrono::duration<double, std::milli>(f.done_at - start_).count();
   spdlog::info("frame={} latency_ms={:.1f} render_ms={:.1f} composite_ms={:.1f} display_ms={:.1f} bytes_raw={} "

@@ -1,5 +1,6 @@
 // Per-frame metrics of the farm, written as one JSON line per frame: per-stage times,
-// bytes raw and compressed, active pixels, imbalance, latency, dropped messages.
+// bytes raw and compressed, active pixels, imbalance, latency, dropped messages, and the
+// master's fault counters so far (reassignments, re-issued frames, refused peers).
 // A frame's line is written once its FrameDone and every stage's stats are in (or a
 // grace period has passed, since stats and FrameDone travel on different paths).
 #pragma once
@@ -28,6 +29,14 @@ class Metrics {
   uint64_t framesDone() const { return frames_done_; }
   size_t pending() const { return frames_.size(); }  // frames whose line is not written yet
 
+  // Cumulative fault counters, written on every line.
+  void reassigned() { ++reassignments_; }
+  void reissued(uint64_t frames) { reissued_ += frames; }
+  void refused() { ++refused_; }
+  uint64_t reassignments() const { return reassignments_; }
+  uint64_t reissuedFrames() const { return reissued_; }
+  uint64_t refusedPeers() const { return refused_; }
+
   // The JSON object of one frame (exposed for tests).
   static nlohmann::json summarize(const std::vector<proto::StageStats>& renderers,
                                   const std::vector<proto::StageStats>& compositors, const proto::FrameDone& done,
@@ -49,6 +58,7 @@ class Metrics {
   std::ofstream out_;
   std::map<uint64_t, Frame> frames_;
   uint64_t frames_done_ = 0;
+  uint64_t reassignments_ = 0, reissued_ = 0, refused_ = 0;
   std::chrono::steady_clock::time_point start_;
 };
 

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <random>
 
 #include <spdlog/spdlog.h>
 
@@ -12,12 +13,33 @@ namespace tessera {
 
 using Clock = std::chrono::steady_clock;
 
+namespace {
+constexpr size_t kIdentityBytes = 16;
+
+std::string randomIdentity() {
+  std::random_device rd;
+  std::string id(kIdentityBytes + 1, '\0');
+  for (size_t i = 0; i < kIdentityBytes; ++i) id[i] = static_cast<char>(rd() & 0xFF);
+  if (id[0] == '\0') id[0] = 1;  // ZeroMQ reserves routing ids that start with a zero byte
+  id[kIdentityBytes] = 'c';
+  return id;
+}
+}  // namespace
+
+std::string StageLink::heartbeatIdentity(const std::string& control_identity) {
+  if (control_identity.size() != kIdentityBytes + 1 || control_identity.back() != 'c') return "";
+  std::string hb = control_identity;
+  hb.back() = 'h';
+  return hb;
+}
+
 StageLink::StageLink(zmq::context_t& ctx, const Endpoints& ep, proto::Role role, std::string advertise)
     : ctx_(ctx), ep_(ep), role_(role), advertise_(std::move(advertise)),
-      sub_(makeSocket(ctx, zmq::socket_type::sub)), ctl_(makeSocket(ctx, zmq::socket_type::dealer)) {
+      identity_(randomIdentity()), sub_(makeSocket(ctx, zmq::socket_type::sub)), ctl_(makeSocket(ctx, zmq::socket_type::dealer)) {
   sub_.set(zmq::sockopt::subscribe, "");
   sub_.set(zmq::sockopt::rcvhwm, 0);  // FrameParams must never be dropped by the queue
   sub_.connect(ep_.masterPub());
+  ctl_.set(zmq::sockopt::routing_id, identity_);
   ctl_.connect(ep_.masterControl());
 }
 
@@ -60,6 +82,7 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   }
   heartbeat_ = std::thread([this] {
     zmq::socket_t hb = makeSocket(ctx_, zmq::socket_type::dealer);
+    hb.set(zmq::sockopt::routing_id, heartbeatIdentity(identity_));
     hb.connect(ep_.masterControl());
     while (!quit_) {
       sendBytes(hb, proto::encode(proto::Heartbeat{role_, rank_}, rank_), false, true);

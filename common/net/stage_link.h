@@ -2,6 +2,9 @@
 // reports, and a heartbeat thread (its own socket) so a long render never looks like a
 // dead stage. join() waits for the master's probe (so the subscription is live), says
 // Hello and waits for the Welcome that carries this stage's rank.
+// Both DEALER sockets carry explicit routing ids: 16 random bytes (first nonzero) plus 'c'
+// (control) or 'h' (heartbeat), so the master binds the heartbeat connection to the member
+// that said Hello on the control connection (see heartbeatIdentity).
 #pragma once
 #include <atomic>
 #include <chrono>
@@ -39,12 +42,16 @@ class StageLink {
   bool masterLost() const;
   static constexpr double kMasterSilenceS = 10.0;
   void report(std::vector<std::byte>&& msg);  // to the master, from the owning thread
+  const std::string& identity() const { return identity_; }  // control connection's routing id
+  // The heartbeat connection's routing id for a control routing id ("" if not of our form).
+  static std::string heartbeatIdentity(const std::string& control_identity);
 
  private:
   zmq::context_t& ctx_;
   Endpoints ep_;
   proto::Role role_;
   std::string advertise_;
+  std::string identity_;
   zmq::socket_t sub_, ctl_;
   uint32_t rank_ = 0;
   std::atomic<bool> quit_{false};

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/io/image_io.h"
+#include "common/net/stage_link.h"
 #include "compositor/stage.h"
 #include "display/stage.h"
 #include "tests/integration/farm_util.h"
@@ -121,13 +122,10 @@ TEST(InProcessFarm, InteractiveFramesFollowInputAndIdleFramesAreNotRendered) {
   proto::Input in;
   in.orbit_dx = 40;
   in.zoom = 0.8;
-  {
-    zmq::socket_t user(ctx, zmq::socket_type::dealer);
-    user.set(zmq::sockopt::linger, 1000);
-    user.connect(ep.masterControl());
-    auto bytes = proto::encode(in, 0);
-    user.send(zmq::buffer(bytes.data(), bytes.size()), zmq::send_flags::none);
-  }
+  // The master takes Input only from a joined display: the user joins as a second one.
+  StageLink user(ctx, ep, proto::Role::Display);
+  ASSERT_TRUE(user.join(&stop, 30));
+  user.report(proto::encode(in, 0));
   EXPECT_TRUE(waitFor(1, 30s)) << "no frame after the input";
   EXPECT_FALSE(waitFor(2, 500ms)) << "more than one frame for one input";
   stop = true;

@@ -1,0 +1,73 @@
+// The credit window: at most `in_flight` frames issued and not yet done; who has delivered
+// for each of them (renderer and compositor Stats, the display's FrameDone); and the
+// per-frame deadline, derived from recent frame latencies, after which the oldest frame's
+// missing stage is blamed. Plain values, no sockets; time is passed in.
+#pragma once
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <optional>
+#include <set>
+#include <vector>
+
+#include "common/camera.h"
+#include "common/wire/protocol.h"
+
+namespace tessera::master {
+
+struct DeadlineOptions {
+  double start_s = 30.0;   // before any frame completed (loading, first frames)
+  double floor_s = 3.0;    // never tighter than this
+  double factor = 8.0;     // x the median of the last kSamples frame latencies
+};
+
+class CreditWindow {
+ public:
+  using Clock = std::chrono::steady_clock;
+  static constexpr size_t kSamples = 16;
+
+  struct InFlight {
+    Clock::time_point issued;
+    Camera camera;
+    std::set<uint32_t> renderers, compositors;  // expected to report Stats
+    std::set<uint32_t> renderers_in, compositors_in;  // reported
+  };
+  // Who a frame still waits for: renderers without Stats, then compositors without Stats,
+  // then the display (its FrameDone) when everyone else has reported.
+  struct Waiting {
+    std::vector<uint32_t> renderers, compositors;
+    bool display = false;
+  };
+
+  CreditWindow(int in_flight, DeadlineOptions deadline) : in_flight_(in_flight), deadline_(deadline) {}
+
+  bool hasRoom() const { return (int)frames_.size() < in_flight_; }
+  bool empty() const { return frames_.empty(); }
+  // Issues `frame` (again, under a new epoch: its deliveries start over).
+  void issue(uint64_t frame, const Camera& cam, std::set<uint32_t> renderers, std::set<uint32_t> compositors,
+             Clock::time_point now);
+  // A stage's Stats for `frame` (ignored when the frame is not in flight).
+  void stats(proto::Role role, uint32_t rank, uint64_t frame);
+  // The display's FrameDone: the latency in ms, or nothing if the frame is not in flight.
+  std::optional<double> done(uint64_t frame, Clock::time_point now);
+
+  const std::map<uint64_t, InFlight>& frames() const { return frames_; }
+  // The oldest frame in flight and how long it has waited (ms), if any.
+  std::optional<std::pair<uint64_t, double>> oldest(Clock::time_point now) const;
+  Waiting waiting(uint64_t frame) const;
+  double deadlineMs() const;
+  // A typical frame time (the median latency; the deadline's start value before any).
+  double typicalMs() const;
+  // How long the oldest frame may wait before the master says who it waits for: several
+  // frame times (before any frame completed, well inside the start deadline).
+  double stallMs() const;
+
+ private:
+  int in_flight_;
+  DeadlineOptions deadline_;
+  std::map<uint64_t, InFlight> frames_;
+  std::deque<double> latencies_;  // last kSamples, ms
+};
+
+}  // namespace tessera::master

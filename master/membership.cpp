@@ -1,0 +1,110 @@
+#include "master/membership.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/net/stage_link.h"
+
+namespace tessera::master {
+
+using proto::Role;
+
+const char* roleName(Role r) {
+  switch (r) {
+    case Role::Renderer: return "renderer";
+    case Role::Compositor: return "compositor";
+    case Role::Display: return "display";
+  }
+  return "?";
+}
+
+double Membership::quarantineS(int strikes) {
+  if (strikes <= 0) return 0;
+  return std::min(60.0, 5.0 * std::pow(2.0, strikes - 1));
+}
+
+Member& Membership::join(const std::string& identity, const proto::Hello& h, Clock::time_point now, bool* joined) {
+  if (Member* m = byControlIdentity(identity)) {
+    if (joined) *joined = false;
+    return *m;
+  }
+  uint32_t rank = 0;
+  while (members_.count({h.role, rank})) ++rank;
+  Member m;
+  m.role = h.role;
+  m.rank = rank;
+  m.pid = h.pid;
+  m.id = (uint32_t)members_.size();
+  m.identity = identity;
+  m.heartbeat_identity = StageLink::heartbeatIdentity(identity);
+  m.last_seen = now;
+  if (joined) *joined = true;
+  return members_[{h.role, rank}] = m;
+}
+
+Member* Membership::byIdentity(const std::string& identity) {
+  for (auto& [key, m] : members_)
+    if (m.identity == identity || (!m.heartbeat_identity.empty() && m.heartbeat_identity == identity)) return &m;
+  return nullptr;
+}
+
+Member* Membership::byControlIdentity(const std::string& identity) {
+  for (auto& [key, m] : members_)
+    if (m.identity == identity) return &m;
+  return nullptr;
+}
+
+bool Membership::heard(Member& m, Clock::time_point now) {
+  m.last_seen = now;
+  if (m.alive) return false;
+  if (std::chrono::duration<double>(now - m.lost_at).count() < quarantineS(m.strikes)) return false;
+  m.alive = true;
+  return true;
+}
+
+std::vector<Member*> Membership::expire(Clock::time_point now, double timeout_s) {
+  std::vector<Member*> lost;
+  for (auto& [key, m] : members_) {
+    if (!m.alive || std::chrono::duration<double>(now - m.last_seen).count() < timeout_s) continue;
+    m.alive = false;
+    m.lost_at = now;
+    lost.push_back(&m);
+  }
+  return lost;
+}
+
+void Membership::missedDeadline(Member& m, Clock::time_point now) {
+  m.alive = false;
+  m.lost_at = now;
+  ++m.strikes;
+}
+
+int Membership::count(Role r) const {
+  int n = 0;
+  for (const auto& [key, m] : members_) n += m.role == r && m.alive;
+  return n;
+}
+
+std::vector<const Member*> Membership::alive(Role r) const {
+  std::vector<const Member*> out;
+  for (const auto& [key, m] : members_)  // the map is ordered by (role, rank)
+    if (m.role == r && m.alive) out.push_back(&m);
+  return out;
+}
+
+const Member* Membership::find(Role r, uint32_t rank) const {
+  auto it = members_.find({r, rank});
+  return it == members_.end() ? nullptr : &it->second;
+}
+
+Member* Membership::find(Role r, uint32_t rank) {
+  auto it = members_.find({r, rank});
+  return it == members_.end() ? nullptr : &it->second;
+}
+
+const Member* Membership::display() const {
+  auto d = alive(Role::Display);
+  return d.empty() ? nullptr : d.front();
+}
+
+}  // namespace tessera::master

@@ -1,0 +1,71 @@
+// Who is in the farm: members join with Hello (role, then the lowest free rank of that
+// role), are bound to the ZeroMQ connections they use (control routing id, and the
+// heartbeat routing id derived from it), are lost when silent or when they miss a frame's
+// deadline, and are re-admitted when heard from again. The epoch (bumped by the master once
+// work is under way) tells stages which assignment is current.
+// Plain values, no sockets; time is passed in so tests control it.
+#pragma once
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "common/wire/protocol.h"
+
+namespace tessera::master {
+
+using Clock = std::chrono::steady_clock;
+
+const char* roleName(proto::Role r);
+
+struct Member {
+  proto::Role role = proto::Role::Renderer;
+  uint32_t rank = 0, pid = 0;
+  uint32_t id = 0;               // small, stable per member: the key of its drop log
+  std::string identity;          // control connection (ROUTER routing id)
+  std::string heartbeat_identity;  // heartbeat connection ("" if unknown)
+  std::string endpoint;          // compositors: where renderers send pieces
+  Clock::time_point last_seen, lost_at;
+  bool alive = true;
+  int strikes = 0;               // deadlines missed: each one doubles its quarantine
+};
+
+class Membership {
+ public:
+  // A member that missed `strikes` deadlines is not re-admitted before this has passed
+  // since it was lost (a stage that heartbeats but never delivers must not stall every
+  // frame); a stage lost only by silence is re-admitted as soon as it is heard again.
+  static double quarantineS(int strikes);
+
+  // A Hello from `identity`. A second Hello on a joined connection returns that member
+  // unchanged (the Welcome is only repeated). `joined` tells which.
+  Member& join(const std::string& identity, const proto::Hello& h, Clock::time_point now, bool* joined = nullptr);
+
+  // The member that owns this connection (control or heartbeat), or nullptr.
+  Member* byIdentity(const std::string& identity);
+  // The member that said Hello on this control connection, or nullptr.
+  Member* byControlIdentity(const std::string& identity);
+
+  // Something came from `m`. True when this re-admitted it (lost -> alive).
+  bool heard(Member& m, Clock::time_point now);
+  // Marks alive members silent for longer than timeout_s lost; returns them.
+  std::vector<Member*> expire(Clock::time_point now, double timeout_s);
+  // `m` missed a frame's deadline: lost, with one strike more.
+  void missedDeadline(Member& m, Clock::time_point now);
+
+  int count(proto::Role r) const;  // alive members of role r
+  std::vector<const Member*> alive(proto::Role r) const;  // by rank
+  const Member* find(proto::Role r, uint32_t rank) const;
+  Member* find(proto::Role r, uint32_t rank);
+  // The display the frames go to: the alive display of lowest rank, or nullptr.
+  const Member* display() const;
+  uint32_t epoch() const { return epoch_; }
+  void bumpEpoch() { ++epoch_; }
+
+ private:
+  std::map<std::pair<proto::Role, uint32_t>, Member> members_;
+  uint32_t epoch_ = 0;
+};
+
+}  // namespace tessera::master

@@ -1,0 +1,34 @@
+// How a frame's work is dealt to the alive stages; one plan per mode (sort_last_plan.h:
+// bricks + compositor bands; sort_first_plan.h: screen tiles). Plans learn from the
+// stages' Stats (active pixels, tile costs) to balance the next frames.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/wire/protocol.h"
+
+namespace tessera::master {
+
+struct CompositorSlot {
+  uint32_t rank = 0;
+  std::string endpoint;
+};
+
+struct Workers {
+  std::vector<uint32_t> renderers;           // ranks, ascending
+  std::vector<CompositorSlot> compositors;   // by rank
+};
+
+class Plan {
+ public:
+  virtual ~Plan() = default;
+  // The alive stages changed (also called once before the first frame).
+  virtual void reassign(const Workers& w) = 0;
+  // Fills p's work (bricks/order or tiles, and regions) for p.frame and p.camera.
+  virtual void fill(proto::FrameParams& p, const Workers& w) = 0;
+  // A renderer's accepted Stats.
+  virtual void stats(const proto::StageStats& s, const Workers& w) = 0;
+};
+
+}  // namespace tessera::master

@@ -1,0 +1,78 @@
+#include "master/membership.h"
+
+#include <gtest/gtest.h>
+
+#include "common/net/stage_link.h"
+
+namespace tessera::master {
+namespace {
+
+using namespace std::chrono_literals;
+using proto::Role;
+
+const Clock::time_point t0 = Clock::now();
+std::string controlId(char c) { return std::string(16, c) + "c"; }
+
+TEST(Membership, RanksPerRoleAndHeartbeatIdentityIsBound) {
+  Membership m;
+  bool joined = false;
+  Member& r0 = m.join(controlId('a'), {Role::Renderer, 11, ""}, t0, &joined);
+  EXPECT_TRUE(joined);
+  EXPECT_EQ(r0.rank, 0u);
+  EXPECT_EQ(m.join(controlId('b'), {Role::Renderer, 12, ""}, t0).rank, 1u);
+  EXPECT_EQ(m.join(controlId('d'), {Role::Display, 13, ""}, t0).rank, 0u);
+  EXPECT_EQ(m.count(Role::Renderer), 2);
+  // The heartbeat connection of renderer 0 belongs to it; it is no control connection.
+  std::string hb = StageLink::heartbeatIdentity(controlId('a'));
+  ASSERT_EQ(hb, std::string(16, 'a') + "h");
+  ASSERT_NE(m.byIdentity(hb), nullptr);
+  EXPECT_EQ(m.byIdentity(hb)->pid, 11u);
+  EXPECT_EQ(m.byControlIdentity(hb), nullptr);
+  EXPECT_EQ(m.byIdentity("stranger"), nullptr);
+  EXPECT_EQ(m.display()->pid, 13u);
+}
+
+TEST(Membership, SecondHelloOnTheSameConnectionIsTheSameMember) {
+  Membership m;
+  m.join(controlId('a'), {Role::Renderer, 11, ""}, t0);
+  bool joined = true;
+  EXPECT_EQ(m.join(controlId('a'), {Role::Renderer, 11, ""}, t0, &joined).rank, 0u);
+  EXPECT_FALSE(joined);
+  EXPECT_EQ(m.count(Role::Renderer), 1);
+}
+
+TEST(Membership, SilentMemberIsLostAndReadmittedWhenHeardAgain) {
+  Membership m;
+  Member& r = m.join(controlId('a'), {Role::Renderer, 11, ""}, t0);
+  m.join(controlId('b'), {Role::Renderer, 12, ""}, t0 + 2s);
+  auto lost = m.expire(t0 + 3s, 2.0);
+  ASSERT_EQ(lost.size(), 1u);
+  EXPECT_EQ(lost[0]->pid, 11u);
+  EXPECT_EQ(m.count(Role::Renderer), 1);
+  // Paused (SIGSTOP), then continued: its next heartbeat brings it back with its rank.
+  EXPECT_TRUE(m.heard(r, t0 + 4s));
+  EXPECT_TRUE(r.alive);
+  EXPECT_EQ(m.count(Role::Renderer), 2);
+  EXPECT_FALSE(m.heard(r, t0 + 5s)) << "only the first word re-admits";
+}
+
+TEST(Membership, MemberThatMissedADeadlineWaitsOutItsQuarantine) {
+  Membership m;
+  Member& r = m.join(controlId('a'), {Role::Renderer, 11, ""}, t0);
+  m.missedDeadline(r, t0);
+  EXPECT_FALSE(r.alive);
+  EXPECT_FALSE(m.heard(r, t0 + 1s)) << "heartbeats alone must not bring back a stage that does not deliver";
+  auto q = std::chrono::duration<double>(Membership::quarantineS(1));
+  EXPECT_TRUE(m.heard(r, t0 + std::chrono::duration_cast<Clock::duration>(q) + 1ms));
+  m.missedDeadline(r, t0 + 10s);
+  EXPECT_GT(Membership::quarantineS(2), Membership::quarantineS(1));
+  EXPECT_LE(Membership::quarantineS(30), 60.0);
+}
+
+TEST(Membership, HeartbeatIdentityOnlyForOurForm) {
+  EXPECT_EQ(StageLink::heartbeatIdentity("short"), "");
+  EXPECT_EQ(StageLink::heartbeatIdentity(std::string(16, 'x') + "h"), "");
+}
+
+}  // namespace
+}  // namespace tessera::master

@@ -1,0 +1,80 @@
+#include "master/metrics.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace tessera::master {
+namespace {
+
+proto::StageStats stats(proto::Role role, uint32_t rank, uint64_t frame, double ms) {
+  proto::StageStats s;
+  s.role = role;
+  s.rank = rank;
+  s.frame = frame;
+  s.work_ms = ms;
+  s.bytes_raw = 100;
+  s.active_pixels = 10;
+  return s;
+}
+
+TEST(Metrics, SummaryTakesTheSlowestStageAndTheImbalance) {
+  proto::FrameDone d;
+  d.frame = 4;
+  d.display_ms = 2;
+  auto j = Metrics::summarize({stats(proto::Role::Renderer, 0, 4, 10), stats(proto::Role::Renderer, 1, 4, 30)},
+                              {stats(proto::Role::Compositor, 0, 4, 5)}, d, 50);
+  EXPECT_EQ(j["frame"], 4);
+  EXPECT_DOUBLE_EQ(j["render_ms_max"].get<double>(), 30);
+  EXPECT_DOUBLE_EQ(j["render_imbalance_time"].get<double>(), 1.5);
+  EXPECT_EQ(j["render_bytes_raw"].get<uint64_t>(), 200u);
+  EXPECT_EQ(j["composite_reports"].get<size_t>(), 1u);
+  EXPECT_DOUBLE_EQ(j["latency_ms"].get<double>(), 50);
+}
+
+TEST(Metrics, LineWrittenOnceDoneAndAllStatsAreInWithTheFaultCounters) {
+  auto path = std::filesystem::temp_directory_path() / ("tessera_metrics_test_" + std::to_string(::getpid()) + ".jsonl");
+  {
+    Metrics m(path.string());
+    m.issued(0, 2, 1, 1);
+    m.stats(stats(proto::Role::Renderer, 0, 0, 10));
+    m.reassigned();
+    m.reissued(3);
+    m.refused();
+    m.refused();
+    proto::FrameDone d;
+    d.frame = 0;
+    m.done(d, 12, 5);
+    EXPECT_EQ(m.pending(), 1u) << "the compositor's stats are missing";
+    m.stats(stats(proto::Role::Compositor, 0, 0, 4));
+    EXPECT_EQ(m.pending(), 0u);
+    EXPECT_EQ(m.framesDone(), 1u);
+    m.stats(stats(proto::Role::Compositor, 0, 0, 4));  // late duplicate: ignored
+  }
+  std::ifstream in(path);
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  auto j = nlohmann::json::parse(line);
+  EXPECT_EQ(j["epoch"], 2);
+  EXPECT_EQ(j["master_dropped"], 5);
+  EXPECT_EQ(j["reassignments"], 1);
+  EXPECT_EQ(j["reissued_frames"], 3);
+  EXPECT_EQ(j["refused_peers"], 2);
+  EXPECT_FALSE(std::getline(in, line)) << "one line per frame";
+  std::filesystem::remove(path);
+}
+
+TEST(Metrics, FlushWritesDoneFramesWhoseStatsNeverCame) {
+  Metrics m("");
+  m.issued(0, 0, 2, 1);
+  proto::FrameDone d;
+  m.done(d, 1, 0);
+  EXPECT_EQ(m.pending(), 1u);
+  m.flushAll();
+  EXPECT_EQ(m.pending(), 0u);
+  EXPECT_EQ(m.framesDone(), 1u);
+}
+
+}  // namespace
+}  // namespace tessera::master

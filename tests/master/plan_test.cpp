@@ -1,0 +1,89 @@
+#include <gtest/gtest.h>
+
+#include "common/scene.h"
+#include "master/sort_first_plan.h"
+#include "master/sort_last_plan.h"
+
+namespace tessera::master {
+namespace {
+
+Workers twoByTwo() { return {{0, 2}, {{0, "ep0"}, {3, "ep3"}}}; }
+
+TEST(SortLastPlan, OneBrickPerRendererAndOneBandPerCompositor) {
+  Scene scene = defaultScene();
+  auto volume = std::make_shared<const Volume>(generateVolume({"hollow-shell", 16, 1}));
+  SortLastPlan plan(volume, scene.tf, 64, 48, true);
+  Workers w = twoByTwo();
+  plan.reassign(w);
+  proto::FrameParams p;
+  p.camera = scene.camera;
+  plan.fill(p, w);
+  ASSERT_EQ(p.bricks.size(), 2u);
+  EXPECT_EQ(p.bricks[0].renderer, 0u);
+  EXPECT_EQ(p.bricks[1].renderer, 2u);
+  EXPECT_EQ(p.order.size(), 2u);
+  ASSERT_EQ(p.regions.size(), 2u);
+  EXPECT_EQ(p.regions[1].compositor, 3u);
+  EXPECT_EQ(p.regions[1].endpoint, "ep3");
+  EXPECT_EQ(p.regions[0].region.h + p.regions[1].region.h, 48);
+}
+
+TEST(SortLastPlan, BandsFollowTheLatestFramesActivePixels) {
+  auto volume = std::make_shared<const Volume>(generateVolume({"hollow-shell", 16, 1}));
+  Scene scene = defaultScene();
+  SortLastPlan plan(volume, scene.tf, 64, 48, true);
+  Workers w = twoByTwo();
+  plan.reassign(w);
+  proto::StageStats s;
+  s.frame = 3;
+  s.active = {0, 0, 64, 8};  // everything in the top rows
+  plan.stats(s, w);
+  s.frame = 1;
+  s.active = {0, 40, 64, 8};  // an older frame: ignored
+  plan.stats(s, w);
+  proto::FrameParams p;
+  plan.fill(p, w);
+  ASSERT_EQ(p.regions.size(), 2u);
+  EXPECT_LT(p.regions[0].region.h, 24) << "the first band should shrink onto the active rows";
+}
+
+TEST(SortFirstPlan, TilesDealtToRenderersAndRoutedByCompositorRendererModM) {
+  SortFirstPlan plan(64, 48, true, 2);
+  Workers w = twoByTwo();
+  proto::FrameParams p;
+  p.frame = 0;
+  plan.fill(p, w);
+  ASSERT_EQ(p.tiles.size(), 4u);
+  long long area = 0;
+  for (size_t i = 0; i < p.tiles.size(); ++i) {
+    EXPECT_EQ(p.tiles[i].renderer, w.renderers[i % 2]);
+    EXPECT_EQ(p.tiles[i].compositor, w.compositors[i % 2].rank);
+    area += p.tiles[i].tile.area();
+  }
+  EXPECT_EQ(area, 64 * 48);
+  EXPECT_EQ(p.regions.size(), 2u);
+}
+
+TEST(SortFirstPlan, CostsOfAFullyReportedFrameRebalanceTheTiles) {
+  SortFirstPlan plan(64, 48, true, 1);
+  Workers w{{0, 1}, {{0, ""}}};
+  proto::FrameParams p0;
+  p0.frame = 0;
+  plan.fill(p0, w);
+  ASSERT_EQ(p0.tiles.size(), 2u);
+  for (uint32_t r : {0u, 1u}) {
+    proto::StageStats s;
+    s.frame = 0;
+    s.rank = r;
+    s.tile_ms = {r == 0 ? 100.0 : 1.0};  // renderer 0's tile is expensive
+    plan.stats(s, w);
+  }
+  proto::FrameParams p1;
+  p1.frame = 1;
+  plan.fill(p1, w);
+  ASSERT_EQ(p1.tiles.size(), 2u);
+  EXPECT_LT(p1.tiles[0].tile.area(), p0.tiles[0].tile.area()) << "the expensive tile should shrink";
+}
+
+}  // namespace
+}  // namespace tessera::master
