@@ -18,6 +18,11 @@
 namespace tessera::master {
 namespace {
 
+// The control socket's largest legitimate message: a Stats with one time per sort-first tile
+// (at most 1024 renderers x 64 tiles x 8 bytes = 512 KiB); larger ones are refused by ZeroMQ
+// before they are read.
+constexpr int64_t kMaxControlMessage = 4 << 20;
+
 using proto::Role;
 
 double msSince(Clock::time_point t) {
@@ -29,7 +34,7 @@ double msSince(Clock::time_point t) {
 class Master {
  public:
   Master(const MasterOptions& opt, zmq::context_t& ctx)
-      : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router)),
+      : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router, kMaxControlMessage)),
         window_(opt.in_flight, opt.deadline), base_camera_(opt.scene.camera), quality_(opt.scene.quality),
         metrics_(opt.metrics_path) {
     pub_.bind(opt_.endpoints.bind(opt_.endpoints.masterPub()));

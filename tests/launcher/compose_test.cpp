@@ -209,17 +209,17 @@ TEST(Compose, TesseraExtension) {
 services:
   master:
     entrypoint: ["/usr/local/bin/tessera-master"]
-    command: ["--window", "3"]
+    command: ["--in-flight", "3"]
     environment: {TESSERA_ENDPOINTS: "tcp://master:5555", KEEP: "1"}
     x-tessera:
-      local_command: "tessera-master --window 3 --log ${LOG:-info}"
+      local_command: "tessera-master --in-flight 3 --log ${LOG:-info}"
       local_environment: ["TESSERA_ENDPOINTS=ipc://${DIR:-/tmp/farm}"]
   display: {command: show}
   viewer: {command: view, x-tessera: {exit_leader: true}}
   sink: {command: sink, x-tessera: {exit_leader: "false"}}
 )");
   EXPECT_EQ(p.find("master")->argv,
-            (std::vector<std::string>{"tessera-master", "--window", "3", "--log", "info"}));
+            (std::vector<std::string>{"tessera-master", "--in-flight", "3", "--log", "info"}));
   const std::map<std::string, std::string> env = {{"TESSERA_ENDPOINTS", "ipc:///tmp/farm"}, {"KEEP", "1"}};
   EXPECT_EQ(p.find("master")->environment, env);
   EXPECT_FALSE(p.find("master")->exit_leader);
