@@ -5,6 +5,7 @@
 #include <map>
 
 #include "common/net/curve.h"
+#include "common/net/data_inbox.h"
 #include "common/net/log.h"
 #include "common/net/stage_link.h"
 #include "common/wire/strips.h"
@@ -22,7 +23,9 @@ class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
       : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Compositor, opt.advertise_host),
-        pull_(makeSocket(ctx, zmq::socket_type::pull, maxPixelMessageBytes(opt.width, opt.height))), gather_(0) {}
+        inbox_(ctx, proto::Role::Renderer, maxPixelMessageBytes(opt.width, opt.height),
+               Gather::waitingBudget(opt.width, opt.height)),
+        gather_(0) {}
 
   int run(const std::atomic<bool>* stop) {
     if (!link_.join(stop)) {
@@ -32,15 +35,19 @@ class Stage {
     uint32_t rank = link_.rank();
     gather_ = Gather(rank, Gather::waitingBudget(opt_.width, opt_.height));
     std::string bind = opt_.endpoints.compositorBind(rank);
-    pull_.set(zmq::sockopt::rcvhwm, 0);  // pieces are bounded by the master's frame window
-    bindTo(pull_, bind);
+    inbox_.bind(bind);
     spdlog::info("compositor rank={} joined, pieces at {}", rank, bind);
-    zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}, {pull_.handle(), 0, ZMQ_POLLIN, 0}};
+    zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0},
+                               {link_.control().handle(), 0, ZMQ_POLLIN, 0},
+                               {inbox_.socket().handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
-      pollFor(items, 2, std::chrono::milliseconds(100));
+      pollFor(items, 3, std::chrono::milliseconds(100));
       if ((items[0].revents & ZMQ_POLLIN) && !readParams()) return 0;
       if (link_.masterLost()) return 1;
-      if (items[1].revents & ZMQ_POLLIN) readPieces();
+      // The roster before the pieces: a new renderer's first pieces may wait for it.
+      if (items[1].revents & ZMQ_POLLIN)
+        if (auto roster = link_.receiveRoster(drops_)) accept(inbox_.setRoster(*roster, drops_));
+      if (items[2].revents & ZMQ_POLLIN) accept(inbox_.receive(drops_));
       for (auto& why : gather_.takeLateDrops()) drops_.drop(~0u, why);
       while (auto ready = gather_.pop()) composite(*ready);
     }
@@ -56,27 +63,32 @@ class Stage {
     return !published.shutdown;
   }
 
-  void readPieces() {
-    for (int i = 0; i < 256; ++i) {
-      zmq::message_t m;
-      if (!pull_.recv(m, zmq::recv_flags::dontwait)) break;
+  // Pieces (sort-last) or framebuffers (sort-first) from roster members; the renderer a
+  // message names must be the one its connection belongs to.
+  void accept(std::vector<DataInbox::Message> messages) {
+    for (auto& [rank, m] : messages) {
       auto t0 = Clock::now();
       auto h = proto::decodeHeader(view(m));
       if (!h) {
-        drops_.drop(~0u, h.error());
+        drops_.drop(rank, h.error());
         continue;
       }
       std::string why;
+      auto claims = [&](uint32_t renderer) {
+        return renderer == rank ? "" : "claims renderer " + std::to_string(renderer) + " from renderer " + std::to_string(rank);
+      };
       if (h->type == proto::Type::Framebuffer) {
         auto fb = proto::decodeFramebuffer(view(m));
-        why = fb ? gather_.addFramebuffer(std::move(*fb)) : fb.error();
+        why = !fb ? fb.error() : claims(fb->renderer);
+        if (why.empty()) why = gather_.addFramebuffer(std::move(*fb));
       } else {
         auto piece = proto::decodePiece(view(m));
-        why = piece ? gather_.addPiece(std::move(*piece)) : piece.error();
+        why = !piece ? piece.error() : claims(piece->renderer);
+        if (why.empty()) why = gather_.addPiece(std::move(*piece));
       }
       decode_ms_ += msSince(t0);
       if (!why.empty()) {
-        drops_.drop(h->sender, why);
+        drops_.drop(rank, why);
         continue;
       }
       bytes_in_ += m.size();
@@ -141,8 +153,9 @@ class Stage {
 
   zmq::socket_t& display(const std::string& endpoint) {
     if (endpoint != display_endpoint_) {
-      display_ = makeSocket(ctx_, zmq::socket_type::push);
+      display_ = makeSocket(ctx_, zmq::socket_type::dealer);
       display_.set(zmq::sockopt::linger, 1000);
+      display_.set(zmq::sockopt::routing_id, link_.dataIdentity());  // the display admits it by this
       connectTo(display_, endpoint);
       display_endpoint_ = endpoint;
     }
@@ -152,7 +165,8 @@ class Stage {
   const StageOptions& opt_;
   zmq::context_t& ctx_;
   StageLink link_;
-  zmq::socket_t pull_, display_;
+  DataInbox inbox_;
+  zmq::socket_t display_;
   std::string display_endpoint_;
   Gather gather_;
   std::vector<float> row_;

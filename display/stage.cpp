@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "common/net/curve.h"
+#include "common/net/data_inbox.h"
 #include "common/net/log.h"
 #include "common/net/stage_link.h"
 #include "common/wire/strips.h"
@@ -23,10 +24,9 @@ class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
       : opt_(opt), link_(ctx, opt.endpoints, proto::Role::Display),
-        pull_(makeSocket(ctx, zmq::socket_type::pull, maxPixelMessageBytes(opt.width, opt.height))),
-        waiting_budget_(kWaitingFrames * 4 * size_t(opt.width + kStripHeaderPixels) * size_t(opt.height)) {
-    pull_.set(zmq::sockopt::rcvhwm, 0);  // bounded by the master's frame window
-    bindTo(pull_, opt_.endpoints.bind(opt_.endpoints.display()));
+        waiting_budget_(kWaitingFrames * 4 * size_t(opt.width + kStripHeaderPixels) * size_t(opt.height)),
+        inbox_(ctx, proto::Role::Compositor, maxPixelMessageBytes(opt.width, opt.height), waiting_budget_) {
+    inbox_.bind(opt_.endpoints.bind(opt_.endpoints.display()));
   }
 
   int run(const std::atomic<bool>* stop) {
@@ -35,12 +35,17 @@ class Stage {
       return 1;
     }
     spdlog::info("display joined, strips at {}", opt_.endpoints.display());
-    zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}, {pull_.handle(), 0, ZMQ_POLLIN, 0}};
+    zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0},
+                               {link_.control().handle(), 0, ZMQ_POLLIN, 0},
+                               {inbox_.socket().handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
-      pollFor(items, 2, std::chrono::milliseconds(20));
+      pollFor(items, 3, std::chrono::milliseconds(20));
       if (items[0].revents & ZMQ_POLLIN) readParams();
       if (link_.masterLost()) return 1;
-      if (items[1].revents & ZMQ_POLLIN) readStrips();
+      // The roster before the strips: a new compositor's first strips may wait for it.
+      if (items[1].revents & ZMQ_POLLIN)
+        if (auto roster = link_.receiveRoster(drops_)) readStrips(inbox_.setRoster(*roster, drops_));
+      if (items[2].revents & ZMQ_POLLIN) readStrips(inbox_.receive(drops_));
       presentReady();
       if (sink_ && pollInput()) return 0;
       auto next = frames_.find(next_);  // strips without FrameParams never hold the display up
@@ -121,14 +126,16 @@ class Stage {
     return frames_.erase(it);
   }
 
-  void readStrips() {
-    for (int i = 0; i < 256; ++i) {
-      zmq::message_t m;
-      if (!pull_.recv(m, zmq::recv_flags::dontwait)) break;
+  // Strips from roster members; the compositor they name must be the one their connection is.
+  void readStrips(std::vector<DataInbox::Message> messages) {
+    for (auto& [rank, m] : messages) {
       auto s = proto::decodeStrips(view(m));
       if (!s) {
-        auto h = proto::decodeHeader(view(m));
-        drops_.drop(h ? h->sender : ~0u, s.error());
+        drops_.drop(rank, s.error());
+        continue;
+      }
+      if (s->compositor != rank) {
+        drops_.drop(rank, "claims compositor " + std::to_string(s->compositor) + " from compositor " + std::to_string(rank));
         continue;
       }
       if (s->epoch < epoch_) continue;  // stale, not malformed
@@ -238,17 +245,17 @@ class Stage {
 
   const StageOptions& opt_;
   StageLink link_;
-  zmq::socket_t pull_;
+  size_t waiting_budget_;
+  DataInbox inbox_;
   std::unique_ptr<Sink> sink_;
   // Frames with FrameParams are bounded by the master's window; strips by their regions.
   std::map<uint64_t, Pending> frames_;
-  // The master's --window is at most 64 frames in flight: no real strips are further ahead.
+  // The master's --in-flight is at most 64 frames in flight: no real strips are further ahead.
   static constexpr uint64_t kAheadWithoutParams = 64;
   // Strips waiting for FrameParams: at most this many whole frames of strips (every pixel
   // once at 4 bytes, plus 2 header pixels per row); the race needs about one.
   static constexpr size_t kWaitingFrames = 8;
   std::optional<proto::FrameParams> newest_;
-  size_t waiting_budget_;
   uint64_t next_ = 0, presented_ = 0, rejected_ = 0, bytes_in_ = 0;
   uint32_t epoch_ = 0;
   bool shutdown_ = false;

@@ -8,6 +8,7 @@
 #include <fmt/ranges.h>
 
 #include "common/net/log.h"
+#include "common/net/stage_link.h"
 #include "common/net/transport.h"
 #include "master/interaction.h"
 #include "master/membership.h"
@@ -113,7 +114,13 @@ class Master {
     if (!joined) return;
     spdlog::info("{} {} joined pid={}{}", roleName(h.role), m.rank, h.pid,
                  m.endpoint.empty() ? "" : " endpoint=" + m.endpoint);
-    if (started_) membershipChanged();
+    membersCameOrWent();
+  }
+
+  void membersCameOrWent() {
+    if (started_) return membershipChanged();
+    members_.bumpEpoch();  // every roster has its own epoch: a stage tells an early piece from a stranger's
+    sendRoster();
   }
 
   void checkHeartbeats() {
@@ -137,7 +144,7 @@ class Master {
 
   void readmit(const Member& m) {
     spdlog::info("{} {} (pid {}) heard from again: re-admitted", roleName(m.role), m.rank, m.pid);
-    if (started_) membershipChanged();
+    membersCameOrWent();
   }
 
   // Who the oldest frame still waits for, e.g. "stats from renderer 1 (pid 1234) and strips
@@ -195,6 +202,7 @@ class Master {
   // new epoch (stages drop work of older epochs), so no frame waits forever for a dead stage.
   void membershipChanged() {
     members_.bumpEpoch();
+    sendRoster();  // before the FrameParams of the new epoch, so it is there before their pieces
     metrics_.reassigned();
     Workers w = workers();
     plan_->reassign(w);
@@ -206,6 +214,17 @@ class Master {
     for (const auto& [frame, f] : window_.frames()) again.emplace_back(frame, f.camera);
     for (const auto& [frame, cam] : again) publish(frame, cam, w);
     metrics_.reissued(again.size());
+  }
+
+  // The members that may send pieces and strips, by the routing id of their data connection,
+  // to the stages that receive them, over each one's own control connection (never on PUB).
+  void sendRoster() {
+    proto::Roster roster{members_.epoch(), {}};
+    for (Role role : {Role::Renderer, Role::Compositor})
+      for (const Member* m : members_.alive(role))
+        if (auto id = StageLink::dataIdentity(m->identity); !id.empty()) roster.members.push_back({role, m->rank, id});
+    for (Role role : {Role::Compositor, Role::Display})
+      for (const Member* m : members_.alive(role)) sendTo(m->identity, proto::encode(roster, kMasterRank));
   }
 
   // ---- frames ---------------------------------------------------------------------------

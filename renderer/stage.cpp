@@ -146,7 +146,8 @@ class Stage {
   zmq::socket_t& socketFor(const std::string& endpoint) {
     auto it = pushes_.find(endpoint);
     if (it == pushes_.end()) {
-      zmq::socket_t s = makeSocket(ctx_, zmq::socket_type::push);
+      zmq::socket_t s = makeSocket(ctx_, zmq::socket_type::dealer);
+      s.set(zmq::sockopt::routing_id, link_.dataIdentity());  // compositors admit it by this
       s.set(zmq::sockopt::linger, 1000);  // let the last pieces leave at shutdown
       connectTo(s, endpoint);
       it = pushes_.emplace(endpoint, std::move(s)).first;

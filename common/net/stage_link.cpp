@@ -116,6 +116,27 @@ StageLink::Published StageLink::receive(DropCounter& drops, int max_messages) {
   return out;
 }
 
+std::string StageLink::dataIdentity(const std::string& control_identity) {
+  std::string data = heartbeatIdentity(control_identity);
+  if (!data.empty()) data.back() = 'd';
+  return data;
+}
+
+std::optional<proto::Roster> StageLink::receiveRoster(DropCounter& drops, int max_messages) {
+  std::optional<proto::Roster> newest;
+  for (int i = 0; i < max_messages; ++i) {
+    zmq::message_t m;
+    if (!ctl_.recv(m, zmq::recv_flags::dontwait)) break;
+    auto r = proto::decodeRoster(view(m));
+    if (!r) {
+      drops.drop(~0u, "control: " + r.error());
+      continue;
+    }
+    if (!newest || r->epoch >= newest->epoch) newest = std::move(*r);
+  }
+  return newest;
+}
+
 bool StageLink::masterLost() const {
   if (std::chrono::duration<double>(Clock::now() - last_heard_).count() < kMasterSilenceS) return false;
   spdlog::error("master lost: nothing from {} for {:.0f} s", ep_.masterPub(), kMasterSilenceS);

@@ -8,6 +8,7 @@
 #pragma once
 #include <atomic>
 #include <chrono>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -45,6 +46,14 @@ class StageLink {
   const std::string& identity() const { return identity_; }  // control connection's routing id
   // The heartbeat connection's routing id for a control routing id ("" if not of our form).
   static std::string heartbeatIdentity(const std::string& control_identity);
+  // The routing id this stage's data sockets (pieces, strips) must carry: the master names it
+  // in the Roster it sends privately to the stages that receive them.
+  static std::string dataIdentity(const std::string& control_identity);
+  const std::string dataIdentity() const { return dataIdentity(identity_); }
+  // Drains the master's private messages on the control connection (non-blocking) and
+  // returns the newest Roster among them; anything else is dropped and counted.
+  std::optional<proto::Roster> receiveRoster(DropCounter& drops, int max_messages = 64);
+  zmq::socket_t& control() { return ctl_; }
 
  private:
   zmq::context_t& ctx_;

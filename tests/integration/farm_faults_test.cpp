@@ -88,8 +88,8 @@ TEST(FarmFaults, BadMessagesAreDroppedCountedAndFramesStayCorrect) {
   std::vector<std::vector<std::byte>> junk = {bytesOf("garbage, not a message"), truncated, old_version, bad_piece,
                                               std::vector<std::byte>(5000, std::byte{0xFF})};
   zmq::context_t ctx;
-  push(ctx, "ipc://" + (sockets / "compositor-0").string(), zmq::socket_type::push, junk);
-  push(ctx, "ipc://" + (sockets / "display").string(), zmq::socket_type::push, junk);
+  push(ctx, "ipc://" + (sockets / "compositor-0").string(), zmq::socket_type::dealer, junk);
+  push(ctx, "ipc://" + (sockets / "display").string(), zmq::socket_type::dealer, junk);
   push(ctx, "ipc://" + (sockets / "master-ctl").string(), zmq::socket_type::dealer, junk);
 
   auto run = farm.get();

@@ -56,7 +56,7 @@ struct Target {
   zmq::socket_type type;
   Bytes valid;  // a well-formed message the stage always refuses (a far-future frame or wrong type)
   std::function<Bytes(uint64_t)> far_future;
-  bool multipart_counts_each_part;  // PULL sees every part; the master's ROUTER sees one message
+  bool multipart_counts_each_part;  // every input is a ROUTER now: a multi-part message is one drop
   int64_t oversized;                // bytes, above the socket's ZMQ_MAXMSGSIZE
 };
 
@@ -116,7 +116,7 @@ void sendOversized(zmq::context_t& ctx, const Target& t) {
 
 TEST(FarmFuzz, JunkOnEveryEndpointIsCountedWhileFramesStayCorrectAndMemoryBounded) {
   FarmDir dir("fuzz");
-  const int frames = 200, width = 160, height = 120;
+  const int frames = 320, width = 160, height = 120;
   // The first 200 frames of a 1000-frame orbit (0 to 72 degrees). A 200-frame orbit also
   // reaches about 88 and 268 degrees, where frames 49 and 149 differed from tessera-render
   // by 2/255 in one run; that is outside this test's subject (see the report of issue 8).
@@ -159,10 +159,10 @@ TEST(FarmFuzz, JunkOnEveryEndpointIsCountedWhileFramesStayCorrectAndMemoryBounde
   auto farDone = [](uint64_t frame) { return proto::encode(proto::FrameDone{frame, 0, 0, 0, 0, 0}, 0); };
   const int64_t oversized = 64 << 20;  // ~90x the pixel-message bound for this image size
   std::vector<std::pair<std::string, Target>> targets = {
-      {"composite_dropped", {"ipc://" + (sockets / "compositor-0").string(), zmq::socket_type::push,
-                             farPiece(1000000), farPiece, true, oversized}},
-      {"display_dropped", {"ipc://" + (sockets / "display").string(), zmq::socket_type::push, farStrips(1000000),
-                           farStrips, true, oversized}},
+      {"composite_dropped", {"ipc://" + (sockets / "compositor-0").string(), zmq::socket_type::dealer,
+                             farPiece(1000000), farPiece, false, oversized}},
+      {"display_dropped", {"ipc://" + (sockets / "display").string(), zmq::socket_type::dealer, farStrips(1000000),
+                           farStrips, false, oversized}},
       {"master_dropped", {"ipc://" + (sockets / "master-ctl").string(), zmq::socket_type::dealer,
                           farPiece(1000000), farDone, false, oversized}},
   };
