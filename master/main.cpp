@@ -1,6 +1,7 @@
 // tessera-master: loads the scene, registers the stages and drives the frames.
 #include <CLI/CLI.hpp>
 
+#include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/net/stop.h"
 #include "master/master.h"
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
                                        : throw std::invalid_argument("--format: expected rgba8, rgba16f or rgba32f");
     opt.balance = tiling == "balanced";
     zmq::context_t ctx(1);
+    setupCurve(ctx, opt.endpoints.base);  // on when endpoints leave this host
     return master::run(opt, ctx, &installStopSignals());
   } catch (const std::exception& e) {
     log->error("{}", e.what());

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/net/stage_link.h"
 #include "common/net/transport.h"
@@ -38,8 +39,8 @@ class Master {
       : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router, kMaxControlMessage)),
         window_(opt.in_flight, opt.deadline), base_camera_(opt.scene.camera), quality_(opt.scene.quality),
         metrics_(opt.metrics_path) {
-    pub_.bind(opt_.endpoints.bind(opt_.endpoints.masterPub()));
-    ctl_.bind(opt_.endpoints.bind(opt_.endpoints.masterControl()));
+    bindTo(pub_, opt_.endpoints.bind(opt_.endpoints.masterPub()));
+    bindTo(ctl_, opt_.endpoints.bind(opt_.endpoints.masterControl()));
     total_frames_ = opt_.frames < 0 ? opt_.scene.orbit.frames : opt_.frames;
     spdlog::info("master listening pub={} control={} renderers={} compositors={} frames={} in_flight={}",
                  opt_.endpoints.masterPub(), opt_.endpoints.masterControl(), opt_.renderers, opt_.compositors,

@@ -7,6 +7,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include "common/net/curve.h"
+
 #include "common/net/transport.h"
 
 namespace tessera {
@@ -38,9 +40,9 @@ StageLink::StageLink(zmq::context_t& ctx, const Endpoints& ep, proto::Role role,
       identity_(randomIdentity()), sub_(makeSocket(ctx, zmq::socket_type::sub)), ctl_(makeSocket(ctx, zmq::socket_type::dealer)) {
   sub_.set(zmq::sockopt::subscribe, "");
   sub_.set(zmq::sockopt::rcvhwm, 0);  // FrameParams must never be dropped by the queue
-  sub_.connect(ep_.masterPub());
+  connectTo(sub_, ep_.masterPub());
   ctl_.set(zmq::sockopt::routing_id, identity_);
-  ctl_.connect(ep_.masterControl());
+  connectTo(ctl_, ep_.masterControl());
 }
 
 StageLink::~StageLink() {
@@ -83,7 +85,7 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   heartbeat_ = std::thread([this] {
     zmq::socket_t hb = makeSocket(ctx_, zmq::socket_type::dealer);
     hb.set(zmq::sockopt::routing_id, heartbeatIdentity(identity_));
-    hb.connect(ep_.masterControl());
+    connectTo(hb, ep_.masterControl());
     while (!quit_) {
       sendBytes(hb, proto::encode(proto::Heartbeat{role_, rank_}, rank_), false, true);
       for (int i = 0; i < 5 && !quit_; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
