@@ -139,6 +139,13 @@ class Parser {
     return sp;
   }
 
+  // "" for a regular file; else "file not found: PATH" or "PATH is a directory, not a regular file".
+  static std::string fileProblem(const std::string& file) {
+    const std::string why = notRegularFile(file);
+    if (why.empty()) return "";
+    return why == "file not found" ? why + ": " + file : file + " " + why;
+  }
+
   std::variant<RawVolumeSpec, GeneratorSpec> volume(const YAML::Node& n) const;
   TransferFunction transferFunction(const YAML::Node& n) const;
   Camera camera(const YAML::Node& n) const;
@@ -191,7 +198,7 @@ std::variant<RawVolumeSpec, GeneratorSpec> Parser::volume(const YAML::Node& n) c
     s.range = {0, t == "uint16" ? 65535.0 : 255.0};
   }
   // Cheap checks now (a stat), so a bad file fails at startup rather than in a renderer.
-  if (std::string m = notRegularFile(s.file); !m.empty()) fail("volume.file", s.file + ": " + m);
+  if (std::string m = fileProblem(s.file); !m.empty()) fail("volume.file", m);
   std::error_code ec;
   uintmax_t have = std::filesystem::file_size(s.file, ec);
   uintmax_t need = (uintmax_t)s.dims[0] * s.dims[1] * s.dims[2] * (t == "uint8" ? 1 : t == "uint16" ? 2 : 4);
@@ -281,7 +288,7 @@ MeshSpec Parser::mesh(const YAML::Node& n, bool has_volume) const {
   if (n.IsScalar()) {
     std::filesystem::path p(n.Scalar());
     m.file = (p.is_relative() ? std::filesystem::path(base_) / p : p).lexically_normal().string();
-    if (std::string why = notRegularFile(m.file); !why.empty()) fail("mesh", m.file + ": " + why);
+    if (std::string why = fileProblem(m.file); !why.empty()) fail("mesh", why);
     return m;
   }
   checkKeys(n, "mesh", {"isosurface"});
