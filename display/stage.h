@@ -18,6 +18,7 @@ struct StageOptions {
   std::string out_dir = "out";  // PNG frames when there is no window
   std::string window = "auto";  // auto | on | off
   std::optional<std::array<double, 3>> background;  // PNG: composite over this colour
+  bool premultiplied = false;  // also write frame_NNNNNN.pam (exact premultiplied rgba8)
 };
 
 int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);
