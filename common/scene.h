@@ -20,7 +20,8 @@ struct Quality {
   bool reference = false;          // double precision, no skipping, no early termination
   bool operator==(const Quality&) const = default;
 };
-// reference: step L0/16, no ET, no skipping; default: step L0, ET 1 - 0.5/255; fast: step 2*L0, ET 0.95.
+// reference: step L0/16, no ET, no skipping; default: step L0, ET 1 - 0.5/255; fast: step 2*L0,
+// ET as default (every preset is farm-exact: see farmAccuracyProblem).
 Quality namedQuality(const std::string& name);  // throws std::invalid_argument
 
 struct Orbit {
@@ -59,6 +60,22 @@ struct Scene {
   Orbit orbit;
 };
 
+// Limits checked where a scene is read, so that no renderer meets them later. Each *Problem
+// function returns "" when fine, else the value and the limit (the caller adds file and key).
+inline constexpr double kMinStep = 0x1p-19;  // sqrt(3) / step < 2^20 samples on the longest ray
+inline constexpr double kMaxStep = 0.25;     // >= 4 samples across the volume (it spans 1)
+inline constexpr double kMinFov = 0.01, kMaxFov = 179;                       // degrees
+inline constexpr double kMinCameraDistance = 1e-6, kMaxCameraDistance = 1e6;  // and |coordinate| <= max
+inline constexpr double kMinOrthoHeight = 1e-6, kMaxOrthoHeight = 1e6;
+// A piece may be the whole image in the widest pixel format (rgba32f, 16 bytes per pixel).
+inline constexpr long long kMaxImagePixels = 16ll << 20;  // kMaxPayload (256 MiB) / 16
+std::string stepProblem(double step);
+std::string imageSizeProblem(int width, int height);
+struct KeyProblem {
+  std::string key, what;  // what == "": fine
+};
+KeyProblem cameraProblem(const Camera& c);
+
 struct SceneError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
@@ -70,6 +87,10 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir,
 Scene loadScene(const std::string& path);
 // The built-in default scene (a hollow shell) that runs with no file.
 Scene defaultScene();
+// "" when a farm of `renderers` (one brick each, or more) renders `q` within the accuracy
+// contract (1/255 of tessera-render); else why not and what to change. Bricks terminate their
+// rays separately: early termination at e can leave (1 - e) * 255 levels out of one process.
+std::string farmAccuracyProblem(const Quality& q, int renderers);
 // Loads or generates the scene's volume.
 Volume loadVolume(const Scene& scene);
 

@@ -12,6 +12,8 @@
 #include <string>
 #include <thread>
 
+#include <unistd.h>
+
 #include "common/parallel.h"
 
 namespace tessera {
@@ -27,9 +29,60 @@ Vec3 Volume::halfExtent() const {
   return {0.5 * e[0] / m, 0.5 * e[1] / m, 0.5 * e[2] / m};
 }
 
+size_t voxelTypeSize(VoxelType t) { return t == VoxelType::UInt8 ? 1 : (t == VoxelType::UInt16 ? 2 : 4); }
+
+std::string spacingProblem(const std::array<double, 3>& sp) {
+  double lo = INFINITY, hi = 0;
+  for (double s : sp) {
+    if (!std::isfinite(s) || !(s >= kMinSpacing && s <= kMaxSpacing))
+      return "spacing " + std::to_string(s) + " must be finite and in [1e-30, 1e30]";
+    lo = std::min(lo, s);
+    hi = std::max(hi, s);
+  }
+  // Beyond this the thinnest axis is far below one pixel and the volume renders as nothing.
+  if (hi / lo > kMaxSpacingRatio)
+    return "spacing ratio largest/smallest is " + std::to_string(hi / lo) + ", must be <= 1e6";
+  return "";
+}
+
+std::string notRegularFile(const std::string& path) {
+  std::error_code ec;
+  const auto st = std::filesystem::status(path, ec);
+  switch (st.type()) {
+    case std::filesystem::file_type::regular: return "";
+    case std::filesystem::file_type::not_found: return "file not found";
+    case std::filesystem::file_type::directory: return "is a directory, not a regular file";
+    case std::filesystem::file_type::fifo: return "is a FIFO (named pipe), not a regular file";
+    case std::filesystem::file_type::socket: return "is a socket, not a regular file";
+    case std::filesystem::file_type::block: return "is a block device, not a regular file";
+    case std::filesystem::file_type::character: return "is a character device, not a regular file";
+    default: return "cannot be examined" + (ec ? ": " + ec.message() : std::string());
+  }
+}
+
+uint64_t volumeLoadBytes(const std::array<int, 3>& dims, size_t file_bytes_per_voxel) {
+  const uint64_t n = (uint64_t)std::max(dims[0], 0) * (uint64_t)std::max(dims[1], 0) * (uint64_t)std::max(dims[2], 0);
+  return n * (sizeof(float) + file_bytes_per_voxel);  // <= 2^48 * 8: no overflow
+}
+
+uint64_t physicalMemoryBytes() {
+  const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && size > 0 ? (uint64_t)pages * (uint64_t)size : UINT64_MAX;
+}
+
+std::string memoryProblem(const std::array<int, 3>& dims, size_t file_bytes_per_voxel) {
+  const uint64_t need = volumeLoadBytes(dims, file_bytes_per_voxel), have = physicalMemoryBytes();
+  if (need <= have) return "";
+  std::string m = "[";  // built by appending: GCC 12 warns falsely (-Wrestrict) on "lit" + string&&
+  m += std::to_string(dims[0]) + ", " + std::to_string(dims[1]) + ", " + std::to_string(dims[2]);
+  m += "] voxels need " + std::to_string(need) + " bytes (" + std::to_string(need >> 30);
+  m += " GiB) to load, more than this machine's " + std::to_string(have) + " bytes of memory";
+  return m;
+}
+
 namespace {
 
-size_t typeSize(VoxelType t) { return t == VoxelType::UInt8 ? 1 : (t == VoxelType::UInt16 ? 2 : 4); }
+size_t typeSize(VoxelType t) { return voxelTypeSize(t); }
 
 [[noreturn]] void fail(const std::string& file, const std::string& what) {
   throw std::runtime_error(file + ": " + what);
@@ -38,9 +91,8 @@ size_t typeSize(VoxelType t) { return t == VoxelType::UInt8 ? 1 : (t == VoxelTyp
 void checkGeometry(const std::string& file, const std::array<int, 3>& dims, const std::array<double, 3>& sp) {
   for (int i = 0; i < 3; ++i) {
     if (dims[i] <= 0) fail(file, "dims must be positive, got " + std::to_string(dims[i]));
-    if (!(sp[i] > 0) || !std::isfinite(sp[i]))
-      fail(file, "spacing must be positive and finite, got " + std::to_string(sp[i]));
   }
+  if (std::string p = spacingProblem(sp); !p.empty()) fail(file, p);
 }
 
 template <class T>
@@ -71,17 +123,19 @@ Volume loadRawVolume(const RawVolumeSpec& spec) {
   if (spec.has_range && !(spec.range[0] < spec.range[1]))
     fail(f, "range must satisfy min < max, got [" + std::to_string(spec.range[0]) + ", " +
                 std::to_string(spec.range[1]) + "]");
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(f, ec)) fail(f, "file not found");
+  if (std::string p = notRegularFile(f); !p.empty()) fail(f, p);
   const size_t count = (size_t)spec.dims[0] * spec.dims[1] * spec.dims[2];
   const size_t ts = typeSize(spec.type);
   const uintmax_t expected = (uintmax_t)count * ts;
+  std::error_code ec;
   const uintmax_t actual = std::filesystem::file_size(f, ec);
   if (ec) fail(f, "cannot read size: " + ec.message());
   if (actual != expected)
     fail(f, "file size is " + std::to_string(actual) + " bytes but dims " + std::to_string(spec.dims[0]) +
                 " x " + std::to_string(spec.dims[1]) + " x " + std::to_string(spec.dims[2]) + " x " +
                 std::to_string(ts) + " bytes/voxel need " + std::to_string(expected) + " bytes");
+  // Before allocating: a sparse or huge file would otherwise end in a bare std::bad_alloc.
+  if (std::string p = memoryProblem(spec.dims, ts); !p.empty()) fail(f, p);
   std::vector<unsigned char> raw(expected);
   std::ifstream in(f, std::ios::binary);
   if (!in || !in.read(reinterpret_cast<char*>(raw.data()), (std::streamsize)expected))
@@ -220,8 +274,9 @@ void noiseCloud(Volume& v, uint32_t seed) {
 Volume generateVolume(const GeneratorSpec& spec) {
   if (spec.size < 2) throw std::invalid_argument("generator '" + spec.name + "': size must be >= 2, got " + std::to_string(spec.size));
   if (spec.size > 2048) throw std::invalid_argument("generator '" + spec.name + "': size must be <= 2048, got " + std::to_string(spec.size));
-  for (double s : spec.spacing)
-    if (!(s > 0) || !std::isfinite(s)) throw std::invalid_argument("generator: spacing must be positive and finite");
+  if (std::string p = spacingProblem(spec.spacing); !p.empty()) throw std::invalid_argument("generator: " + p);
+  const std::array<int, 3> dims{spec.size, spec.size, spec.size};
+  if (std::string p = memoryProblem(dims, 0); !p.empty()) throw std::invalid_argument("generator: " + p);
   Volume v;
   v.dims = {spec.size, spec.size, spec.size};
   v.spacing = spec.spacing;

@@ -43,6 +43,20 @@ struct GeneratorSpec {
   std::array<double, 3> spacing{1, 1, 1};
 };
 
+// Checks done where a scene is read and again before loading; each returns "" when fine,
+// else what is wrong (the caller adds the file and key).
+// Spacing: finite, in [kMinSpacing, kMaxSpacing], largest / smallest <= kMaxSpacingRatio.
+inline constexpr double kMinSpacing = 1e-30, kMaxSpacing = 1e30, kMaxSpacingRatio = 1e6;
+std::string spacingProblem(const std::array<double, 3>& spacing);
+// "" for a regular file, else e.g. "is a directory", "is a FIFO (named pipe), not a regular file", "file not found".
+std::string notRegularFile(const std::string& path);
+// Bytes needed to load a volume: the normalised floats plus the file read whole (0 for generators).
+uint64_t volumeLoadBytes(const std::array<int, 3>& dims, size_t file_bytes_per_voxel);
+uint64_t physicalMemoryBytes();
+// "" if volumeLoadBytes fits in this machine's physical memory, else a sentence with both sizes.
+std::string memoryProblem(const std::array<int, 3>& dims, size_t file_bytes_per_voxel);
+size_t voxelTypeSize(VoxelType t);
+
 // Throws std::runtime_error naming the file: missing file, size != dims x type size,
 // non-finite value (with the first offending index).
 Volume loadRawVolume(const RawVolumeSpec& spec);

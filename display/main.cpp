@@ -20,6 +20,8 @@ int main(int argc, char** argv) {
   app.add_option("--out", opt.out_dir, "folder for PNG frames (no window)")->envname("TESSERA_OUT");
   app.add_option("--window", opt.window, "auto | on | off")->envname("TESSERA_WINDOW")
       ->check(CLI::IsMember({"auto", "on", "off"}));
+  app.add_flag("--premultiplied", opt.premultiplied, "also write frame_NNNNNN.pam: exact premultiplied rgba8")
+      ->envname("TESSERA_PREMULTIPLIED");
   app.add_option("--background", bg, "r,g,b in [0,1]: PNGs composited over this colour")->delimiter(',')->expected(3);
   CLI11_PARSE(app, argc, argv);
   try {

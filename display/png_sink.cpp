@@ -1,4 +1,5 @@
-// PNG folder sink: one file per frame, <dir>/frame_<id, 6 digits>.png, via writePng.
+// PNG folder sink: one file per frame, <dir>/frame_<id, 6 digits>.png, via writePng, and
+// optionally frame_<id>.pam with the premultiplied values (for exact comparisons).
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -11,8 +12,8 @@ namespace {
 
 class PngSink final : public Sink {
  public:
-  PngSink(std::string dir, std::optional<std::array<double, 3>> background)
-      : dir_(std::move(dir)), background_(background) {
+  PngSink(std::string dir, std::optional<std::array<double, 3>> background, bool premultiplied)
+      : dir_(std::move(dir)), background_(background), premultiplied_(premultiplied) {
     std::error_code ec;
     std::filesystem::create_directories(dir_, ec);
     if (ec || !std::filesystem::is_directory(dir_))
@@ -22,20 +23,23 @@ class PngSink final : public Sink {
   // The status line is not burnt into files: they stay comparable with reference images.
   void present(const Image8& frame, uint64_t id, const std::string& /*status*/) override {
     char name[40];
-    std::snprintf(name, sizeof name, "frame_%06llu.png", (unsigned long long)id);
-    writePng((std::filesystem::path(dir_) / name).string(), frame, background_);
+    std::snprintf(name, sizeof name, "frame_%06llu", (unsigned long long)id);
+    const std::filesystem::path stem = std::filesystem::path(dir_) / name;
+    writePng(stem.string() + ".png", frame, background_);
+    if (premultiplied_) writePam(stem.string() + ".pam", frame);
   }
 
  private:
   std::string dir_;
   std::optional<std::array<double, 3>> background_;
+  bool premultiplied_;
 };
 
 }  // namespace
 
-std::unique_ptr<Sink> makePngSink(const std::string& dir,
-                                  std::optional<std::array<double, 3>> background) {
-  return std::make_unique<PngSink>(dir, background);
+std::unique_ptr<Sink> makePngSink(const std::string& dir, std::optional<std::array<double, 3>> background,
+                                  bool premultiplied) {
+  return std::make_unique<PngSink>(dir, background, premultiplied);
 }
 
 }  // namespace tessera::display

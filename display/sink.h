@@ -28,9 +28,11 @@ class Sink {
   virtual std::vector<InputEvent> poll() { return {}; }
 };
 
-// Writes <dir>/frame_<id 6 digits>.png (straight alpha, or composited over background).
+// Writes <dir>/frame_<id 6 digits>.png (straight alpha, or composited over background) and,
+// with `premultiplied`, frame_<id>.pam beside it: the exact rgba8 values (see writePam).
 std::unique_ptr<Sink> makePngSink(const std::string& dir,
-                                  std::optional<std::array<double, 3>> background = std::nullopt);
+                                  std::optional<std::array<double, 3>> background = std::nullopt,
+                                  bool premultiplied = false);
 // Opens a window of the image's size; throws std::runtime_error if no display server.
 std::unique_ptr<Sink> makeWindowSink(int width, int height, const std::string& title);
 // True if a display server is reachable (DISPLAY or WAYLAND_DISPLAY set and SDL video inits).

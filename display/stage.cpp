@@ -224,7 +224,7 @@ class Stage {
       sink_ = makeWindowSink(p.width, p.height, "Tessera");
       spdlog::info("display window {}x{}", p.width, p.height);
     } else {
-      sink_ = makePngSink(opt_.out_dir, opt_.background);
+      sink_ = makePngSink(opt_.out_dir, opt_.background, opt_.premultiplied);
       spdlog::info("display writing PNG frames to {}/", opt_.out_dir);
     }
   }

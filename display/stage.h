@@ -20,6 +20,7 @@ struct StageOptions {
   std::optional<std::array<double, 3>> background;  // PNG: composite over this colour
   // The scene's image size (every process loads the same scene): bounds what peers may send.
   int width = 512, height = 512;
+  bool premultiplied = false;  // also write frame_NNNNNN.pam (exact premultiplied rgba8)
 };
 
 int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);

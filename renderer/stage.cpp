@@ -55,12 +55,23 @@ class Stage {
       for (const auto& p : published.params) epoch_ = std::max(epoch_, p.epoch);
       if (link_.masterLost()) return 1;
       for (const auto& p : published.params)
-        if (p.epoch == epoch_) renderFrame(p);
+        if (p.epoch == epoch_) renderFrameOrLog(p);
     }
     return 0;
   }
 
  private:
+  // A frame whose parameters make rendering throw (the master's checks should prevent it)
+  // costs that frame, never the renderer: the farm keeps its other frames.
+  void renderFrameOrLog(const proto::FrameParams& p) {
+    try {
+      renderFrame(p);
+    } catch (const std::exception& e) {
+      ++frames_failed_;
+      spdlog::error("frame={} render failed: {} frames_failed={}", p.frame, e.what(), frames_failed_);
+    }
+  }
+
   void renderFrame(const proto::FrameParams& p) {
     proto::StageStats st;
     st.role = proto::Role::Renderer;
@@ -164,6 +175,7 @@ class Stage {
   std::deque<Cached> cache_;
   std::map<std::string, zmq::socket_t> pushes_;
   uint32_t epoch_ = 0;
+  uint64_t frames_failed_ = 0;
   DropCounter drops_;
 };
 

@@ -1,4 +1,4 @@
-// PNG (libpng, straight alpha) and raw float image files.
+// PNG (libpng, straight alpha), PAM (premultiplied rgba8) and raw float image files.
 #include "common/io/image_io.h"
 
 #include <png.h>
@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 
 namespace tessera {
@@ -126,6 +127,44 @@ Image8 readPng(const std::string& path) {
     for (int k = 0; k < 3; ++k) d[k] = (uint8_t)((s[k] * s[3] + 127) / 255);  // premultiply, rounded
     d[3] = s[3];
   }
+  return img;
+}
+
+void writePam(const std::string& path, const Image8& img) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) fail(path, std::string("cannot open for writing: ") + std::strerror(errno));
+  out << "P7\nWIDTH " << img.width << "\nHEIGHT " << img.height
+      << "\nDEPTH 4\nMAXVAL 255\nTUPLTYPE RGB_ALPHA_PREMULTIPLIED\nENDHDR\n";
+  out.write(reinterpret_cast<const char*>(img.px.data()), (std::streamsize)img.px.size());
+  if (!out) fail(path, "write failed");
+}
+
+void writePam(const std::string& path, const ImageF& img) { writePam(path, toRGBA8(img)); }
+
+Image8 readPam(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+  std::string line;
+  if (!std::getline(in, line) || line != "P7") fail(path, "not a PAM file (expected 'P7' on the first line)");
+  long long w = -1, h = -1, depth = -1, maxval = -1;
+  std::string tuple;
+  for (int n = 0; n < 16 && std::getline(in, line) && line != "ENDHDR"; ++n) {
+    std::istringstream f(line);
+    std::string key;
+    f >> key;
+    if (key == "WIDTH") f >> w;
+    else if (key == "HEIGHT") f >> h;
+    else if (key == "DEPTH") f >> depth;
+    else if (key == "MAXVAL") f >> maxval;
+    else if (key == "TUPLTYPE") f >> tuple;
+  }
+  if (line != "ENDHDR") fail(path, "PAM header has no ENDHDR line");
+  if (depth != 4 || maxval != 255 || tuple != "RGB_ALPHA_PREMULTIPLIED")
+    fail(path, "expected DEPTH 4, MAXVAL 255, TUPLTYPE RGB_ALPHA_PREMULTIPLIED");
+  if (w < 1 || h < 1 || w > 65536 || h > 65536) fail(path, "PAM size out of range");
+  Image8 img((int)w, (int)h);
+  if (!in.read(reinterpret_cast<char*>(img.px.data()), (std::streamsize)img.px.size()))
+    fail(path, "PAM file is shorter than WIDTH x HEIGHT x 4 bytes");
   return img;
 }
 

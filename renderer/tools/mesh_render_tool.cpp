@@ -66,6 +66,7 @@ int renderMeshScene(const Scene& scene, const MeshToolOptions& opt) {
 
   const Frame f = renderFrame(r, g, cam, w, h, tiles, aa, base, opt.repeat);
   writePng(opt.out, f.image, opt.background);
+  if (!opt.pam.empty()) writePam(opt.pam, f.image);
   std::printf("wrote %s (%dx%d, %zu triangles in %zu chunks, %zu tile%s, antialiasing %s %d, frame %d)\n",
               opt.out.c_str(), w, h, g.mesh.triangleCount(), g.chunks.size(), tiles.size(),
               tiles.size() == 1 ? "" : "s", aa.method.c_str(), aa.samples, opt.frame);

@@ -22,6 +22,7 @@ struct MeshToolOptions {
   std::string aa;                  // override the scene's antialiasing.method
   int aa_samples = 0;              // and its samples (0: the method's default)
   std::optional<std::array<double, 3>> background;
+  std::string pam;                 // also write premultiplied rgba8 (writePam) here
 };
 
 // Returns the process exit code.

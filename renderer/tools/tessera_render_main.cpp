@@ -1,6 +1,6 @@
 // tessera-render: renders a scene in one process with the CPU ray caster or the GLSL
 // (OSMesa) backend, optionally split into bricks and composited exactly as the farm does,
-// and writes a PNG (and raw float).
+// and writes a PNG (and a premultiplied rgba8 PAM, raw float).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -75,7 +75,7 @@ ImageF renderScene(const renderer::VolumeBackend& rc, const Volume& vol, const T
 
 int run(int argc, char** argv) {
   CLI::App app{"tessera-render: CPU ray casting of a Tessera scene in one process"};
-  std::string scene_path, out = "out.png", quality_name, size, raw, background, backend = "cpu";
+  std::string scene_path, out = "out.png", quality_name, size, raw, pam, background, backend = "cpu";
   int bricks = 1, frame = 0, threads = 0, repeat = 1;
   bool print_stats = false, compare_ref = false, no_skip = false;
   app.add_option("scene", scene_path, "scene file (default: the built-in hollow shell)");
@@ -93,6 +93,8 @@ int run(int argc, char** argv) {
   app.add_flag("--no-skip", no_skip, "disable empty-space skipping (for measurements)");
   app.add_option("--repeat", repeat, "render N times and report the fastest (for measurements)")->check(CLI::Range(1, 1000));
   app.add_option("--raw", raw, "also write premultiplied RGBA32F");
+  app.add_option("--premultiplied", pam,
+                 "also write premultiplied rgba8 as a PAM file (what farm comparisons use: exact values)");
   app.add_option("--background", background, "composite over r,g,b in [0,1] instead of writing alpha");
   // Mesh scenes (OSMesa): tiles, anti-aliasing overrides and the anti-aliasing sweep.
   std::string tiles = "1x1", aa;
@@ -130,6 +132,7 @@ int run(int argc, char** argv) {
     mo.aa = aa;
     mo.aa_samples = aa_samples;
     mo.background = bg;
+    mo.pam = pam;
     return renderer::renderMeshScene(scene, mo);
   }
   renderer::RenderOptions opt;
@@ -157,6 +160,10 @@ int run(int argc, char** argv) {
   if (!raw.empty()) {
     writeRawF32(raw, img);
     std::printf("wrote %s\n", raw.c_str());
+  }
+  if (!pam.empty()) {
+    writePam(pam, img);
+    std::printf("wrote %s\n", pam.c_str());
   }
   if (print_stats)
     std::printf("time_ms=%.1f cpu_ms=%.1f%s samples=%llu skipped=%llu terminated=%llu skip_empty=%d\n", best_ms,

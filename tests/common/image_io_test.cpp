@@ -85,3 +85,27 @@ TEST(ImageIo, ErrorsNameTheFile) {
   std::ofstream(t.file("junk.png")) << "not a png at all";
   EXPECT_THROW(readPng(t.file("junk.png")), std::runtime_error);
 }
+
+TEST(ImageIo, PremultipliedPamRoundTripIsExact) {
+  // Translucent pixels whose colour <= alpha: a PNG could not keep them exactly, a PAM must.
+  TempDir t;
+  Image8 img(7, 5);
+  for (size_t i = 0; i < img.px.size(); i += 4) {
+    img.px[i + 3] = (uint8_t)(i * 13 % 256);
+    for (int k = 0; k < 3; ++k) img.px[i + k] = (uint8_t)(img.px[i + 3] * (k + 1) / 4);
+  }
+  writePam(t.file("a.pam"), img);
+  EXPECT_EQ(readPam(t.file("a.pam")), img);
+}
+
+TEST(ImageIo, PamOfAnotherTupleTypeIsRefused) {
+  TempDir t;
+  std::ofstream(t.file("s.pam"), std::ios::binary) << "P7\nWIDTH 1\nHEIGHT 1\nDEPTH 4\nMAXVAL 255\nTUPLTYPE RGB_ALPHA\nENDHDR\n"
+                                                   << std::string(4, '\x10');
+  try {
+    readPam(t.file("s.pam"));
+    FAIL() << "straight-alpha PAM accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("RGB_ALPHA_PREMULTIPLIED"), std::string::npos) << e.what();
+  }
+}

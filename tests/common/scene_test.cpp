@@ -2,6 +2,7 @@
 #include "common/scene.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -99,7 +100,7 @@ TEST(Scene, UnknownKeysNameTheirPath) {
   EXPECT_ERROR(edit("fov: 30", "fov: 30, fvo: 20"), "camera.fvo: unknown key");
   EXPECT_ERROR(edit("size: 16", "size: 16, sede: 2"), "volume.generator.sede: unknown key");
   EXPECT_ERROR(std::string(kGood) + "orbit: {frames: 4, axes: [0, 1, 0]}\n", "orbit.axes: unknown key");
-  EXPECT_ERROR(std::string(kGood) + "mesh: bunny.ply\n", "mesh: file not found");
+  EXPECT_ERROR(std::string(kGood) + "mesh: bunny.ply\n", "mesh: file not found: ");
 }
 
 TEST(Scene, MissingKeys) {
@@ -130,10 +131,10 @@ TEST(Scene, BadSizesAndValues) {
   EXPECT_ERROR(edit("image: [64, 48]", "image: [64, 16385]"), "image[1]: must be in 1..16384");
   EXPECT_ERROR("volume: {file: a.raw, dims: [4, 0, 4], type: uint8}\n", "volume.dims[1]: must be in 1..");
   EXPECT_ERROR("volume: {file: a.raw, dims: [4, -1, 4], type: uint8}\n", "volume.dims[1]");
-  EXPECT_ERROR(edit("size: 16}", "size: 16}, spacing: [1, 0, 1]"), "volume.spacing[1]: spacing must be > 0");
+  EXPECT_ERROR(edit("size: 16}", "size: 16}, spacing: [1, 0, 1]"), "volume.spacing: spacing 0.000000 must be finite and in [1e-30, 1e30]");
   EXPECT_ERROR(edit("eye: [0, 0, 2.5]", "eye: [0, 0, 0]"), "s.yaml: camera: eye equals target");
   EXPECT_ERROR(edit("up: [0, 1, 0]", "up: [0, 0, 3]"), "parallel");
-  EXPECT_ERROR(edit("fov: 30", "fov: 180"), "fov must be in (0, 180)");
+  EXPECT_ERROR(edit("fov: 30", "fov: 180"), "camera.fov: 180 must be in [0.01, 179] degrees");
   EXPECT_ERROR(edit("[1.0, 1, 1, 1, 0.5]", "[-0.5, 1, 1, 1, 0.5]"), "transfer_function[1][0]: must be in [0, 1], got '-0.5'");
   EXPECT_ERROR(edit("[1.0, 1, 1, 1, 0.5]", "[1.0, 1, 1, 1, 1.5]"), "transfer_function[1][4]: must be in [0, 1]");
   EXPECT_ERROR(edit("[0.0, 0, 0, 0, 0]", "[0.5, 0, 0, 0, 0]\n  - [0.2, 0, 0, 0, 0]"), "transfer_function[1]: scalar '0.2' is less");
@@ -204,4 +205,77 @@ TEST(Scene, ShippedScenesParse) {
   EXPECT_EQ(d.quality, b.quality);
   EXPECT_EQ(d.orbit.frames, b.orbit.frames);
   EXPECT_EQ(std::get<GeneratorSpec>(d.volume).size, std::get<GeneratorSpec>(b.volume).size);
+}
+
+// Issue 8: scenes that used to fail late (a renderer throwing, std::bad_alloc) or silently (an
+// empty image) are refused where they are read, with the key, the value and the limit.
+TEST(Scene, HugeDimsNameTheBytesBeforeAllocating) {
+  const std::string m = errorOf("volume: {file: none.raw, dims: [65536, 65536, 4096], type: float32}\n");
+  EXPECT_NE(m.find("volume.dims: [65536, 65536, 4096] voxels need 140737488355328 bytes"), std::string::npos) << m;
+  EXPECT_NE(m.find("of memory"), std::string::npos) << m;
+}
+
+TEST(Scene, FarAwayCameraIsOutOfRangeNotParallel) {
+  const std::string m = errorOf(edit("eye: [0, 0, 2.5]", "eye: [1e300, 0, 0]"));
+  EXPECT_NE(m.find("camera.eye: distance to the target is 1e+300"), std::string::npos) << m;
+  EXPECT_EQ(m.find("parallel"), std::string::npos) << m;
+  EXPECT_ERROR(edit("target: [0, 0, 0]", "target: [0, 0, -1e7]"), "camera.eye: distance to the target is 10000002.5");
+  EXPECT_ERROR(edit("eye: [0, 0, 2.5], target: [0, 0, 0]", "eye: [-1e7, 0, 2.5], target: [-1e7, 0, 0]"),
+               "camera.eye: coordinate -10000000 is out of range (|coordinate| <= 1000000");
+  EXPECT_ERROR(edit("eye: [0, 0, 2.5], target: [0, 0, 0]", "eye: [1e308, 0, 0], target: [-1e308, 0, 0]"),
+               "camera.eye: distance to the target overflows");
+  EXPECT_ERROR(edit("eye: [0, 0, 2.5]", "eye: [0, 0, 1e-9]"), "camera.eye: distance to the target is 1e-09");
+}
+
+TEST(Scene, VolumePathThatIsNotARegularFileSaysWhatItIs) {
+  TempDir t;
+  const std::string dir = (t.path / "data").string();
+  EXPECT_ERROR("volume: {file: " + dir + ", dims: [1, 1, 1], type: uint8}\n", "volume.file: " + dir + " is a directory");
+  const std::string fifo = (t.path / "pipe").string();
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_ERROR("volume: {file: " + fifo + ", dims: [1, 1, 1], type: uint8}\n", "volume.file: " + fifo + " is a FIFO (named pipe)");
+}
+
+TEST(Scene, AbsurdSpacingFovStepAreRefusedWithTheirLimits) {
+  EXPECT_ERROR(edit("size: 16}", "size: 16}, spacing: [1, 1e-9, 1]"), "volume.spacing: spacing ratio largest/smallest is");
+  EXPECT_ERROR(edit("size: 16}", "size: 16}, spacing: [1e300, 1e300, 1e300]"), "must be finite and in [1e-30, 1e30]");
+  EXPECT_ERROR(edit("fov: 30", "fov: 1e-9"), "camera.fov: 1e-09 must be in [0.01, 179] degrees");
+  EXPECT_ERROR(edit("fov: 30", "fov: 179.9999"), "camera.fov: 179.9999 must be in [0.01, 179] degrees");
+  EXPECT_ERROR(edit("fov: 30", "orthographic: true, height: 1e-12"), "camera.height: 1e-12 must be in [1e-06, 1000000]");
+  EXPECT_ERROR(std::string(kGood) + "quality: {step: 1e-8}\n",
+               "quality.step: 1e-08 must be in [1.9073486328125e-06, 0.25] world units");
+  EXPECT_ERROR(std::string(kGood) + "quality: {step: 1e-8}\n", "samples per ray");
+  EXPECT_ERROR(std::string(kGood) + "quality: {step: 1e6}\n", "quality.step: 1000000 must be in");
+  EXPECT_ERROR(std::string(kGood) + "quality: {step: 0.25}\n", "<no error>");
+}
+
+TEST(Scene, ImageLargerThanTheWireCarriesIsRefused) {
+  // A whole-image rgba32f piece of 8192 x 4096 is 512 MiB, over the protocol's message limit.
+  const std::string m = errorOf(edit("image: [64, 48]", "image: [8192, 4096]"));
+  EXPECT_NE(m.find("image: 8192 x 4096 = 33554432 pixels"), std::string::npos) << m;
+  EXPECT_NE(m.find("at most 16777216 pixels"), std::string::npos) << m;
+  EXPECT_ERROR(edit("image: [64, 48]", "image: [4096, 4096]"), "<no error>");
+}
+
+TEST(Scene, FastPresetIsFarmExact) {
+  const Quality fast = namedQuality("fast"), def = namedQuality("default");
+  EXPECT_EQ(fast.early_termination, def.early_termination);
+  EXPECT_EQ(fast.step, 2 * def.step);
+  for (const char* name : {"reference", "default", "fast"})
+    for (int renderers : {1, 2, 64}) EXPECT_EQ(farmAccuracyProblem(namedQuality(name), renderers), "") << name;
+}
+
+TEST(Scene, LowEarlyTerminationIsRefusedOnlyForManyBricks) {
+  Quality q = namedQuality("default");
+  q.name = "custom";
+  q.early_termination = 0.95;
+  EXPECT_EQ(farmAccuracyProblem(q, 1), "");  // one brick: the same rays as tessera-render
+  const std::string m = farmAccuracyProblem(q, 3);
+  EXPECT_NE(m.find("quality.early_termination: 0.95"), std::string::npos) << m;
+  EXPECT_NE(m.find("12.75 levels"), std::string::npos) << m;
+  EXPECT_NE(m.find("use >= 0.9961 or one renderer"), std::string::npos) << m;
+  q.early_termination = 1 - 1.0 / 255;
+  EXPECT_EQ(farmAccuracyProblem(q, 3), "");
+  q.early_termination = 2;  // > 1: never terminates
+  EXPECT_EQ(farmAccuracyProblem(q, 3), "");
 }

@@ -153,3 +153,30 @@ TEST(Volume, GeneratorRejectsBadSpecs) {
   EXPECT_THROW(generateVolume({"hollow-shell", 1, 1, {1, 1, 1}}), std::invalid_argument);
   EXPECT_THROW(generateVolume({"hollow-shell", 8, 1, {1, 0, 1}}), std::invalid_argument);
 }
+
+// Issue 8: the loader says what is wrong before it allocates or opens.
+TEST(Volume, NotARegularFileSaysWhatItIs) {
+  TempDir t;
+  RawVolumeSpec s{t.path.string(), {1, 1, 1}, VoxelType::UInt8, {1, 1, 1}, false, {0, 255}};
+  EXPECT_NE(errorOf(s).find("is a directory"), std::string::npos) << errorOf(s);
+  s.file = (t.path / "absent.raw").string();
+  EXPECT_NE(errorOf(s).find("file not found"), std::string::npos) << errorOf(s);
+}
+
+TEST(Volume, HugeSparseFileNamesTheBytesInsteadOfBadAlloc) {
+  TempDir t;
+  const std::string f = t.write("huge.raw", "", 0);
+  const std::array<int, 3> dims{65536, 65536, 64};  // 2^38 voxels of uint8: 256 GiB of file
+  std::filesystem::resize_file(f, (uintmax_t)1 << 38);  // sparse: no disk used
+  RawVolumeSpec s{f, dims, VoxelType::UInt8, {1, 1, 1}, false, {0, 255}};
+  const std::string m = errorOf(s);
+  EXPECT_NE(m.find("voxels need 1374389534720 bytes"), std::string::npos) << m;
+  EXPECT_EQ(m.find("bad_alloc"), std::string::npos) << m;
+}
+
+TEST(Volume, SpacingLimits) {
+  EXPECT_EQ(spacingProblem({1, 2, 3}), "");
+  EXPECT_NE(spacingProblem({1, 1e-7, 1}).find("ratio"), std::string::npos);
+  EXPECT_NE(spacingProblem({INFINITY, 1, 1}).find("finite"), std::string::npos);
+  EXPECT_THROW(generateVolume({"hollow-shell", 8, 1, {1, 1, 1e-9}}), std::invalid_argument);
+}

@@ -58,6 +58,17 @@ TEST(PngSink, WritesNumberedFilesThatReadBackExactly) {
   fs::remove_all(dir.parent_path().parent_path());
 }
 
+TEST(PngSink, PremultipliedWritesExactPamBesideEachPng) {
+  const fs::path dir = freshDir("pam");
+  auto sink = makePngSink(dir.string(), std::nullopt, true);
+  const Image8 a = testFrame(3);
+  sink->present(a, 5, "");
+  ASSERT_TRUE(fs::exists(dir / "frame_000005.png"));
+  ASSERT_TRUE(fs::exists(dir / "frame_000005.pam"));
+  EXPECT_EQ(readPam((dir / "frame_000005.pam").string()), a);
+  fs::remove_all(dir);
+}
+
 TEST(PngSink, CompositesOverBackground) {
   const fs::path dir = freshDir("pngbg");
   const std::array<double, 3> bg = {0.2, 0.4, 0.6};

@@ -6,6 +6,17 @@
 #include <random>
 #include <nlohmann/json.hpp>
 
+#include <spdlog/sinks/ringbuffer_sink.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <future>
+#include <thread>
+
+#include "compositor/stage.h"
+#include "display/stage.h"
+#include "master/master.h"
+#include "renderer/stage.h"
 #include "tests/integration/farm_util.h"
 
 namespace tessera::test {
@@ -26,7 +37,7 @@ TEST_P(FarmMatchesOneProcess, EveryFrameWithinOneLevel) {
   ASSERT_EQ(run.exit_code, 0) << run.output;
   for (int k = 0; k < frames; ++k) {
     ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " missing\n" << run.output;
-    Image8 farm = readPng(dir.frame(k).string());
+    Image8 farm = dir.farmFrame(k);
     Image8 ref = dir.reference(scene, k);
     // 1/255: each brick's piece is quantized to rgba8 once before compositing.
     EXPECT_LE(maxAbsDiff(farm, ref), 1) << "frame " << k << " in " << dir.path();
@@ -65,7 +76,7 @@ TEST(FarmPixelFormats, Rgba8PiecesStayWithinTwoLevels) {
   auto scene = dir.writeScene(4);
   auto run = dir.runFarm(scene, 4, 1, 2, 120, "--env TESSERA_FORMAT=rgba8");
   ASSERT_EQ(run.exit_code, 0) << run.output;
-  for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(readPng(dir.frame(k).string()), dir.reference(scene, k)), 2);
+  for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 2);
 }
 
 // The same farm over TCP on loopback (what a cluster uses, minus the other hosts): the
@@ -80,7 +91,7 @@ TEST(FarmTransports, TcpLoopbackMatchesOneProcess) {
   EXPECT_NE(run.output.find("tcp://127.0.0.1:" + std::to_string(base + 11)), std::string::npos)
       << "compositor 1 should listen on base+11";
   // 1/255: the sort-last contract.
-  for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(readPng(dir.frame(k).string()), dir.reference(scene, k)), 1);
+  for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 1);
 }
 
 TEST(FarmPixelFormats, Rgba32fPiecesKeepTheContract) {
@@ -89,7 +100,86 @@ TEST(FarmPixelFormats, Rgba32fPiecesKeepTheContract) {
   auto run = dir.runFarm(scene, 4, 2, 2, 120, "--env TESSERA_FORMAT=rgba32f --env TESSERA_CODEC=lz4");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   // 1/255: float pieces, one rounding at the end.
-  for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(readPng(dir.frame(k).string()), dir.reference(scene, k)), 1);
+  for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 1);
+}
+
+}  // namespace
+}  // namespace tessera::test
+
+namespace tessera::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Issue 8: the farm at quality fast (every named preset is farm-exact) matches tessera-render.
+TEST(FarmQuality, FastPresetMatchesOneProcessWithinOneLevel) {
+  FarmDir dir("fast");
+  auto scene = dir.writeScene(4);
+  {
+    std::ifstream in(scene);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    text.replace(text.find("quality: default"), 16, "quality: fast");
+    std::ofstream(scene) << text;
+  }
+  auto run = dir.runFarm(scene, 3, 1, 2);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  for (int k = 0; k < 2; ++k) {
+    Image8 farm = dir.farmFrame(k);
+    EXPECT_LE(maxAbsDiff(farm, dir.reference(scene, k)), 1) << "frame " << k << " in " << dir.path();
+    EXPECT_GT(activeRegion(farm).area(), 100) << "frame " << k << " is (nearly) empty";
+  }
+}
+
+// A frame that makes the ray caster throw (a step the scene parser would refuse, given here
+// straight to the master) costs that frame, not the renderer: it logs frame= and keeps serving.
+TEST(FarmFaults, RendererSurvivesAFrameThatThrows) {
+  auto ring = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(256);
+  auto previous = spdlog::default_logger();
+  spdlog::set_default_logger(std::make_shared<spdlog::logger>("survives", ring));
+  Scene scene = defaultScene();
+  scene.volume = GeneratorSpec{"hollow-shell", 16, 1};
+  scene.width = 32;
+  scene.height = 24;
+  scene.orbit.frames = 1;
+  scene.quality.step = 1e-9;  // > 2^24 samples per ray: castFast throws
+  Endpoints ep = makeEndpoints("inproc://farm-renderer-survives");
+  zmq::context_t ctx;
+  std::atomic<bool> stop{false};
+  master::MasterOptions mo;
+  mo.scene = scene;
+  mo.endpoints = ep;
+  mo.renderers = 1;
+  renderer::StageOptions ro{scene, ep, 1};
+  FarmDir dir("survives");
+  compositor::StageOptions co{ep, ""};
+  display::StageOptions dopt{ep, (dir.path() / "out").string(), "off", std::nullopt};
+  auto master_done = std::async(std::launch::async, [&] { return master::run(mo, ctx, &stop); });
+  auto renderer_done = std::async(std::launch::async, [&] { return renderer::runStage(ro, ctx, &stop); });
+  auto compositor_done = std::async(std::launch::async, [&] { return compositor::runStage(co, ctx, &stop); });
+  auto display_done = std::async(std::launch::async, [&] { return display::runStage(dopt, ctx, &stop); });
+  bool logged = false;
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  while (!logged && std::chrono::steady_clock::now() < deadline &&
+         renderer_done.wait_for(10ms) != std::future_status::ready) {
+    for (const auto& line : ring->last_formatted())
+      logged = logged || (line.find("frame=0 render failed") != std::string::npos &&
+                          line.find("frames_failed=1") != std::string::npos);
+  }
+  const bool still_serving = renderer_done.wait_for(0s) != std::future_status::ready;
+  stop = true;
+  int renderer_rc = -1;
+  try {
+    renderer_rc = renderer_done.get();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "the renderer died of the frame: " << e.what();
+  }
+  master_done.wait();
+  compositor_done.wait();
+  display_done.wait();
+  spdlog::set_default_logger(previous);
+  EXPECT_TRUE(logged) << "no 'frame=0 render failed ... frames_failed=1' log line";
+  EXPECT_TRUE(still_serving);
+  EXPECT_EQ(renderer_rc, 0);
 }
 
 }  // namespace

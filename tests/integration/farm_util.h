@@ -69,7 +69,8 @@ class FarmDir {
   // happens (tests react to what the farm says) and is returned whole.
   CommandResult runFarm(const fs::path& scene, int renderers, int compositors, int frames, int timeout_s = 120,
                         const std::string& extra = "", const std::string& endpoints = "") const {
-    std::string cmd = bin("tessera-up") + " " + TESSERA_SOURCE_DIR "/compose.yaml" +
+    // TESSERA_PREMULTIPLIED: the display also writes frame_NNNNNN.pam (exact values to compare).
+  std::string cmd = "env TESSERA_PREMULTIPLIED=1 " + bin("tessera-up") + " " + TESSERA_SOURCE_DIR "/compose.yaml" +
                       " --env TESSERA_SCENE=" + scene.string() + " --env TESSERA_RENDERERS=" + std::to_string(renderers) +
                       " --env TESSERA_COMPOSITORS=" + std::to_string(compositors) +
                       " --env TESSERA_FRAMES=" + std::to_string(frames) + " --env TESSERA_OUT=" + (dir_ / "out").string() +
@@ -92,12 +93,21 @@ class FarmDir {
     return dir_ / "out" / name;
   }
 
-  // The one-process render of orbit frame k (bricks = 1: the whole volume at once).
-  Image8 reference(const fs::path& scene, int k) const {
-    fs::path out = dir_ / ("ref_" + std::to_string(k) + ".png");
-    auto r = runCommand(bin("tessera-render") + " " + scene.string() + " --frame " + std::to_string(k) + " -o " + out.string(), 120);
+  // The farm's frame k as the display computed it: premultiplied rgba8, exact (PAM).
+  Image8 farmFrame(int k) const {
+    fs::path p = frame(k);
+    return readPam(p.replace_extension(".pam").string());
+  }
+
+  // The one-process render of orbit frame k (bricks = 1: the whole volume at once), as exact
+  // premultiplied rgba8: a straight-alpha PNG rounds colour and alpha separately and could
+  // add a level of its own. `extra`: more tessera-render options.
+  Image8 reference(const fs::path& scene, int k, const std::string& extra = "") const {
+    const std::string stem = (dir_ / ("ref_" + std::to_string(k))).string();
+    auto r = runCommand(bin("tessera-render") + " " + scene.string() + " --frame " + std::to_string(k) + " -o " +
+                            stem + ".png --premultiplied " + stem + ".pam " + extra, 120);
     if (r.exit_code != 0) throw std::runtime_error("tessera-render failed: " + r.output);
-    return readPng(out.string());
+    return readPam(stem + ".pam");
   }
 
  private:
