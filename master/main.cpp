@@ -32,6 +32,9 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     opt.scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
+    // Each brick ends its rays on its own: below this the farm could not match tessera-render.
+    if (std::string why = farmAccuracyProblem(opt.scene.quality, opt.renderers); !why.empty())
+      throw std::invalid_argument((scene_path.empty() ? std::string("built-in scene") : scene_path) + ": " + why);
     opt.endpoints = makeEndpoints(base.empty() ? defaultEndpointBase() : base);
     opt.codec = parseCodec(codec);
     opt.format = format == "rgba8"     ? proto::PixelFormat::RGBA8

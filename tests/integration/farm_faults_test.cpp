@@ -97,7 +97,7 @@ TEST(FarmFaults, BadMessagesAreDroppedCountedAndFramesStayCorrect) {
   for (int k : {0, frames - 1}) {
     ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k;
     // 1/255: pieces are quantized to rgba8 once before compositing.
-    EXPECT_LE(maxAbsDiff(readPng(dir.frame(k).string()), dir.reference(scene, k)), 1) << "frame " << k;
+    EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 1) << "frame " << k;
   }
   std::ifstream metrics(dir.path() / "out" / "metrics.jsonl");
   double master = 0, composite = 0, display = 0;
@@ -152,7 +152,7 @@ void expectEveryFrameOnceAndCorrect(const FarmDir& dir, const fs::path& scene, c
   }
   for (int k : {0, after, (after + kFaultFrames) / 2, kFaultFrames - 1}) {
     if (!fs::exists(dir.frame(k))) continue;
-    EXPECT_LE(maxAbsDiff(readPng(dir.frame(k).string()), dir.reference(scene, k)), 1) << "frame " << k;
+    EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 1) << "frame " << k;
   }
 }
 

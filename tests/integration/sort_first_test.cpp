@@ -45,7 +45,7 @@ TEST_P(SortFirstFarm, FramesAreBitIdenticalToOneProcess) {
   ASSERT_EQ(run.exit_code, 0) << run.output;
   for (int k = 0; k < frames; ++k) {
     ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << "\n" << run.output;
-    Image8 farm = readPng(dir.frame(k).string());
+    Image8 farm = dir.farmFrame(k);
     Image8 ref = dir.reference(scene, k);
     EXPECT_EQ(maxAbsDiff(farm, ref), 0) << "frame " << k << " in " << dir.path();  // bit-identical
     EXPECT_GT(activeRegion(farm).area(), 500) << "frame " << k << " is (nearly) empty";
