@@ -18,6 +18,7 @@
 #include <zmq.hpp>
 
 #include "common/wire/protocol.h"
+#include "common/wire/strips.h"
 #include "tests/integration/farm_util.h"
 
 namespace tessera::test {
@@ -175,6 +176,55 @@ void expectTwoRenderersWorked(const nlohmann::json& frame) {
 }
 
 bool logHas(const FarmDir& dir, const std::string& text) { return dir.farmLog().find(text) != std::string::npos; }
+
+// Well-formed parts from a process that never joined, for the frames in flight and claiming
+// real ranks: before the roster they stalled the display (a forged Piece) or replaced real
+// pixels (forged Strips). Now the data sockets take only roster members' connections.
+TEST(FarmFaults, ForgedPartsFromNonMembersAreRefusedAndFramesStayCorrect) {
+  FarmDir dir("forged");
+  const int frames = 24;
+  auto scene = dir.writeScene(frames, 40, 160, 120);
+  const fs::path sockets = dir.path() / "sockets";
+  auto farm = std::async(std::launch::async, [&] { return dir.runFarm(scene, 2, 1, frames, 180); });
+  ASSERT_TRUE(waitFor([&] { return fs::exists(dir.frame(1)); }, 60s)) << "the farm produced no frame";
+  Image8 white(160, 120);
+  std::fill(white.px.begin(), white.px.end(), 255);
+  std::vector<std::vector<std::byte>> strips, pieces;
+  for (uint64_t f = 2; f < frames; ++f)
+    for (uint32_t epoch : {0u, 1u}) {
+      proto::Strips st;
+      st.frame = f;
+      st.epoch = epoch;
+      st.compositor = 0;
+      st.stream = encodeStrips(white, {0, 0, 160, 120}, 0);
+      strips.push_back(proto::encode(st, 0, Codec::Lz4));
+      proto::Piece pc;
+      pc.frame = f;
+      pc.epoch = epoch;
+      pc.renderer = 0;
+      pc.brick = 0;
+      pc.region = {0, 0, 160, 120};
+      pieces.push_back(proto::encode(pc, 0, Codec::Lz4));
+    }
+  zmq::context_t ctx;
+  push(ctx, "ipc://" + (sockets / "display").string(), zmq::socket_type::dealer, strips);
+  push(ctx, "ipc://" + (sockets / "compositor-0").string(), zmq::socket_type::dealer, pieces);
+
+  auto run = farm.get();
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  // 1/255: the sort-last contract; a forged white strip would be 255 levels off.
+  for (int k = 0; k < frames; ++k) EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 1) << "frame " << k;
+  EXPECT_NE(run.output.find("refused peer"), std::string::npos) << "refusals were not logged";
+  std::ifstream metrics(dir.path() / "out" / "metrics.jsonl");
+  double composite = 0, display = 0;
+  for (std::string line; std::getline(metrics, line);) {
+    auto j = nlohmann::json::parse(line);
+    composite = std::max(composite, j["composite_dropped"].get<double>());
+    display = std::max(display, j["display_dropped"].get<double>());
+  }
+  EXPECT_GE(composite, (double)pieces.size()) << "forged pieces not counted";
+  EXPECT_GE(display, (double)strips.size()) << "forged strips not counted";
+}
 
 TEST(FarmFaults, KilledRendererIsRestartedAndEveryFrameIsDoneOnce) {
   FarmDir dir("kill-renderer");
