@@ -31,14 +31,18 @@ inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as ov
 
 enum class Type : uint16_t {
   Hello = 1, Welcome, FrameParams, Piece, Strips, FrameDone, Heartbeat, Input, Stats, Shutdown, Framebuffer, Roster,
-  Last = Roster  // keep last: the decoder's range check derives from it
+  Probe,
+  Last = Probe  // keep last: the decoder's range check derives from it
 };
 inline constexpr uint16_t kTypeCount = static_cast<uint16_t>(Type::Last);
 const char* typeName(Type t);
 
-enum class Role : uint8_t { Renderer = 1, Compositor = 2, Display = 3 };
+// Role and PixelFormat travel as u8; `Last` (keep it last) bounds the decoders' range checks.
+enum class Role : uint8_t { Renderer = 1, Compositor = 2, Display = 3, Last = Display };
 // RGBA16F pixels travel as two byte planes (low bytes of every half, then high bytes).
-enum class PixelFormat : uint8_t { RGBA8 = 1, RGBA16F = 2, RGBA32F = 3 };
+enum class PixelFormat : uint8_t { RGBA8 = 1, RGBA16F = 2, RGBA32F = 3, Last = RGBA32F };
+constexpr bool validRole(uint8_t v) { return v >= 1 && v <= static_cast<uint8_t>(Role::Last); }
+constexpr bool validPixelFormat(uint8_t v) { return v >= 1 && v <= static_cast<uint8_t>(PixelFormat::Last); }
 size_t bytesPerPixel(PixelFormat f);
 
 struct Header {
@@ -75,6 +79,11 @@ struct Roster {                                                            // ma
   uint32_t epoch = 0;
   std::vector<RosterEntry> members;
   bool operator==(const Roster&) const = default;
+};
+// The master's membership probe on PUB: a stage that receives anything on SUB knows its
+// subscription is live and may say Hello. Carries nothing; stages skip it after joining.
+struct Probe {                                                             // master -> all (PUB)
+  bool operator==(const Probe&) const = default;
 };
 struct Shutdown {                                                          // master -> all
   std::string reason;
@@ -176,6 +185,7 @@ struct Input {                                 // display -> master (interactive
 std::vector<std::byte> encode(const Hello&, uint32_t sender);
 std::vector<std::byte> encode(const Welcome&, uint32_t sender);
 std::vector<std::byte> encode(const Heartbeat&, uint32_t sender);
+std::vector<std::byte> encode(const Probe&, uint32_t sender);
 std::vector<std::byte> encode(const Shutdown&, uint32_t sender);
 std::vector<std::byte> encode(const Roster&, uint32_t sender);
 std::vector<std::byte> encode(const FrameParams&, uint32_t sender);
@@ -191,6 +201,7 @@ Result<Header> decodeHeader(std::span<const std::byte> msg);
 Result<Hello> decodeHello(std::span<const std::byte> msg);
 Result<Welcome> decodeWelcome(std::span<const std::byte> msg);
 Result<Heartbeat> decodeHeartbeat(std::span<const std::byte> msg);
+Result<Probe> decodeProbe(std::span<const std::byte> msg);
 Result<Shutdown> decodeShutdown(std::span<const std::byte> msg);
 Result<Roster> decodeRoster(std::span<const std::byte> msg);
 Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg);
