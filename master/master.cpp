@@ -105,7 +105,7 @@ class Master {
     return false;
   }
 
-  void probe() { sendBytes(pub_, proto::encode(proto::Heartbeat{Role::Display, 0}, kMasterRank)); }
+  void probe() { sendBytes(pub_, proto::encode(proto::Probe{}, kMasterRank)); }
 
   void onHello(const std::string& identity, const proto::Hello& h) {
     bool joined = false;

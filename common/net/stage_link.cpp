@@ -106,9 +106,10 @@ StageLink::Published StageLink::receive(DropCounter& drops, int max_messages) {
       continue;
     }
     if (h->type == proto::Type::Shutdown) out.shutdown = true;
-    if (h->type == proto::Type::Shutdown || h->type == proto::Type::Heartbeat) continue;
-    auto p = h->type == proto::Type::FrameParams ? proto::decodeFrameParams(view(m))
-                                                 : Result<proto::FrameParams>::fail("unexpected message on SUB");
+    if (h->type == proto::Type::Shutdown || h->type == proto::Type::Probe) continue;
+    auto p = h->type == proto::Type::FrameParams
+                 ? proto::decodeFrameParams(view(m))
+                 : Result<proto::FrameParams>::fail(std::string("unexpected ") + proto::typeName(h->type) + " on SUB");
     if (!p) {
       drops.drop(h->sender, p.error());
       continue;

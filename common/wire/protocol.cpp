@@ -113,6 +113,7 @@ const char* typeName(Type t) {
     case Type::Shutdown: return "Shutdown";
     case Type::Framebuffer: return "Framebuffer";
     case Type::Roster: return "Roster";
+    case Type::Probe: return "Probe";
   }
   return "unknown";
 }
@@ -215,6 +216,13 @@ Result<Heartbeat> decodeHeartbeat(std::span<const std::byte> msg) {
     m.role = readRole(r);
     m.rank = r.u32("rank");
   });
+}
+
+std::vector<std::byte> encode(const Probe&, uint32_t sender) {
+  return encodeStructured(Type::Probe, 0, sender, [](ByteWriter&) {});
+}
+Result<Probe> decodeProbe(std::span<const std::byte> msg) {
+  return decodeStructured<Probe>(msg, Type::Probe, [](ByteReader&, const Header&, Probe&) {});
 }
 
 std::vector<std::byte> encode(const Shutdown& m, uint32_t sender) {

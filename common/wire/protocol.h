@@ -1,12 +1,26 @@
-// The wire protocol: the one place that knows the byte layout of every message.
-// Every message = 36-byte little-endian header + payload. Header fields:
-//   magic u32 "TSER" | version u16 | type u16 | frame u64 | sender u32 |
-//   codec u8 | flags u8 | reserved u16 | raw_size u32 | encoded_size u32 | checksum u32 (Adler-32 of payload)
-// raw_size = payload size once decoded; encoded_size = bytes after the header. Pixel
-// messages carry uncompressed metadata then the codec-compressed pixels; others use none.
-// The header's frame field carries the `frame` of messages that have one.
-// Structured payloads are explicit little-endian fields written by ByteWriter; never a
-// memcpy'd struct. Decoders validate every field before touching memory and never throw.
+// The wire protocol: the one place that states the byte layout of every message.
+// Every message = 36-byte header + payload, all little-endian. Header (decodeHeader):
+//   magic         u32  4  == kMagic (bytes "TSER")
+//   version       u16  2  == kVersion
+//   type          u16  2  1..Type::Last
+//   frame         u64  8  the `frame` of messages that have one, else 0 (not checked)
+//   sender        u32  4  sender's rank; any (informational, never trusted)
+//   codec         u8   1  < kCodecCount; structured messages must use none (0)
+//   flags         u8   1  == 0
+//   reserved      u16  2  == 0
+//   raw_size      u32  4  payload size once decoded, <= kMaxPayload; == encoded_size if codec none
+//   encoded_size  u32  4  == bytes after the header, <= kMaxPayload
+//   checksum      u32  4  == Adler-32 of the payload bytes
+// Payload tables below list field, type, bytes, range as the decoder enforces it, in wire
+// order. Types: u8..u64, i32, f64 (IEEE double; "finite" = not NaN/inf); bool = u8 0|1;
+// str = u32 n <= 65536 (kMaxString) then n bytes; rect = i32 x, y, w, h (16 bytes);
+// "sane rect" = 0 <= x, y, w, h and x + w, y + h <= 16384. A u32 count precedes repeated
+// entries and must fit (count * smallest entry <= bytes left). No range = any value.
+// Structured messages must use every payload byte. Pixel messages carry uncompressed
+// metadata then the codec-compressed pixels; their decoded size (raw_size - metadata)
+// is fixed by the metadata and checked before anything is allocated or decompressed.
+// Payloads are written field by field (ByteWriter), never as a memcpy'd struct.
+// Decoders validate every field before touching memory and never throw.
 #pragma once
 #include <array>
 #include <cstddef>
@@ -31,14 +45,18 @@ inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as ov
 
 enum class Type : uint16_t {
   Hello = 1, Welcome, FrameParams, Piece, Strips, FrameDone, Heartbeat, Input, Stats, Shutdown, Framebuffer, Roster,
-  Last = Roster  // keep last: the decoder's range check derives from it
+  Probe,
+  Last = Probe  // keep last: the decoder's range check derives from it
 };
 inline constexpr uint16_t kTypeCount = static_cast<uint16_t>(Type::Last);
 const char* typeName(Type t);
 
-enum class Role : uint8_t { Renderer = 1, Compositor = 2, Display = 3 };
+// Role and PixelFormat travel as u8; `Last` (keep it last) bounds the decoders' range checks.
+enum class Role : uint8_t { Renderer = 1, Compositor = 2, Display = 3, Last = Display };
 // RGBA16F pixels travel as two byte planes (low bytes of every half, then high bytes).
-enum class PixelFormat : uint8_t { RGBA8 = 1, RGBA16F = 2, RGBA32F = 3 };
+enum class PixelFormat : uint8_t { RGBA8 = 1, RGBA16F = 2, RGBA32F = 3, Last = RGBA32F };
+constexpr bool validRole(uint8_t v) { return v >= 1 && v <= static_cast<uint8_t>(Role::Last); }
+constexpr bool validPixelFormat(uint8_t v) { return v >= 1 && v <= static_cast<uint8_t>(PixelFormat::Last); }
 size_t bytesPerPixel(PixelFormat f);
 
 struct Header {
@@ -52,6 +70,9 @@ struct Header {
 };
 
 // ---- messages ---------------------------------------------------------------------
+// Hello:      role u8 1 (1..Role::Last) | pid u32 4 | endpoint str 4+n
+// Welcome:    role u8 1 (1..Role::Last) | rank u32 4
+// Heartbeat:  role u8 1 (1..Role::Last) | rank u32 4
 struct Hello {                                                             // stage -> master
   Role role = Role::Renderer; uint32_t pid = 0; std::string endpoint;
   bool operator==(const Hello&) const = default;
@@ -67,6 +88,12 @@ struct Heartbeat {                                                         // st
 // Who may send on a stage's data socket: the data-connection routing ids of the members
 // (16 random bytes + 'd', see StageLink), sent privately over each stage's control
 // connection, never on the PUB socket, so a peer that did not join cannot learn them.
+// Roster:
+//   epoch             u32  4
+//   members           u32  4    count <= 65536, then per member (>= 9 bytes):
+//   members.role      u8   1    1..Role::Last
+//   members.rank      u32  4
+//   members.identity  str  4+n  n in 1..255 (a ZeroMQ routing id)
 struct RosterEntry {
   Role role = Role::Renderer; uint32_t rank = 0; std::string identity;
   bool operator==(const RosterEntry&) const = default;
@@ -76,6 +103,13 @@ struct Roster {                                                            // ma
   std::vector<RosterEntry> members;
   bool operator==(const Roster&) const = default;
 };
+// The master's membership probe on PUB: a stage that receives anything on SUB knows its
+// subscription is live and may say Hello. Carries nothing; stages skip it after joining.
+// Probe:      empty payload (0 bytes)
+struct Probe {                                                             // master -> all (PUB)
+  bool operator==(const Probe&) const = default;
+};
+// Shutdown:   reason str 4+n
 struct Shutdown {                                                          // master -> all
   std::string reason;
   bool operator==(const Shutdown&) const = default;
@@ -95,6 +129,33 @@ struct CompositorRegion {
   uint32_t compositor = 0; Rect region; std::string endpoint;
   bool operator==(const CompositorRegion&) const = default;
 };
+// FrameParams (header frame = frame):
+//   epoch                      u32      4
+//   camera.eye/target/up       3x3 f64  72    finite
+//   camera.fov                 f64      8     finite, in (0, 180)
+//   camera.orthographic        bool     1
+//   camera.height              f64      8     finite, > 0
+//   quality.name               str      4+n
+//   quality.step               f64      8     finite, > 0
+//   quality.early_termination  f64      8     finite
+//   quality.skip_empty         bool     1
+//   quality.reference          bool     1
+//   width, height              i32 x2   8     1..16384 each
+//   codec                      u8       1     < kCodecCount
+//   format                     u8       1     1..PixelFormat::Last
+//   bricks                     u32      4     count <= 65536, then per brick (28 bytes):
+//   bricks.renderer            u32      4
+//   bricks.lo, bricks.hi       3x i32   24    per axis 0 <= lo < hi <= 65536
+//   order                      u32      4     count == bricks count, then:
+//   order[i]                   i32      4     together a permutation of 0..count-1
+//   regions                    u32      4     count <= 65536, then per region (>= 24 bytes):
+//   regions.compositor         u32      4
+//   regions.region             rect     16    0 <= x, y, w, h; inside width x height
+//   regions.endpoint           str      4+n
+//   display_endpoint           str      4+n
+//   tiles                      u32      4     count <= 2^20, then per tile (24 bytes):
+//   tiles.renderer, compositor u32 x2   8
+//   tiles.tile                 rect     16    w, h > 0; 0 <= x, y; inside width x height
 struct FrameParams {                                                       // master -> all (PUB)
   uint64_t frame = 0;
   uint32_t epoch = 0;                        // bumped when membership changes; stale work is dropped
@@ -111,6 +172,13 @@ struct FrameParams {                                                       // ma
   bool operator==(const FrameParams&) const = default;
 };
 
+// Piece (pixel message, header frame = frame; 61 bytes of metadata):
+//   epoch, renderer, brick  u32 x3  12
+//   region                  rect    16  sane
+//   active                  rect    16  sane; inside region unless empty (w or h <= 0)
+//   format                  u8      1   1..PixelFormat::Last
+//   render_ms, encode_ms    f64 x2  16  finite
+//   pixels                  codec   rest  decodes to exactly active.w * active.h * bytesPerPixel(format)
 struct Piece {                                 // renderer -> compositor
   uint64_t frame = 0;
   uint32_t epoch = 0;                          // FrameParams::epoch it was rendered for
@@ -123,6 +191,11 @@ struct Piece {                                 // renderer -> compositor
   bool operator==(const Piece&) const = default;
 };
 
+// Strips (pixel message, header frame = frame; 40 bytes of metadata):
+//   epoch, compositor                   u32 x2  8
+//   composite_ms, encode_ms, render_ms  f64 x3  24   finite
+//   active_pixels                       u64     8
+//   stream                              codec   rest decodes to raw_size - 40 bytes (parsed later, strips.h)
 struct Strips {                                // compositor -> display
   uint64_t frame = 0;
   uint32_t epoch = 0;
@@ -136,6 +209,11 @@ struct Strips {                                // compositor -> display
 
 // Sort-first: a renderer's tiles packed left to right, top to bottom in one rgba8
 // framebuffer, each tile row preceded by its two-pixel strip header (strips.h).
+// Framebuffer (pixel message, header frame = frame; 24 bytes of metadata):
+//   epoch, renderer  u32 x2  8
+//   width, height    i32 x2  8    0..32768 each (twice the largest image edge)
+//   render_ms        f64     8    finite
+//   pixels           codec   rest decodes to exactly width * height * 4
 struct Framebuffer {                           // renderer -> compositor (router)
   uint64_t frame = 0;
   uint32_t epoch = 0, renderer = 0;
@@ -145,6 +223,16 @@ struct Framebuffer {                           // renderer -> compositor (router
   bool operator==(const Framebuffer&) const = default;
 };
 
+// StageStats (type Stats, header frame = frame):
+//   role                                         u8      1   1..Role::Last
+//   rank                                         u32     4
+//   work_ms, encode_ms                           f64 x2  16  finite
+//   bytes_raw, bytes_encoded, active_pixels      u64 x3  24
+//   active                                       rect    16  sane
+//   dropped                                      u64     8
+//   tile_ms                                      u32     4   count <= 2^20, then:
+//   tile_ms[i]                                   f64     8   finite
+//   chunks_drawn, chunks_total, triangles        u64 x3  24
 struct StageStats {                            // renderer/compositor -> master, per frame
   Role role = Role::Renderer; uint32_t rank = 0; uint64_t frame = 0;
   double work_ms = 0, encode_ms = 0;
@@ -158,6 +246,9 @@ struct StageStats {                            // renderer/compositor -> master,
   bool operator==(const StageStats&) const = default;
 };
 
+// FrameDone (header frame = frame):
+//   display_ms, route_ms                     f64 x2  16  finite
+//   bytes_encoded, strips_rejected, dropped  u64 x3  24
 struct FrameDone {                             // display -> master
   uint64_t frame = 0;
   double display_ms = 0, route_ms = 0;
@@ -165,6 +256,10 @@ struct FrameDone {                             // display -> master
   bool operator==(const FrameDone&) const = default;
 };
 
+// Input:
+//   orbit_dx, orbit_dy  f64 x2  16   finite
+//   zoom                f64     8    finite, > 0
+//   quality             str     4+n
 struct Input {                                 // display -> master (interactive camera)
   double orbit_dx = 0, orbit_dy = 0;           // degrees
   double zoom = 1;                             // multiply eye distance
@@ -176,6 +271,7 @@ struct Input {                                 // display -> master (interactive
 std::vector<std::byte> encode(const Hello&, uint32_t sender);
 std::vector<std::byte> encode(const Welcome&, uint32_t sender);
 std::vector<std::byte> encode(const Heartbeat&, uint32_t sender);
+std::vector<std::byte> encode(const Probe&, uint32_t sender);
 std::vector<std::byte> encode(const Shutdown&, uint32_t sender);
 std::vector<std::byte> encode(const Roster&, uint32_t sender);
 std::vector<std::byte> encode(const FrameParams&, uint32_t sender);
@@ -191,6 +287,7 @@ Result<Header> decodeHeader(std::span<const std::byte> msg);
 Result<Hello> decodeHello(std::span<const std::byte> msg);
 Result<Welcome> decodeWelcome(std::span<const std::byte> msg);
 Result<Heartbeat> decodeHeartbeat(std::span<const std::byte> msg);
+Result<Probe> decodeProbe(std::span<const std::byte> msg);
 Result<Shutdown> decodeShutdown(std::span<const std::byte> msg);
 Result<Roster> decodeRoster(std::span<const std::byte> msg);
 Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg);

@@ -192,7 +192,7 @@ Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
         if (r.ok() && codec >= kCodecCount) r.fail("codec " + std::to_string(codec) + " unknown");
         m.codec = static_cast<Codec>(codec);
         uint8_t format = r.u8("format");
-        if (r.ok() && (format < 1 || format > 3)) r.fail("format " + std::to_string(format) + " unknown");
+        if (r.ok() && !validPixelFormat(format)) r.fail("format " + std::to_string(format) + " unknown");
         m.format = static_cast<PixelFormat>(format);
         readBricks(r, m);
         readOrder(r, m);

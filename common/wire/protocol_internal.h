@@ -55,7 +55,7 @@ Result<T> decodeStructured(std::span<const std::byte> msg, Type type, F&& body) 
 
 inline Role readRole(ByteReader& r) {
   uint8_t v = r.u8("role");
-  if (r.ok() && (v < 1 || v > 3)) r.fail("role " + std::to_string(v) + " unknown");
+  if (r.ok() && !validRole(v)) r.fail("role " + std::to_string(v) + " unknown");
   return static_cast<Role>(v);
 }
 

@@ -68,7 +68,7 @@ Result<Piece> decodePiece(std::span<const std::byte> msg) {
   uint8_t format = r.u8("format");
   m.render_ms = detail::readFinite(r, "render_ms");
   m.encode_ms = detail::readFinite(r, "encode_ms");
-  if (r.ok() && (format < 1 || format > 3)) r.fail("format " + std::to_string(format) + " unknown");
+  if (r.ok() && !validPixelFormat(format)) r.fail("format " + std::to_string(format) + " unknown");
   m.format = static_cast<PixelFormat>(format);
   detail::checkSaneRect(r, m.region, "region");
   detail::checkSaneRect(r, m.active, "active");

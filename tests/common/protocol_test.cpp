@@ -125,6 +125,8 @@ TEST(Protocol, EveryStructuredMessageRoundTrips) {
   expectRoundTrip(hello, encode(hello, 11), decodeHello, Type::Hello);
   expectRoundTrip(Welcome{Role::Display, 3}, encode(Welcome{Role::Display, 3}, 11), decodeWelcome, Type::Welcome);
   expectRoundTrip(Heartbeat{Role::Renderer, 9}, encode(Heartbeat{Role::Renderer, 9}, 11), decodeHeartbeat, Type::Heartbeat);
+  expectRoundTrip(Probe{}, encode(Probe{}, 11), decodeProbe, Type::Probe);
+  EXPECT_EQ(encode(Probe{}, 11).size(), kHeaderSize) << "Probe carries no payload";
   expectRoundTrip(Shutdown{"master exiting"}, encode(Shutdown{"master exiting"}, 11), decodeShutdown, Type::Shutdown);
   Roster roster{7, {{Role::Renderer, 0, std::string(16, '\x5a') + "d"}, {Role::Compositor, 3, "x"}}};
   expectRoundTrip(roster, encode(roster, 11), decodeRoster, Type::Roster);
@@ -181,6 +183,7 @@ TEST(Protocol, TruncatedAtEveryLengthFails) {
   expectTruncationsFail(encode(sampleStrips(), 1, Codec::Zstd), decodeStrips);
   expectTruncationsFail(encode(sampleFramebuffer(), 1, Codec::Lz4), decodeFramebuffer);
   expectTruncationsFail(encode(Input{1, 2, 3, "fast"}, 1), decodeInput);
+  expectTruncationsFail(encode(Probe{}, 1), decodeProbe);
 }
 
 TEST(Protocol, FramebufferAndTilesAreValidated) {
@@ -221,12 +224,13 @@ TEST(Protocol, GarbageBytesFailEveryDecoder) {
     }
     EXPECT_FALSE(decodeHello(g) && decodeWelcome(g) && decodeHeartbeat(g) && decodeShutdown(g) &&
                  decodeFrameParams(g) && decodePiece(g) && decodeStrips(g) && decodeStageStats(g) &&
-                 decodeFrameDone(g) && decodeInput(g));
+                 decodeFrameDone(g) && decodeInput(g) && decodeProbe(g));
     // At most one decoder may accept any buffer: the type field picks it.
     int accepted = bool(decodeHello(g)) + bool(decodeWelcome(g)) + bool(decodeHeartbeat(g)) +
                    bool(decodeShutdown(g)) + bool(decodeFrameParams(g)) + bool(decodePiece(g)) +
                    bool(decodeStrips(g)) + bool(decodeStageStats(g)) + bool(decodeFrameDone(g)) +
-                   bool(decodeInput(g)) + bool(decodeRoster(g));
+                   bool(decodeInput(g)) + bool(decodeRoster(g)) + bool(decodeFramebuffer(g)) +
+                   bool(decodeProbe(g));
     EXPECT_LE(accepted, 1);
   }
 }
@@ -354,6 +358,50 @@ TEST(Protocol, RosterRejectsImpossibleRoutingIds) {
   auto truncated = encode(Roster{1, {{Role::Renderer, 0, "abc"}}}, 1);
   truncated.resize(truncated.size() - 1);
   EXPECT_FALSE(decodeRoster(truncated));
+}
+
+// The master's probe used to be a Heartbeat posing as a Display; now it is its own type,
+// and a Probe with any payload, or anything else, is not a Probe.
+TEST(Protocol, ProbeIsEmptyAndDistinctFromHeartbeat) {
+  Bytes probe = encode(Probe{}, 1);
+  EXPECT_EQ(uint16_t(uint8_t(probe[6])), uint16_t(Type::Probe));
+  EXPECT_EQ(Type::Last, Type::Probe);
+  EXPECT_STREQ(typeName(Type::Probe), "Probe");
+  EXPECT_FALSE(decodeHeartbeat(probe));
+  auto hb = decodeProbe(encode(Heartbeat{Role::Display, 0}, 1));
+  ASSERT_FALSE(hb);
+  EXPECT_NE(hb.error().find("Heartbeat"), std::string::npos) << hb.error();
+  Bytes trailing = probe;
+  trailing.push_back(std::byte{0});
+  putLE(trailing, 24, trailing.size() - kHeaderSize, 4);
+  reseal(trailing);
+  auto t = decodeProbe(trailing);
+  ASSERT_FALSE(t);
+  EXPECT_NE(t.error().find("trailing"), std::string::npos) << t.error();
+  Bytes coded = probe;
+  coded[20] = std::byte{uint8_t(Codec::Lz4)};
+  EXPECT_FALSE(decodeProbe(coded));
+}
+
+// Enum ranges come from each enum's Last: one past it is unknown on the wire.
+TEST(Protocol, RoleAndFormatRangesDeriveFromLast) {
+  EXPECT_TRUE(validRole(uint8_t(Role::Last)));
+  EXPECT_FALSE(validRole(uint8_t(Role::Last) + 1));
+  EXPECT_FALSE(validRole(0));
+  EXPECT_TRUE(validPixelFormat(uint8_t(PixelFormat::Last)));
+  EXPECT_FALSE(validPixelFormat(uint8_t(PixelFormat::Last) + 1));
+  EXPECT_FALSE(validPixelFormat(0));
+  Bytes hb = encode(Heartbeat{Role::Renderer, 1}, 1);
+  hb[kHeaderSize] = std::byte{uint8_t(uint8_t(Role::Last) + 1)};
+  reseal(hb);
+  auto r = decodeHeartbeat(hb);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("role"), std::string::npos) << r.error();
+  FrameParams p = sampleParams();
+  p.format = PixelFormat(uint8_t(PixelFormat::Last) + 1);
+  auto f = decodeFrameParams(encode(p, 1));
+  ASSERT_FALSE(f);
+  EXPECT_NE(f.error().find("format"), std::string::npos) << f.error();
 }
 
 }  // namespace

@@ -69,6 +69,7 @@ void writeSeeds(const std::string& dir) {
   writeSeed(dir, n, encode(Hello{Role::Compositor, 42, "ipc:///tmp/x"}, 1));
   writeSeed(dir, n, encode(Welcome{Role::Renderer, 2}, 1));
   writeSeed(dir, n, encode(Heartbeat{Role::Display, 0}, 1));
+  writeSeed(dir, n, encode(Probe{}, 1));
   writeSeed(dir, n, encode(Shutdown{"bye"}, 1));
   writeSeed(dir, n, encode(Roster{3, {{Role::Renderer, 1, "0123456789abcdefd"}}}, 1));
   FrameParams fp;
@@ -120,6 +121,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   check<Hello>(msg, decodeHello, [&](const Hello& v) { return encode(v, sender); });
   check<Welcome>(msg, decodeWelcome, [&](const Welcome& v) { return encode(v, sender); });
   check<Heartbeat>(msg, decodeHeartbeat, [&](const Heartbeat& v) { return encode(v, sender); });
+  check<Probe>(msg, decodeProbe, [&](const Probe& v) { return encode(v, sender); });
   check<Shutdown>(msg, decodeShutdown, [&](const Shutdown& v) { return encode(v, sender); });
   check<Roster>(msg, decodeRoster, [&](const Roster& v) { return encode(v, sender); });
   check<FrameParams>(msg, decodeFrameParams, [&](const FrameParams& v) { return encode(v, sender); });
