@@ -8,7 +8,6 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -20,6 +19,7 @@
 
 #include "tests/bench/aa_sweep.h"
 #include "tests/bench/geometry_farm.h"
+#include "common/clock.h"
 #include "common/scene.h"
 #include "master/tiling.h"
 #include "renderer/gl/gl_renderer.h"
@@ -40,10 +40,6 @@ struct Options {
   std::vector<std::string> parts{"throughput", "culling", "model", "farm", "aa"};
   bool has(const std::string& p) const { return std::find(parts.begin(), parts.end(), p) != parts.end(); }
 };
-
-double msSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -96,7 +92,7 @@ void throughput(const Options& o) {
       (void)r.render(s.camera, s.width, s.height, all, g.chunks, opt);  // warm-up: shader JIT
       std::vector<double> ms;
       for (int i = 0; i < o.repeat; ++i) {
-        auto t0 = std::chrono::steady_clock::now();
+        auto t0 = Clock::now();
         (void)r.render(s.camera, s.width, s.height, all, g.chunks, opt);
         ms.push_back(msSince(t0));
       }
@@ -142,11 +138,11 @@ bool culling(const Options& o) {
       GlRenderStats cst, bst;
       Image8 a, b;
       for (int i = 0; i < o.repeat; ++i) {  // interleaved, so load changes hit both alike
-        auto t0 = std::chrono::steady_clock::now();
+        auto t0 = Clock::now();
         cst = {};
         a = renderTiles(r, s.camera, s.width, s.height, tiles, g.chunks, opt, &cst);
         culled_ms.push_back(msSince(t0));
-        t0 = std::chrono::steady_clock::now();
+        t0 = Clock::now();
         bst = {};
         b = broadcast(&bst);
         broad_ms.push_back(msSince(t0));
@@ -200,7 +196,7 @@ void tilingModel(const Options& o) {
             std::vector<Chunk> draw;
             for (int c : chunksInTile(g.chunks, vp, tiles[i])) draw.push_back(g.chunks[c]);
             for (int k = 0; k < o.repeat; ++k) {  // best of repeats: the machine is shared
-              auto t0 = std::chrono::steady_clock::now();
+              auto t0 = Clock::now();
               (void)r.render(s.camera, s.width, s.height, tiles[i], draw, opt);
               best = std::min(best, msSince(t0));
             }

@@ -5,7 +5,6 @@
 // A benchmark, not a timed test: exits 2 only when a counting invariant breaks.
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -17,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.h"
 #include "common/io/image_io.h"
 #include "common/scene.h"
 #include "tests/bench/render_sweep_report.h"
@@ -26,9 +26,6 @@ namespace {
 
 using namespace tessera;
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // CPU time of the whole process (all threads): unlike wall time it does not grow while other
 // programs hold the shared cores, so it is the steadier speed figure on a busy machine.
