@@ -7,6 +7,7 @@
 #include <cstring>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "renderer/mesh/mesh.h"
 
@@ -91,144 +92,223 @@ class Body {
   const std::string& name_;
 };
 
-}  // namespace
-
-Mesh parsePly(const std::string& bytes, const std::string& name) {
-  size_t pos = 0;
-  int line_no = 0;
-  auto headerLine = [&]() {
-    if (pos >= bytes.size()) throw std::runtime_error(name + ": bad PLY header: missing end_header");
-    size_t end = bytes.find('\n', pos);
-    if (end == std::string::npos) end = bytes.size();
-    std::string line = bytes.substr(pos, end - pos);
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    pos = end + 1;
-    ++line_no;
-    return line;
-  };
-  auto bad = [&](const std::string& msg) {
-    throw std::runtime_error(name + ": bad PLY header: line " + std::to_string(line_no) + ": " + msg);
-  };
-  if (headerLine() != "ply") bad("expected 'ply'");
-  bool ascii = false, have_format = false;
+// The header: format, then elements with their properties; `body` is where the data starts.
+struct Header {
+  bool ascii = false;
   std::vector<Element> elements;
+  size_t body = 0;
+};
+
+// Reads the header line by line; errors name the file and the header line.
+class HeaderParser {
+ public:
+  HeaderParser(const std::string& bytes, const std::string& name) : bytes_(bytes), name_(name) {}
+  Header parse();
+
+ private:
+  std::string nextLine();
+  [[noreturn]] void bad(const std::string& msg) const {
+    throw std::runtime_error(name_ + ": bad PLY header: line " + std::to_string(line_no_) + ": " + msg);
+  }
+  void format(std::istringstream& in);
+  void element(std::istringstream& in);
+  void property(std::istringstream& in, const std::string& line);
+
+  const std::string& bytes_;
+  const std::string& name_;
+  size_t pos_ = 0;
+  int line_no_ = 0;
+  bool have_format_ = false;
+  Header h_;
+};
+
+Header HeaderParser::parse() {
+  if (nextLine() != "ply") bad("expected 'ply'");
   for (;;) {
-    const std::string line = headerLine();
+    const std::string line = nextLine();
     std::istringstream in(line);
     std::string kw;
     in >> kw;
     if (kw == "end_header") break;
     if (kw.empty() || kw == "comment" || kw == "obj_info") continue;
-    if (kw == "format") {
-      std::string fmt, ver;
-      in >> fmt >> ver;
-      if (fmt == "ascii") ascii = true;
-      else if (fmt != "binary_little_endian") bad("unsupported format '" + fmt + "' (ascii | binary_little_endian)");
-      have_format = true;
-    } else if (kw == "element") {
-      Element e;
-      long long count = -1;
-      if (!(in >> e.name >> count) || count < 0) bad("expected 'element <name> <count>'");
-      e.count = (size_t)count;
-      elements.push_back(e);
-    } else if (kw == "property") {
-      if (elements.empty()) bad("property before any element");
-      Prop p;
-      std::string t;
-      in >> t;
-      if (t == "list") {
-        std::string ct, it;
-        in >> ct >> it >> p.name;
-        p.list = true;
-        if (!parseType(ct, p.count_type) || !parseType(it, p.type)) bad("unknown list type in '" + line + "'");
-      } else {
-        in >> p.name;
-        if (!parseType(t, p.type)) bad("unknown property type '" + t + "'");
-      }
-      if (p.name.empty()) bad("property without a name");
-      elements.back().props.push_back(p);
-    } else {
-      bad("unknown keyword '" + kw + "'");
-    }
+    if (kw == "format") format(in);
+    else if (kw == "element") element(in);
+    else if (kw == "property") property(in, line);
+    else bad("unknown keyword '" + kw + "'");
   }
-  if (!have_format) bad("missing format line");
+  if (!have_format_) bad("missing format line");
+  h_.body = pos_;
+  return h_;
+}
 
-  Mesh m;
-  bool have_normals = false, have_colors = false;
-  size_t vertex_count = 0;
-  for (const Element& e : elements)
-    if (e.name == "vertex") vertex_count = e.count;
-  Body body(bytes, pos, ascii, name);
-  for (const Element& e : elements) {
-    const bool is_vertex = e.name == "vertex", is_face = e.name == "face";
-    int slot[9];  // property index of x y z nx ny nz red green blue, or -1
-    const char* kNames[9] = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"};
-    for (int k = 0; k < 9; ++k) {
-      slot[k] = -1;
-      for (size_t i = 0; i < e.props.size(); ++i)
-        if (e.props[i].name == kNames[k] && !e.props[i].list) slot[k] = (int)i;
-    }
-    if (is_vertex) {
-      if (slot[0] < 0 || slot[1] < 0 || slot[2] < 0)
-        throw std::runtime_error(name + ": bad PLY header: vertex element needs properties x, y and z");
-      have_normals = slot[3] >= 0 && slot[4] >= 0 && slot[5] >= 0;
-      have_colors = slot[6] >= 0 && slot[7] >= 0 && slot[8] >= 0;
-      m.positions.reserve(3 * e.count);
-    }
-    int list_prop = -1;
-    if (is_face)
-      for (size_t i = 0; i < e.props.size(); ++i)
-        if (e.props[i].list && (e.props[i].name == "vertex_indices" || e.props[i].name == "vertex_index"))
-          list_prop = (int)i;
-    if (is_face && list_prop < 0)
-      throw std::runtime_error(name + ": bad PLY header: face element needs a vertex_indices list");
-    std::vector<double> vals(e.props.size());
-    std::vector<uint32_t> poly;
-    for (size_t item = 0; item < e.count; ++item) {
-      body.where = e.name + " " + std::to_string(item);
-      for (size_t i = 0; i < e.props.size(); ++i) {
-        const Prop& p = e.props[i];
-        if (!p.list) {
-          vals[i] = body.next(p.type);
-          continue;
-        }
-        const double n = body.next(p.count_type);
-        if (!(n >= 0 && n <= 1e6) || n != std::floor(n)) body.fail("bad list length " + std::to_string(n));
-        poly.clear();
-        for (int k = 0; k < (int)n; ++k) {
-          const double v = body.next(p.type);
-          if ((int)i != list_prop) continue;
-          if (!(v >= 0 && v < (double)vertex_count) || v != std::floor(v))
-            body.fail("vertex index " + std::to_string((long long)v) + " out of range (" +
-                      std::to_string(vertex_count) + " vertices)");
-          poly.push_back((uint32_t)v);
-        }
-        if ((int)i == list_prop) {
-          if (poly.size() < 3) body.fail("a face needs at least 3 vertices, got " + std::to_string(poly.size()));
-          for (size_t k = 1; k + 1 < poly.size(); ++k) m.indices.insert(m.indices.end(), {poly[0], poly[k], poly[k + 1]});
-        }
-      }
-      if (!is_vertex) continue;
-      for (int k = 0; k < 3; ++k) {
-        const double v = vals[slot[k]];
-        if (!std::isfinite(v) || std::fabs(v) > 3e38) body.fail("position is not finite");
-        m.positions.push_back((float)v);
-      }
-      if (have_normals)
-        for (int k = 3; k < 6; ++k) m.normals.push_back((float)vals[slot[k]]);
-      if (have_colors)
-        for (int k = 6; k < 9; ++k) {
-          const bool bytes_colour = e.props[slot[k]].type == Type::U8;
-          m.colors.push_back((float)std::clamp(bytes_colour ? vals[slot[k]] / 255.0 : vals[slot[k]], 0.0, 1.0));
-        }
-    }
+std::string HeaderParser::nextLine() {
+  if (pos_ >= bytes_.size()) throw std::runtime_error(name_ + ": bad PLY header: missing end_header");
+  size_t end = bytes_.find('\n', pos_);
+  if (end == std::string::npos) end = bytes_.size();
+  std::string line = bytes_.substr(pos_, end - pos_);
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  pos_ = end + 1;
+  ++line_no_;
+  return line;
+}
+
+void HeaderParser::format(std::istringstream& in) {
+  std::string fmt, ver;
+  in >> fmt >> ver;
+  if (fmt == "ascii") h_.ascii = true;
+  else if (fmt != "binary_little_endian") bad("unsupported format '" + fmt + "' (ascii | binary_little_endian)");
+  have_format_ = true;
+}
+
+void HeaderParser::element(std::istringstream& in) {
+  Element e;
+  long long count = -1;
+  if (!(in >> e.name >> count) || count < 0) bad("expected 'element <name> <count>'");
+  e.count = (size_t)count;
+  h_.elements.push_back(e);
+}
+
+void HeaderParser::property(std::istringstream& in, const std::string& line) {
+  if (h_.elements.empty()) bad("property before any element");
+  Prop p;
+  std::string t;
+  in >> t;
+  if (t == "list") {
+    std::string ct, it;
+    in >> ct >> it >> p.name;
+    p.list = true;
+    if (!parseType(ct, p.count_type) || !parseType(it, p.type)) bad("unknown list type in '" + line + "'");
+  } else {
+    in >> p.name;
+    if (!parseType(t, p.type)) bad("unknown property type '" + t + "'");
   }
-  if (m.vertexCount() == 0 || m.indices.empty()) throw std::runtime_error(name + ": empty mesh (no triangles)");
-  if (!have_normals) computeSmoothNormals(m);
-  if (!have_colors)
-    for (size_t v = 0; v < m.vertexCount(); ++v) m.colors.insert(m.colors.end(), kDefaultMeshColor, kDefaultMeshColor + 3);
-  validateMesh(m, name);
-  return m;
+  if (p.name.empty()) bad("property without a name");
+  h_.elements.back().props.push_back(p);
+}
+
+// Where an element's properties land: x y z nx ny nz red green blue (property index or -1) for
+// vertices, the vertex index list for faces.
+struct Layout {
+  bool is_vertex = false, is_face = false;
+  int slot[9];
+  int list_prop = -1;
+  bool normals() const { return slot[3] >= 0 && slot[4] >= 0 && slot[5] >= 0; }
+  bool colors() const { return slot[6] >= 0 && slot[7] >= 0 && slot[8] >= 0; }
+};
+
+// Throws the header errors that only show once the element's role is known.
+Layout layoutOf(const Element& e, const std::string& name) {
+  Layout l;
+  l.is_vertex = e.name == "vertex";
+  l.is_face = e.name == "face";
+  const char* kNames[9] = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"};
+  for (int k = 0; k < 9; ++k) {
+    l.slot[k] = -1;
+    for (size_t i = 0; i < e.props.size(); ++i)
+      if (e.props[i].name == kNames[k] && !e.props[i].list) l.slot[k] = (int)i;
+  }
+  if (l.is_vertex && (l.slot[0] < 0 || l.slot[1] < 0 || l.slot[2] < 0))
+    throw std::runtime_error(name + ": bad PLY header: vertex element needs properties x, y and z");
+  if (l.is_face)
+    for (size_t i = 0; i < e.props.size(); ++i)
+      if (e.props[i].list && (e.props[i].name == "vertex_indices" || e.props[i].name == "vertex_index"))
+        l.list_prop = (int)i;
+  if (l.is_face && l.list_prop < 0)
+    throw std::runtime_error(name + ": bad PLY header: face element needs a vertex_indices list");
+  return l;
+}
+
+// Reads every element of the body in order: vertices and faces into the mesh, others dropped.
+class MeshReader {
+ public:
+  MeshReader(const std::string& bytes, const Header& header, const std::string& name)
+      : header_(header), name_(name), body_(bytes, header.body, header.ascii, name) {
+    for (const Element& e : header.elements)
+      if (e.name == "vertex") vertex_count_ = e.count;
+  }
+  Mesh build();
+
+ private:
+  void readElement(const Element& e);
+  void readList(const Prop& p, bool indices);
+  void addVertex(const Element& e, const Layout& l);
+
+  const Header& header_;
+  const std::string& name_;
+  Body body_;
+  size_t vertex_count_ = 0;
+  bool have_normals_ = false, have_colors_ = false;
+  std::vector<double> vals_;    // the current item's scalar properties
+  std::vector<uint32_t> poly_;  // the current face's vertex indices
+  Mesh m_;
+};
+
+Mesh MeshReader::build() {
+  for (const Element& e : header_.elements) readElement(e);
+  if (m_.vertexCount() == 0 || m_.indices.empty()) throw std::runtime_error(name_ + ": empty mesh (no triangles)");
+  if (!have_normals_) computeSmoothNormals(m_);
+  if (!have_colors_)
+    for (size_t v = 0; v < m_.vertexCount(); ++v) m_.colors.insert(m_.colors.end(), kDefaultMeshColor, kDefaultMeshColor + 3);
+  validateMesh(m_, name_);
+  return std::move(m_);
+}
+
+void MeshReader::readElement(const Element& e) {
+  const Layout l = layoutOf(e, name_);
+  if (l.is_vertex) {
+    have_normals_ = l.normals();
+    have_colors_ = l.colors();
+    m_.positions.reserve(3 * e.count);
+  }
+  vals_.assign(e.props.size(), 0.0);
+  for (size_t item = 0; item < e.count; ++item) {
+    body_.where = e.name + " " + std::to_string(item);
+    for (size_t i = 0; i < e.props.size(); ++i) {
+      if (e.props[i].list) readList(e.props[i], (int)i == l.list_prop);
+      else vals_[i] = body_.next(e.props[i].type);
+    }
+    if (l.is_vertex) addVertex(e, l);
+  }
+}
+
+// Lists other than a face's vertex indices are read and dropped; a face is fan-triangulated.
+void MeshReader::readList(const Prop& p, bool indices) {
+  const double n = body_.next(p.count_type);
+  if (!(n >= 0 && n <= 1e6) || n != std::floor(n)) body_.fail("bad list length " + std::to_string(n));
+  poly_.clear();
+  for (int k = 0; k < (int)n; ++k) {
+    const double v = body_.next(p.type);
+    if (!indices) continue;
+    if (!(v >= 0 && v < (double)vertex_count_) || v != std::floor(v))
+      body_.fail("vertex index " + std::to_string((long long)v) + " out of range (" + std::to_string(vertex_count_) +
+                 " vertices)");
+    poly_.push_back((uint32_t)v);
+  }
+  if (!indices) return;
+  if (poly_.size() < 3) body_.fail("a face needs at least 3 vertices, got " + std::to_string(poly_.size()));
+  for (size_t k = 1; k + 1 < poly_.size(); ++k) m_.indices.insert(m_.indices.end(), {poly_[0], poly_[k], poly_[k + 1]});
+}
+
+void MeshReader::addVertex(const Element& e, const Layout& l) {
+  for (int k = 0; k < 3; ++k) {
+    const double v = vals_[l.slot[k]];
+    if (!std::isfinite(v) || std::fabs(v) > 3e38) body_.fail("position is not finite");
+    m_.positions.push_back((float)v);
+  }
+  if (have_normals_)
+    for (int k = 3; k < 6; ++k) m_.normals.push_back((float)vals_[l.slot[k]]);
+  if (have_colors_)
+    for (int k = 6; k < 9; ++k) {
+      const bool bytes_colour = e.props[l.slot[k]].type == Type::U8;
+      m_.colors.push_back((float)std::clamp(bytes_colour ? vals_[l.slot[k]] / 255.0 : vals_[l.slot[k]], 0.0, 1.0));
+    }
+}
+
+}  // namespace
+
+Mesh parsePly(const std::string& bytes, const std::string& name) {
+  const Header header = HeaderParser(bytes, name).parse();
+  return MeshReader(bytes, header, name).build();
 }
 
 }  // namespace tessera::renderer

@@ -4,12 +4,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <stdexcept>
 
+#include "common/clock.h"
 #include "renderer/tools/fft_filter.h"
 
 namespace tessera::bench {
@@ -17,10 +17,6 @@ namespace tessera::bench {
 using renderer::GlRenderOptions;
 
 namespace {
-
-double msSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // One whole-image render (the post filter needs the whole image, see fft_filter.h).
 Image8 renderOnce(renderer::GlRenderer& r, const renderer::SceneGeometry& g, const Camera& cam, int w, int h,
@@ -30,7 +26,7 @@ Image8 renderOnce(renderer::GlRenderer& r, const renderer::SceneGeometry& g, con
   o.supersample = m.method == "ssaa" ? m.samples : 1;
   Image8 img = r.render(cam, w, h, Rect{0, 0, w, h}, g.chunks, o);
   if (m.method == "fft") {
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = Clock::now();
     renderer::lowPassFilter(img, m.sigma);
     *filter_ms = msSince(t0);
   }
@@ -65,7 +61,7 @@ AaSweepResult aaSweep(renderer::GlRenderer& r, const renderer::SceneGeometry& g,
   // Warm-up: llvmpipe compiles shaders per state on first use; keep that out of the rows.
   (void)renderOnce(r, g, cam, width, height, base, row("none"), &unused);
   (void)renderOnce(r, g, cam, width, height, base, ref_method, &unused);
-  auto t0 = std::chrono::steady_clock::now();
+  auto t0 = Clock::now();
   const Image8 ref = renderOnce(r, g, cam, width, height, base, ref_method, &unused);
   res.reference_ms = msSince(t0);
 
@@ -79,7 +75,7 @@ AaSweepResult aaSweep(renderer::GlRenderer& r, const renderer::SceneGeometry& g,
     // i == -1 warms up: llvmpipe JIT-compiles each new state (sample count, target size).
     for (int i = -1; i < std::max(1, repeat); ++i) {
       double filter_ms = 0;
-      t0 = std::chrono::steady_clock::now();
+      t0 = Clock::now();
       img = renderOnce(r, g, cam, width, height, base, m, &filter_ms);
       if (i < 0) continue;
       m.ms = std::min(m.ms, msSince(t0));

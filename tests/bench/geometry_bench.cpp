@@ -3,25 +3,23 @@
 // every chunk to every tile (2x2 tiles, identical bytes required); (c) the farm through
 // tessera-up on a corner-crowded scene, static against balanced tiling; (d) anti-aliasing
 // run time against error (CSV + gnuplot PNG). Prints markdown tables. Not a timed test.
+// Part (c) lives in geometry_farm.cpp, part (d)'s sweep in aa_sweep.cpp.
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "tests/bench/aa_sweep.h"
-#include "common/io/image_io.h"
+#include "tests/bench/geometry_farm.h"
+#include "common/clock.h"
 #include "common/scene.h"
 #include "master/tiling.h"
 #include "renderer/gl/gl_renderer.h"
@@ -42,10 +40,6 @@ struct Options {
   std::vector<std::string> parts{"throughput", "culling", "model", "farm", "aa"};
   bool has(const std::string& p) const { return std::find(parts.begin(), parts.end(), p) != parts.end(); }
 };
-
-double msSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -98,7 +92,7 @@ void throughput(const Options& o) {
       (void)r.render(s.camera, s.width, s.height, all, g.chunks, opt);  // warm-up: shader JIT
       std::vector<double> ms;
       for (int i = 0; i < o.repeat; ++i) {
-        auto t0 = std::chrono::steady_clock::now();
+        auto t0 = Clock::now();
         (void)r.render(s.camera, s.width, s.height, all, g.chunks, opt);
         ms.push_back(msSince(t0));
       }
@@ -144,11 +138,11 @@ bool culling(const Options& o) {
       GlRenderStats cst, bst;
       Image8 a, b;
       for (int i = 0; i < o.repeat; ++i) {  // interleaved, so load changes hit both alike
-        auto t0 = std::chrono::steady_clock::now();
+        auto t0 = Clock::now();
         cst = {};
         a = renderTiles(r, s.camera, s.width, s.height, tiles, g.chunks, opt, &cst);
         culled_ms.push_back(msSince(t0));
-        t0 = std::chrono::steady_clock::now();
+        t0 = Clock::now();
         bst = {};
         b = broadcast(&bst);
         broad_ms.push_back(msSince(t0));
@@ -202,7 +196,7 @@ void tilingModel(const Options& o) {
             std::vector<Chunk> draw;
             for (int c : chunksInTile(g.chunks, vp, tiles[i])) draw.push_back(g.chunks[c]);
             for (int k = 0; k < o.repeat; ++k) {  // best of repeats: the machine is shared
-              auto t0 = std::chrono::steady_clock::now();
+              auto t0 = Clock::now();
               (void)r.render(s.camera, s.width, s.height, tiles[i], draw, opt);
               best = std::min(best, msSince(t0));
             }
@@ -224,139 +218,17 @@ void tilingModel(const Options& o) {
   }
 }
 
-// ---- (c) the farm ---------------------------------------------------------------------------
-struct FarmRow {
-  std::string lp, tiling;
-  int renderers = 0, frames = 0;
-  double fps = 0, render_ms = 0, overlap = 0, imbalance = 0, triangles = 0, composite_ms = 0, display_ms = 0;
-  bool image_ok = false;
-  std::vector<double> fps_all;  // every round's fps, sorted
-};
-
-FarmRow summarizeFarm(const fs::path& metrics, size_t warm) {
-  std::vector<nlohmann::json> rows;
-  std::ifstream in(metrics);
-  for (std::string line; std::getline(in, line);) rows.push_back(nlohmann::json::parse(line));
-  std::sort(rows.begin(), rows.end(), [](const nlohmann::json& a, const nlohmann::json& b) {
-    return a["frame"].get<int>() < b["frame"].get<int>();
-  });
-  FarmRow f;
-  f.frames = (int)rows.size();
-  if (rows.size() < warm + 2) return f;
-  const double n = (double)(rows.size() - warm);
-  for (size_t i = warm; i < rows.size(); ++i) {
-    f.render_ms += rows[i]["render_ms_max"].get<double>() / n;
-    f.overlap += rows[i]["overlap_factor"].get<double>() / n;
-    f.imbalance += rows[i]["render_imbalance_time"].get<double>() / n;
-    f.triangles += rows[i]["triangles"].get<double>() / n;
-    f.composite_ms += rows[i]["composite_ms_max"].get<double>() / n;
-    f.display_ms += rows[i]["display_ms"].get<double>() / n;
-  }
-  f.fps = (double)(rows.size() - 1 - warm) * 1000.0 /
-          (rows.back()["done_ms"].get<double>() - rows[warm]["done_ms"].get<double>());
-  return f;
-}
-
-// Returns false if a run failed or a farm image differs from the one-process render.
+// ---- (c) the farm (geometry_farm.cpp) -------------------------------------------------------
 bool farm(const Options& o) {
-  const fs::path self = fs::canonical("/proc/self/exe").parent_path();
-  const fs::path compose = fs::path(TESSERA_SOURCE_DIR) / "compose.yaml";
-  const fs::path root = fs::absolute(o.out) / "farm";
-  fs::create_directories(root);
-  const fs::path scene_file = root / "corner.yaml";
-  std::ofstream(scene_file) << sceneText(scenePath("corner.yaml"), o.size, o.image);
-  const Scene s = loadScene(scene_file.string());
-
-  // The one-process image every farm frame must equal (same camera every frame: no orbit),
-  // through the same PNG round trip as the display's frames.
-  Image8 expected;
-  size_t triangles = 0;
-  {
-    const SceneGeometry g = loadSceneGeometry(s);
-    GlRenderer r;
-    r.setMesh(g.mesh);
-    triangles = g.mesh.triangleCount();
-    writePng((root / "one-process.png").string(),
-             r.render(s.camera, s.width, s.height, {0, 0, s.width, s.height}, g.chunks, sceneRenderOptions(s)));
-    expected = readPng((root / "one-process.png").string());
-  }
-  const size_t warm = std::min<size_t>(4, (size_t)o.frames / 4);  // start-up; balanced needs a frame of costs
-  std::vector<FarmRow> rows;
-  bool ok = true;
-  std::vector<std::vector<FarmRow>> runs;           // per configuration, one row per round
-  for (int round = 0; round < o.rounds; ++round) {  // rounds interleave configurations: load drifts
-    size_t config = 0;
-    for (const std::string& lp : o.lp_threads) {
-      if (lp == "default")
-        unsetenv("LP_NUM_THREADS");
-      else
-        setenv("LP_NUM_THREADS", lp.c_str(), 1);
-      for (int n : o.renderers)
-        for (const char* tiling : {"static", "balanced"}) {
-          if (runs.size() <= config) runs.emplace_back();
-          const fs::path dir = root / fmt::format("lp{}-r{}-{}-round{}", lp, n, tiling, round);
-          fs::remove_all(dir);
-          fs::create_directories(dir);
-          const std::string cmd = fmt::format(
-              "{}/tessera-up {} --env TESSERA_SCENE={} --env TESSERA_FRAMES={} --env TESSERA_RENDERERS={} "
-              "--env TESSERA_COMPOSITORS=1 --env TESSERA_TILING={} --env TESSERA_OUT={} "
-              "--env TESSERA_ENDPOINTS=ipc://{}/sockets --env TESSERA_WINDOW=off --env TESSERA_LOG=warn > {}/farm.log "
-              "2>&1",
-              self.string(), compose.string(), scene_file.string(), o.frames, n, tiling, dir.string(), dir.string(),
-              dir.string());
-          std::cerr << fmt::format("farm round {}: LP_NUM_THREADS={} renderers={} tiling={} ({} frames)...\n", round,
-                                   lp, n, tiling, o.frames);
-          ++config;
-          if (std::system(cmd.c_str()) != 0) {
-            std::cerr << "farm failed; see " << (dir / "farm.log").string() << "\n";
-            ok = false;
-            continue;
-          }
-          FarmRow f = summarizeFarm(dir / "metrics.jsonl", warm);
-          f.lp = lp;
-          f.tiling = tiling;
-          f.renderers = n;
-          const fs::path last = dir / fmt::format("frame_{:06d}.png", o.frames - 1);
-          f.image_ok = fs::exists(last) && readPng(last.string()).px == expected.px;
-          ok = ok && f.image_ok;
-          runs[config - 1].push_back(f);
-        }
-    }
-  }
-  // Per configuration, the round with the median fps (all its columns from that one run).
-  for (auto& v : runs) {
-    if (v.empty()) continue;
-    std::sort(v.begin(), v.end(), [](const FarmRow& a, const FarmRow& b) { return a.fps < b.fps; });
-    FarmRow m = v[v.size() / 2];
-    for (const FarmRow& f : v) m.image_ok = m.image_ok && f.image_ok;
-    m.fps_all.clear();
-    for (const FarmRow& f : v) m.fps_all.push_back(f.fps);
-    rows.push_back(m);
-  }
-  std::cout
-      << fmt::format(
-             "\n### Farm (tessera-up, compose.yaml), {} {}x{}, {} triangles, {} frames ({} warm-up "
-             "frames left out), 1 compositor; median of {} interleaved rounds by fps\n\n",
-             o.image > 0 || o.size > 0 ? "corner.yaml (resized)" : "corner.yaml", s.width, s.height, triangles,
-             o.frames, warm, o.rounds)
-      << "| LP_NUM_THREADS | renderers | tiling | fps (done_ms) | fps of all rounds | render_ms_max mean | overlap "
-         "factor | "
-         "render imbalance (max/mean) | triangles drawn | composite ms | display ms | last frame == one process |\n"
-      << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-  for (const FarmRow& f : rows)
-    std::cout << fmt::format(
-        "| {} | {} | {} | {:.2f} | {:.2f} | {:.1f} | {:.2f} | {:.2f} | {:.0f} | {:.1f} | {:.1f} | {} |\n", f.lp,
-        f.renderers, f.tiling, f.fps, fmt::join(f.fps_all, ", "), f.render_ms, f.overlap, f.imbalance, f.triangles,
-        f.composite_ms, f.display_ms, f.image_ok ? "yes" : "NO");
-  std::cout << "\n| LP_NUM_THREADS | renderers | balanced / static fps | static / balanced render_ms_max "
-               "|\n|---|---|---|---|\n";
-  for (const FarmRow& st : rows)
-    for (const FarmRow& b : rows)
-      if (st.tiling == "static" && b.tiling == "balanced" && st.lp == b.lp && st.renderers == b.renderers &&
-          st.fps > 0 && b.render_ms > 0)
-        std::cout << fmt::format("| {} | {} | {:.2f}x | {:.2f}x |\n", st.lp, st.renderers, b.fps / st.fps,
-                                 st.render_ms / b.render_ms);
-  return ok;
+  bench::FarmConfig c;
+  c.out = o.out;
+  c.scene_text = sceneText(scenePath("corner.yaml"), o.size, o.image);
+  c.resized = o.image > 0 || o.size > 0;
+  c.frames = o.frames;
+  c.rounds = o.rounds;
+  c.renderers = o.renderers;
+  c.lp_threads = o.lp_threads;
+  return bench::geometryFarm(c);
 }
 
 // ---- (d) anti-aliasing ----------------------------------------------------------------------

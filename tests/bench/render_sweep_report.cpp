@@ -125,78 +125,83 @@ std::string defaultSummary(const std::vector<SweepRow>& rows) {
   return o.str();
 }
 
-bool plot(const std::string& dir, const std::vector<SweepRow>& rows, const std::vector<std::string>& scenes) {
-  if (rows.empty() || scenes.empty()) return false;
+namespace {
+
+// points.dat: scene_index ms psnr skip step_index is_default (PSNR capped so "inf" plots).
+void writePoints(const std::string& dir, const std::vector<SweepRow>& rows, const std::vector<std::string>& scenes) {
   std::map<std::string, int> scene_index;
   for (size_t i = 0; i < scenes.size(); ++i) scene_index[scenes[i]] = int(i);
-  {
-    // points.dat: scene_index ms psnr skip step_index is_default (PSNR capped so "inf" plots).
-    auto out = openOut(dir + "/points.dat");
-    for (const auto& r : rows)
-      out << scene_index[r.scene] << ' ' << r.ms_best << ' ' << std::min(r.psnr, 99.0) << ' ' << int(r.skip) << ' '
-          << stepIndex(r.step_l0) << ' ' << int(r.is_default) << '\n';
+  auto out = openOut(dir + "/points.dat");
+  for (const auto& r : rows)
+    out << scene_index[r.scene] << ' ' << r.ms_best << ' ' << std::min(r.psnr, 99.0) << ' ' << int(r.skip) << ' '
+        << stepIndex(r.step_l0) << ' ' << int(r.is_default) << '\n';
+}
+
+// speedup.dat: one line per (step, ET); one column per scene: CPU ms(skip off) / CPU ms(skip
+// on). CPU time, because wall time on a shared machine swings by 2x between neighbours.
+void writeSpeedup(const std::string& dir, const std::vector<SweepRow>& rows, const std::vector<std::string>& scenes) {
+  auto out = openOut(dir + "/speedup.dat");
+  std::map<std::pair<double, double>, std::map<std::string, std::pair<double, double>>> by_config;
+  std::vector<std::pair<double, double>> order;
+  for (const auto& r : rows) {
+    const auto key = std::make_pair(r.step_l0, r.et);
+    if (!by_config.count(key)) order.push_back(key);
+    auto& ms = by_config[key][r.scene];
+    (r.skip ? ms.second : ms.first) = r.cpu_ms_best;
   }
-  {
-    // speedup.dat: one line per (step, ET); one column per scene: CPU ms(skip off) / CPU ms(skip
-    // on). CPU time, because wall time on a shared machine swings by 2x between neighbours.
-    auto out = openOut(dir + "/speedup.dat");
-    std::map<std::pair<double, double>, std::map<std::string, std::pair<double, double>>> by_config;
-    std::vector<std::pair<double, double>> order;
-    for (const auto& r : rows) {
-      const auto key = std::make_pair(r.step_l0, r.et);
-      if (!by_config.count(key)) order.push_back(key);
-      auto& ms = by_config[key][r.scene];
-      (r.skip ? ms.second : ms.first) = r.cpu_ms_best;
+  out << "# config";
+  for (const auto& s : scenes) out << ' ' << s;
+  out << '\n';
+  for (const auto& key : order) {
+    out << '"' << fmt("%g", key.first) << " L0, ET " << etLabel(key.second) << '"';
+    for (const auto& s : scenes) {
+      const auto& ms = by_config[key][s];
+      out << ' ' << (ms.first > 0 && ms.second > 0 ? ms.first / ms.second : 0.0);
     }
-    out << "# config";
-    for (const auto& s : scenes) out << ' ' << s;
     out << '\n';
-    for (const auto& key : order) {
-      out << '"' << fmt("%g", key.first) << " L0, ET " << etLabel(key.second) << '"';
-      for (const auto& s : scenes) {
-        const auto& ms = by_config[key][s];
-        out << ' ' << (ms.first > 0 && ms.second > 0 ? ms.first / ms.second : 0.0);
-      }
-      out << '\n';
-    }
   }
+}
+
+// plot.gp: one time-vs-PSNR panel per scene, then the speedup histogram.
+void writeScript(const std::string& dir, const std::vector<SweepRow>& rows, const std::vector<std::string>& scenes) {
   const SweepRow& any = rows.front();
   const std::string what = std::to_string(any.size) + "^3 volumes, " + std::to_string(any.width) + "x" +
                            std::to_string(any.height) + " images";
-  {
-    auto g = openOut(dir + "/plot.gp");
-    g << "set terminal pngcairo size " << 600 * scenes.size() << ",560 font 'Sans,10'\n"
-      << "set output '" << dir << "/render-sweep.png'\n"
-      << "set multiplot layout 1," << scenes.size() << " title 'Run time vs error against the reference ("
-      << what << "); colour: skipping, shape: step, circle: default quality'\n"
-      << "set logscale x\nset grid\nset xlabel 'run time per frame (ms, log)'\nset ylabel 'PSNR vs reference (dB)'\n"
-      << "set key below maxrows 3 font ',8'\nset bmargin 9\nset xlabel offset 0,0.3\n"
-      << "steps = '0.5 1 2 4'\n";
-    for (size_t i = 0; i < scenes.size(); ++i) {
-      g << "set title '" << scenes[i] << "'\n"
-        << "plot 40 with lines dt 2 lc 'gray' title '40 dB (contract)'";
-      for (int skip = 0; skip <= 1; ++skip)
-        for (int st = 0; st < 4; ++st)
-          g << ", '" << dir << "/points.dat' using ($1==" << i << " && $4==" << skip << " && $5==" << st
-            << " ? $2 : NaN):3 with points pt " << (st == 0 ? 5 : st == 1 ? 7 : st == 2 ? 9 : 13) << " ps 1.2 lc '"
-            << (skip ? "#d62728" : "#1f77b4") << "' title 'skip " << (skip ? "on" : "off") << ", step "
-            << (st == 0 ? "0.5" : st == 1 ? "1" : st == 2 ? "2" : "4") << " L0'";
-      g << ", '' using ($1==" << i << " && $6==1 ? $2 : NaN):3 with points pt 6 ps 3 lc 'black' title 'default'\n";
-    }
-    g << "unset multiplot\n"
-      << "set terminal pngcairo size 1200,560 font 'Sans,10'\n"
-      << "set output '" << dir << "/render-sweep-speedup.png'\n"
-      << "unset logscale x\nset bmargin\nset title 'Empty-space skipping: speedup = CPU ms(skip off) / CPU ms(skip on), same run ("
-      << what << ")'\n"
-      << "set style data histograms\nset style histogram clustered gap 1\nset style fill solid 0.8 border -1\n"
-      << "set xtics rotate by -45 font ',8'\nset xlabel 'step, early termination'\nset ylabel 'speedup (x)'\n"
-      << "set yrange [0:*]\nset key inside top right\n"
-      << "set arrow from graph 0, first 1 to graph 1, first 1 nohead dt 2 lc 'gray'\n"
-      << "plot ";
-    for (size_t i = 0; i < scenes.size(); ++i)
-      g << (i ? ", '" : "'") << dir << "/speedup.dat' using " << (i + 2) << ":xtic(1) title '" << scenes[i] << "'";
-    g << '\n';
+  auto g = openOut(dir + "/plot.gp");
+  g << "set terminal pngcairo size " << 600 * scenes.size() << ",560 font 'Sans,10'\n"
+    << "set output '" << dir << "/render-sweep.png'\n"
+    << "set multiplot layout 1," << scenes.size() << " title 'Run time vs error against the reference ("
+    << what << "); colour: skipping, shape: step, circle: default quality'\n"
+    << "set logscale x\nset grid\nset xlabel 'run time per frame (ms, log)'\nset ylabel 'PSNR vs reference (dB)'\n"
+    << "set key below maxrows 3 font ',8'\nset bmargin 9\nset xlabel offset 0,0.3\n"
+    << "steps = '0.5 1 2 4'\n";
+  for (size_t i = 0; i < scenes.size(); ++i) {
+    g << "set title '" << scenes[i] << "'\n"
+      << "plot 40 with lines dt 2 lc 'gray' title '40 dB (contract)'";
+    for (int skip = 0; skip <= 1; ++skip)
+      for (int st = 0; st < 4; ++st)
+        g << ", '" << dir << "/points.dat' using ($1==" << i << " && $4==" << skip << " && $5==" << st
+          << " ? $2 : NaN):3 with points pt " << (st == 0 ? 5 : st == 1 ? 7 : st == 2 ? 9 : 13) << " ps 1.2 lc '"
+          << (skip ? "#d62728" : "#1f77b4") << "' title 'skip " << (skip ? "on" : "off") << ", step "
+          << (st == 0 ? "0.5" : st == 1 ? "1" : st == 2 ? "2" : "4") << " L0'";
+    g << ", '' using ($1==" << i << " && $6==1 ? $2 : NaN):3 with points pt 6 ps 3 lc 'black' title 'default'\n";
   }
+  g << "unset multiplot\n"
+    << "set terminal pngcairo size 1200,560 font 'Sans,10'\n"
+    << "set output '" << dir << "/render-sweep-speedup.png'\n"
+    << "unset logscale x\nset bmargin\nset title 'Empty-space skipping: speedup = CPU ms(skip off) / CPU ms(skip on), same run ("
+    << what << ")'\n"
+    << "set style data histograms\nset style histogram clustered gap 1\nset style fill solid 0.8 border -1\n"
+    << "set xtics rotate by -45 font ',8'\nset xlabel 'step, early termination'\nset ylabel 'speedup (x)'\n"
+    << "set yrange [0:*]\nset key inside top right\n"
+    << "set arrow from graph 0, first 1 to graph 1, first 1 nohead dt 2 lc 'gray'\n"
+    << "plot ";
+  for (size_t i = 0; i < scenes.size(); ++i)
+    g << (i ? ", '" : "'") << dir << "/speedup.dat' using " << (i + 2) << ":xtic(1) title '" << scenes[i] << "'";
+  g << '\n';
+}
+
+bool runGnuplot(const std::string& dir) {
   const std::string cmd = "gnuplot '" + dir + "/plot.gp' 2>'" + dir + "/gnuplot.log'";
   if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
     std::fprintf(stderr, "tessera-sweep: gnuplot not found (apt-get install gnuplot-nox); no plots\n");
@@ -207,6 +212,16 @@ bool plot(const std::string& dir, const std::vector<SweepRow>& rows, const std::
     return false;
   }
   return true;
+}
+
+}  // namespace
+
+bool plot(const std::string& dir, const std::vector<SweepRow>& rows, const std::vector<std::string>& scenes) {
+  if (rows.empty() || scenes.empty()) return false;
+  writePoints(dir, rows, scenes);
+  writeSpeedup(dir, rows, scenes);
+  writeScript(dir, rows, scenes);
+  return runGnuplot(dir);
 }
 
 }  // namespace tessera::bench
