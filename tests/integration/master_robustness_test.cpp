@@ -205,19 +205,26 @@ TEST(MasterRobustness, ReportsFromStrangersAreRefusedAndCounted) {
   const int frames = 24;
   Farm farm("forged", smallScene(frames));
   farm.startMaster();
-  farm.startStages(1);
+  // Connect once the master listens (an ipc connect before the bind retries only after 100 ms,
+  // and this farm can be done by then).
+  const std::string control = farm.endpoints().masterControl();
+  ASSERT_TRUE(waitUntil([&] { return fs::exists(control.substr(6)); }, 10s)) << control;
   zmq::socket_t stranger(farm.ctx(), zmq::socket_type::dealer);
-  stranger.connect(farm.endpoints().masterControl());
+  stranger.set(zmq::sockopt::linger, 0);
+  stranger.set(zmq::sockopt::sndtimeo, 2000);  // wait (bounded) for the connection, never drop silently
+  stranger.connect(control);
   auto forge = [&] {  // FrameDone for every frame, and Stats claiming to be renderer 0
     for (uint64_t f = 0; f < frames; ++f) {
       proto::FrameDone d;
       d.frame = f;
-      sendBytes(stranger, proto::encode(d, 0), false, true);
+      sendBytes(stranger, proto::encode(d, 0));
       proto::StageStats s;
       s.frame = f;
-      sendBytes(stranger, proto::encode(s, 0), false, true);
+      sendBytes(stranger, proto::encode(s, 0));
     }
   };
+  forge();  // before the stages join: the master reads these while it gathers its members
+  farm.startStages(1);
   EXPECT_EQ(farm.join(60s, forge), 0);
   expectOrbitFrames(farm, frames);
   auto lines = farm.metrics();
