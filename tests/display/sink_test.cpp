@@ -199,9 +199,9 @@ TEST_F(WindowSinkXvfb, ShowsFrameQuadrantsAndStatusLine) {
   // Presenting is asynchronous (the X server draws when it gets to it, slower on a loaded
   // machine; CI runs other tests beside this one): present and look again until the screen
   // shows the frame, at most ~10 s. A correct frame ends the loop at once.
-  for (int attempt = 0; attempt < 100; ++attempt) {
+  for (int attempt = 0; attempt < 20; ++attempt) {
     sink->present(frame, 2 + attempt, status);
-    std::this_thread::sleep_for(std::chrono::milliseconds(50 + 50 * (attempt > 0)));
+    std::this_thread::sleep_for(std::chrono::milliseconds(50 + 450 * (attempt > 0)));
     std::string err;
     shot = testing::screenshotRoot(xvfb_.display(), err);
     ASSERT_FALSE(shot.px.empty()) << err;
