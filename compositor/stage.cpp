@@ -4,6 +4,7 @@
 #include <cstring>
 #include <map>
 
+#include "common/clock.h"
 #include "common/net/curve.h"
 #include "common/net/data_inbox.h"
 #include "common/net/log.h"
@@ -16,8 +17,6 @@
 namespace tessera::compositor {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
 class Stage {
  public:

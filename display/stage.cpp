@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "common/clock.h"
 #include "common/net/curve.h"
 #include "common/net/data_inbox.h"
 #include "common/net/log.h"
@@ -17,8 +18,6 @@
 namespace tessera::display {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
 class Stage {
  public:

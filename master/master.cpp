@@ -9,7 +9,6 @@
 
 #include "common/net/curve.h"
 #include "common/net/log.h"
-#include "common/net/stage_link.h"
 #include "common/net/transport.h"
 #include "master/interaction.h"
 #include "master/membership.h"
@@ -20,16 +19,10 @@
 namespace tessera::master {
 namespace {
 
-// The control socket's largest legitimate message: a Stats with one time per sort-first tile
-// (at most 1024 renderers x 64 tiles x 8 bytes = 512 KiB); larger ones are refused by ZeroMQ
-// before they are read.
+// Largest legitimate control message: a Stats with a time per sort-first tile (1024 renderers
+// x 64 tiles x 8 bytes = 512 KiB); ZeroMQ refuses larger ones before reading them.
 constexpr int64_t kMaxControlMessage = 4 << 20;
-
 using proto::Role;
-
-double msSince(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
 
 // The thin loop: wires the PUB and ROUTER sockets to membership, the credit window, the
 // plan of the scene's mode and the metrics.
@@ -217,13 +210,9 @@ class Master {
     metrics_.reissued(again.size());
   }
 
-  // The members that may send pieces and strips, by the routing id of their data connection,
-  // to the stages that receive them, over each one's own control connection (never on PUB).
+  // Who may send pieces and strips, to the stages that receive them, privately (never on PUB).
   void sendRoster() {
-    proto::Roster roster{members_.epoch(), {}};
-    for (Role role : {Role::Renderer, Role::Compositor})
-      for (const Member* m : members_.alive(role))
-        if (auto id = StageLink::dataIdentity(m->identity); !id.empty()) roster.members.push_back({role, m->rank, id});
+    const auto roster = members_.roster();
     for (Role role : {Role::Compositor, Role::Display})
       for (const Member* m : members_.alive(role)) sendTo(m->identity, proto::encode(roster, kMasterRank));
   }

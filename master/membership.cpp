@@ -107,4 +107,12 @@ const Member* Membership::display() const {
   return d.empty() ? nullptr : d.front();
 }
 
+proto::Roster Membership::roster() const {
+  proto::Roster r{epoch_, {}};
+  for (proto::Role role : {proto::Role::Renderer, proto::Role::Compositor})
+    for (const Member* m : alive(role))
+      if (auto id = StageLink::dataIdentity(m->identity); !id.empty()) r.members.push_back({role, m->rank, id});
+  return r;
+}
+
 }  // namespace tessera::master

@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.h"
 #include "common/wire/protocol.h"
 
 namespace tessera::master {
 
-using Clock = std::chrono::steady_clock;
 
 const char* roleName(proto::Role r);
 
@@ -60,6 +60,9 @@ class Membership {
   Member* find(proto::Role r, uint32_t rank);
   // The display the frames go to: the alive display of lowest rank, or nullptr.
   const Member* display() const;
+  // Who may send pieces and strips: alive renderers and compositors by the routing id of their
+  // data connection (see StageLink::dataIdentity), under the current epoch.
+  proto::Roster roster() const;
   uint32_t epoch() const { return epoch_; }
   void bumpEpoch() { ++epoch_; }
 

@@ -342,24 +342,6 @@ TEST(Protocol, StructuredMessagesMustUseCodecNone) {
   EXPECT_NE(r.error().find("codec"), std::string::npos) << r.error();
 }
 
-}  // namespace
-}  // namespace tessera::proto
-
-namespace tessera::proto {
-namespace {
-
-TEST(Protocol, RosterRejectsImpossibleRoutingIds) {
-  auto empty = encode(Roster{1, {{Role::Renderer, 0, ""}}}, 1);
-  auto r = decodeRoster(empty);
-  ASSERT_FALSE(r);
-  EXPECT_NE(r.error().find("members.identity"), std::string::npos) << r.error();
-  auto huge = encode(Roster{1, {{Role::Renderer, 0, std::string(256, 'a')}}}, 1);
-  EXPECT_FALSE(decodeRoster(huge));
-  auto truncated = encode(Roster{1, {{Role::Renderer, 0, "abc"}}}, 1);
-  truncated.resize(truncated.size() - 1);
-  EXPECT_FALSE(decodeRoster(truncated));
-}
-
 // The master's probe used to be a Heartbeat posing as a Display; now it is its own type,
 // and a Probe with any payload, or anything else, is not a Probe.
 TEST(Protocol, ProbeIsEmptyAndDistinctFromHeartbeat) {
