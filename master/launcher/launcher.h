@@ -34,6 +34,10 @@ struct LaunchOptions {
   bool handle_signals = true;
   // Backoff and crash-loop bound for services with a `restart:` policy.
   RestartLimits restart;
+  // A command that starts each process in its place (`srun -N1 -n1`, `ssh host`, or the
+  // emulated cluster's per-host wrapper): argv becomes launch_with + [executable, args...].
+  // The wrapper sees TESSERA_SERVICE/TESSERA_REPLICA, so it can pick the host per process.
+  std::vector<std::string> launch_with;
 };
 
 // One child process to start.

@@ -70,6 +70,13 @@ std::vector<PlannedProcess> planProcesses(const ComposeProject& project, const L
       throw LaunchError("services." + s.name + ": command \"" + s.argv.front() +
                         "\" not found (PATH=" + path + ")");
     }
+    std::string wrapper;
+    if (!options.launch_with.empty()) {
+      wrapper = resolveExecutable(options.launch_with.front(), path, project.directory);
+      if (wrapper.empty() && !allow_missing) {
+        throw LaunchError("--launch-with: command \"" + options.launch_with.front() + "\" not found (PATH=" + path + ")");
+      }
+    }
     for (int r = 1; r <= s.replicas; ++r) {
       PlannedProcess p;
       p.service = s.name;
@@ -86,6 +93,14 @@ std::vector<PlannedProcess> planProcesses(const ComposeProject& project, const L
       if (!exe.empty() && exe != s.argv.front() && s.argv.front().find('/') != std::string::npos &&
           std::filesystem::path(s.argv.front()).is_absolute()) {
         p.note = s.argv.front() + " does not exist here; using " + exe;
+      }
+      if (!options.launch_with.empty()) {
+        std::vector<std::string> argv = options.launch_with;
+        argv.push_back(exe.empty() ? s.argv.front() : exe);
+        argv.insert(argv.end(), s.argv.begin() + 1, s.argv.end());
+        p.note = "started through " + options.launch_with.front();
+        p.argv = std::move(argv);
+        p.executable = wrapper;
       }
       plan.push_back(std::move(p));
     }

@@ -1,5 +1,5 @@
 // tessera-up: runs compose.yaml as local processes, no container engine needed.
-//   tessera-up [FILE] [--env KEY=VALUE]... [--dry-run]
+//   tessera-up [FILE] [--env KEY=VALUE]... [--dry-run] [--launch-with CMD]
 #include <CLI/CLI.hpp>
 
 #include <iostream>
@@ -39,10 +39,14 @@ int main(int argc, char** argv) {
   std::string file = "compose.yaml";
   std::vector<std::string> env_args;
   bool dry_run = false;
+  std::string launch_with;
   app.add_option("file", file, "Compose file")->capture_default_str();
   app.add_option("--env", env_args, "Variable for interpolation, KEY=VALUE (wins over the "
                                     "environment and .env)");
   app.add_flag("--dry-run", dry_run, "Print the resolved processes, argv and environment; start nothing");
+  app.add_option("--launch-with", launch_with,
+                 "Start every process through this command (e.g. \"srun -N1 -n1\"); it gets the "
+                 "stage's command line and TESSERA_SERVICE/TESSERA_REPLICA in its environment");
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -55,6 +59,9 @@ int main(int argc, char** argv) {
     const auto project = tessera::launcher::loadCompose(file, options);
     for (const auto& w : project.warnings) log->warn("{}", w);
     tessera::launcher::LaunchOptions launch_options;
+    if (!launch_with.empty()) {
+      launch_options.launch_with = tessera::launcher::splitCommandLine(launch_with, "--launch-with");
+    }
     if (dry_run) {
       return printPlan(project, tessera::launcher::planProcesses(project, launch_options, true)) ? 0 : 1;
     }

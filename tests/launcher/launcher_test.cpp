@@ -140,6 +140,22 @@ TEST_F(LauncherTest, ImagePathFallsBackToPath) {
   EXPECT_EQ(plan[0].environment.at("TESSERA_REPLICA"), "1");
 }
 
+// --launch-with: the wrapper runs each process; it sees the stage's command and identity.
+TEST_F(LauncherTest, LaunchWithWrapsEveryProcess) {
+  LaunchOptions options;
+  options.handle_signals = false;
+  options.output = [this](std::string_view line) { lines_.emplace_back(line); };
+  options.launch_with = {"sh", "-c", "echo via-wrapper $TESSERA_SERVICE-$TESSERA_REPLICA; exec \"$@\"", "wrap"};
+  const auto p = project("services: {a: {command: echo hello, deploy: {replicas: 2}}}");
+  const auto plan = planProcesses(p, options);
+  ASSERT_EQ(plan.size(), 2u);
+  EXPECT_EQ(std::filesystem::path(plan[0].executable).filename(), "sh");
+  EXPECT_EQ(std::filesystem::path(plan[0].argv.at(4)).filename(), "echo");
+  EXPECT_EQ(launch(p, options), 0);
+  EXPECT_TRUE(hasLine("a-2 | via-wrapper a-2")) << allLines();
+  EXPECT_TRUE(hasLine("a-1 | hello")) << allLines();
+}
+
 // The real binary: SIGTERM to tessera-up stops the farm with exit code 143.
 TEST_F(LauncherTest, BinaryStopsOnSigterm) {
   const std::string binary = TESSERA_BINARY_DIR "/bin/tessera-up";

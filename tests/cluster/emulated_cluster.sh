@@ -1,0 +1,99 @@
+#!/usr/bin/env bash
+# Runs the farm of compose.yaml on an emulated cluster: every process on its own host (a
+# network namespace with one veth link to a switch namespace holding a bridge), links
+# rate-limited with tc's tbf qdisc in both directions, the farm over TCP between the hosts'
+# addresses with CURVE on (as across real machines). Needs root and iproute2.
+#
+#   tests/cluster/emulated_cluster.sh [--rate RATE] [--out DIR] [--bin DIR] [-- tessera-up args]
+#     --rate   link rate per host, tc syntax (100mbit, 1gbit) or "unlimited" (default)
+#     --out    folder for frames, metrics.jsonl, farm.log and links.tsv (default out/cluster)
+#     --bin    folder of the tessera binaries (default build/bin)
+# The farm's settings come from the environment as for tessera-up (TESSERA_RENDERERS,
+# TESSERA_COMPOSITORS, TESSERA_FRAMES, TESSERA_CODEC, TESSERA_SCENE...). links.tsv has one
+# line per host: host, bytes it sent, bytes it received (counted on the switch side).
+# Every namespace is removed at exit, also on failure or Ctrl-C; namespaces left by a run
+# that was killed with SIGKILL are removed by the next run.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/../.." && pwd)
+rate=unlimited out=out/cluster bin="$root/build/bin"
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --rate) rate=$2; shift 2 ;;
+    --out) out=$2; shift 2 ;;
+    --bin) bin=$2; shift 2 ;;
+    --) shift; break ;;
+    *) echo "emulated_cluster.sh: unknown option $1" >&2; exit 2 ;;
+  esac
+done
+[ "$(id -u)" -eq 0 ] || { echo "emulated_cluster.sh: needs root (network namespaces)" >&2; exit 2; }
+command -v ip >/dev/null && command -v tc >/dev/null || { echo "emulated_cluster.sh: needs iproute2 (ip, tc)" >&2; exit 2; }
+mkdir -p "$out"; out=$(cd "$out" && pwd); bin=$(cd "$bin" && pwd)
+
+tag="tcl$$"                       # namespaces and links of this run
+state=$(mktemp -d "/tmp/tessera-cluster.XXXXXX")
+cleanup() {
+  for ns in $(ip netns list | awk '{print $1}' | grep "^$tag-" || true); do ip netns pids "$ns" 2>/dev/null | xargs -r kill -9 2>/dev/null || true; ip netns del "$ns" 2>/dev/null || true; done
+  rm -rf "$state"
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+# Namespaces of earlier runs whose script is gone (killed with SIGKILL).
+for ns in $(ip netns list | awk '{print $1}' | grep -E '^tcl[0-9]+-' || true); do
+  pid=${ns#tcl}; pid=${pid%%-*}
+  kill -0 "$pid" 2>/dev/null || { ip netns pids "$ns" 2>/dev/null | xargs -r kill -9 2>/dev/null || true; ip netns del "$ns" 2>/dev/null || true; }
+done
+
+renderers=${TESSERA_RENDERERS:-2} compositors=${TESSERA_COMPOSITORS:-1}
+hosts=(master display)
+for ((i = 1; i <= renderers; i++)); do hosts+=("renderer-$i"); done
+for ((i = 1; i <= compositors; i++)); do hosts+=("compositor-$i"); done
+
+# tbf needs a bucket of at least one timer tick of traffic; 64 KiB keeps short bursts whole.
+limit() {  # limit NS DEV
+  [ "$rate" = unlimited ] && return 0
+  local bits; bits=$(numfmt --from=si "${rate%bit}")
+  local burst=$((bits / 8 / 250)); [ "$burst" -ge 65536 ] || burst=65536
+  ip netns exec "$1" tc qdisc add dev "$2" root tbf rate "$rate" burst "$burst" latency 50ms
+}
+sw="$tag-sw"
+ip netns add "$sw"
+ip -n "$sw" link add br0 type bridge
+ip -n "$sw" link set br0 up
+mkdir -p "$state/hosts"
+n=0
+for h in "${hosts[@]}"; do
+  n=$((n + 1)); ns="$tag-$h"; addr="10.77.0.$n"
+  ip netns add "$ns"
+  ip link add "${tag}h$n" type veth peer name "${tag}s$n"
+  ip link set "${tag}h$n" netns "$ns" name eth0
+  ip link set "${tag}s$n" netns "$sw"
+  ip -n "$sw" link set "${tag}s$n" master br0 up
+  ip -n "$ns" addr add "$addr/24" dev eth0
+  ip -n "$ns" link set eth0 up
+  ip -n "$ns" link set lo up
+  limit "$ns" eth0          # what the host sends
+  limit "$sw" "${tag}s$n"   # what the host receives
+  echo "$addr" > "$state/hosts/$h.ip"
+  echo "$ns" > "$state/hosts/$h.ns"
+  echo "${tag}s$n" > "$state/hosts/$h.link"
+done
+
+"$bin/tessera-keys" "$state/keys" >/dev/null
+export TESSERA_ENDPOINTS="tcp://$(cat "$state/hosts/master.ip"):5550"
+export TESSERA_DISPLAY_HOST=$(cat "$state/hosts/display.ip")
+export TESSERA_KEYS="$state/keys" TESSERA_CURVE=on TESSERA_WINDOW=off TESSERA_OUT="$out"
+export TESSERA_CLUSTER_STATE="$state"
+echo "emulated cluster: ${#hosts[@]} hosts, links $rate, endpoints $TESSERA_ENDPOINTS, output $out"
+set +e
+"$bin/tessera-up" "$root/compose.yaml" --launch-with "$root/tests/cluster/on_host.sh" "$@" 2>&1 | tee "$out/farm.log"
+status=${PIPESTATUS[0]}
+set -e
+: > "$out/links.tsv"
+for h in "${hosts[@]}"; do
+  link=$(cat "$state/hosts/$h.link")
+  # The switch side sends what the host receives and receives what the host sends.
+  tx=$(ip netns exec "$sw" cat "/sys/class/net/$link/statistics/rx_bytes")
+  rx=$(ip netns exec "$sw" cat "/sys/class/net/$link/statistics/tx_bytes")
+  printf '%s\t%s\t%s\n' "$h" "$tx" "$rx" >> "$out/links.tsv"
+done
+exit "$status"
