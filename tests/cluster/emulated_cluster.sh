@@ -51,7 +51,7 @@ for ((i = 1; i <= compositors; i++)); do hosts+=("compositor-$i"); done
 # tbf needs a bucket of at least one timer tick of traffic; 64 KiB keeps short bursts whole.
 limit() {  # limit NS DEV
   [ "$rate" = unlimited ] && return 0
-  local bits; bits=$(numfmt --from=si "${rate%bit}")
+  local bits; bits=$(numfmt --from=si "$(echo "${rate%bit}" | tr a-z A-Z)")
   local burst=$((bits / 8 / 250)); [ "$burst" -ge 65536 ] || burst=65536
   ip netns exec "$1" tc qdisc add dev "$2" root tbf rate "$rate" burst "$burst" latency 50ms
 }
