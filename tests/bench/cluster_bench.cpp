@@ -1,0 +1,210 @@
+// tessera-cluster-bench: the farm on emulated hosts (tests/cluster/emulated_cluster.sh; root),
+// swept over link rate, codec, frames in flight, image size and farm shape. For each run:
+// frames per second, median latency, median stage times, and the bytes per frame of the
+// busiest host link. Writes results.csv, a gnuplot PNG of the 100 Mbit/s display rate by
+// image size (raw against LZO, the shape of Cao et al.'s Table 3) and markdown tables.
+// Not a timed test: run it alone on the machine.
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Config {
+  std::string rate, codec;
+  int in_flight, size, renderers, compositors;
+  std::string shape() const { return fmt::format("{}R+{}C", renderers, compositors); }
+  std::string name() const {
+    return fmt::format("{}-{}-f{}-{}-{}r{}c", rate, codec, in_flight, size, renderers, compositors);
+  }
+};
+
+struct Result {
+  Config c;
+  double fps = 0, latency_ms = 0, render_ms = 0, composite_ms = 0, display_ms = 0;
+  double busiest_bytes = 0;  // per frame, the host link that carried the most
+  std::string busiest_host;
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// The farm's numbers from the master's metrics and the switch's link counters.
+Result measure(const Config& c, const fs::path& dir, int frames) {
+  Result r;
+  r.c = c;
+  std::vector<double> done, latency, render, composite, display;
+  std::ifstream in(dir / "metrics.jsonl");
+  for (std::string line; std::getline(in, line);) {
+    auto j = nlohmann::json::parse(line);
+    done.push_back(j["done_ms"]);
+    latency.push_back(j["latency_ms"]);
+    render.push_back(j["render_ms_max"]);
+    composite.push_back(j["composite_ms_max"]);
+    display.push_back(j["display_ms"]);
+  }
+  std::sort(done.begin(), done.end());
+  const size_t warm = std::min<size_t>(2, done.size() / 4);  // the first frames include start-up
+  if (done.size() >= warm + 2) r.fps = (done.size() - 1 - warm) * 1000.0 / (done.back() - done[warm]);
+  r.latency_ms = median(latency);
+  r.render_ms = median(render);
+  r.composite_ms = median(composite);
+  r.display_ms = median(display);
+  std::ifstream links(dir / "links.tsv");
+  std::string host;
+  double sent = 0, received = 0;
+  while (links >> host >> sent >> received) {
+    const double most = std::max(sent, received) / frames;
+    if (most > r.busiest_bytes) r.busiest_bytes = most, r.busiest_host = host;
+  }
+  return r;
+}
+
+std::string sceneAt(int size, const fs::path& dir) {
+  std::ifstream in(fs::path(TESSERA_SOURCE_DIR) / "scenes" / "default.yaml");
+  std::string text(std::istreambuf_iterator<char>(in), {});
+  text = std::regex_replace(text, std::regex(R"(image: \[\d+, \d+\])"), fmt::format("image: [{}, {}]", size, size));
+  const fs::path p = dir / fmt::format("default-{}.yaml", size);
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+// The sweeps: Cao's table (100 Mbit/s, raw vs LZO by size), codecs x rates x shapes at
+// 1024^2, and frames in flight 1 against 3.
+std::vector<Config> sweep(bool quick) {
+  std::vector<Config> v;
+  if (quick) return {{"100mbit", "lzo", 3, 128, 2, 1}};
+  for (int size : {128, 256, 512, 1024})
+    for (const char* codec : {"none", "lzo"}) v.push_back({"100mbit", codec, 3, size, 2, 1});
+  for (auto [r, c] : {std::pair{2, 1}, std::pair{4, 2}})
+    for (const char* rate : {"100mbit", "1gbit", "unlimited"})
+      for (const char* codec : {"none", "lzo", "lz4", "zstd"}) {
+        Config cfg{rate, codec, 3, 1024, r, c};
+        if (!(r == 2 && std::string(rate) == "100mbit" && (cfg.codec == "none" || cfg.codec == "lzo"))) v.push_back(cfg);
+      }
+  for (const char* rate : {"100mbit", "unlimited"}) v.push_back({rate, "lzo", 1, 1024, 2, 1});
+  return v;
+}
+
+double oneProcessMs(const std::string& scene, const fs::path& dir) {
+  const fs::path bin = fs::canonical("/proc/self/exe").parent_path();
+  const std::string cmd = fmt::format("{}/tessera-render {} --stats --repeat 3 -o {}/one.png", bin.string(), scene, dir.string());
+  FILE* p = popen(cmd.c_str(), "r");
+  char line[512];
+  double ms = 0;
+  while (p && std::fgets(line, sizeof line, p)) {
+    if (std::strncmp(line, "time_ms=", 8) == 0) ms = std::atof(line + 8);
+  }
+  if (p) pclose(p);
+  return ms;
+}
+
+void plot(const fs::path& out, const std::vector<Result>& results) {
+  std::ofstream dat(out / "table3.dat");
+  for (int size : {128, 256, 512, 1024}) {
+    double none = 0, lzo = 0;
+    for (const auto& r : results) {
+      if (r.c.rate != "100mbit" || r.c.size != size || r.c.renderers != 2 || r.c.in_flight != 3) continue;
+      if (r.c.codec == "none") none = r.fps;
+      if (r.c.codec == "lzo") lzo = r.fps;
+    }
+    dat << size << " " << none << " " << lzo << "\n";
+  }
+  dat.close();
+  const std::string gp = fmt::format(
+      "set terminal pngcairo size 800,500; set output '{0}/cluster-table3.png';"
+      "set title 'Display rate on 100 Mbit/s links, 2 renderers + 1 compositor'; set xlabel 'image edge (pixels)';"
+      "set ylabel 'frames per second'; set logscale x 2; set key top right; set grid;"
+      "plot '{0}/table3.dat' using 1:2 with linespoints title 'raw', '' using 1:3 with linespoints title 'LZO'",
+      out.string());
+  if (std::system(("gnuplot -e \"" + gp + "\"").c_str()) != 0) std::cerr << "gnuplot failed; the CSV is there\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Tessera on an emulated cluster: fps, latency and link bytes per frame (needs root)"};
+  std::string out = "bench-out/cluster";
+  int frames = 20;
+  bool quick = false;
+  app.add_option("--out", out, "folder for runs, results.csv and the plot")->capture_default_str();
+  app.add_option("--frames", frames, "frames per run (twice as many below 512^2)")->check(CLI::Range(6, 1000))->capture_default_str();
+  app.add_flag("--quick", quick, "one small run (checks that the benchmark works)");
+  CLI11_PARSE(app, argc, argv);
+  if (geteuid() != 0) {
+    std::cerr << "tessera-cluster-bench: needs root (it makes network namespaces)\n";
+    return 77;  // ctest: skipped
+  }
+  const fs::path root = fs::absolute(out);
+  fs::create_directories(root);
+  const fs::path bin = fs::canonical("/proc/self/exe").parent_path();
+  const std::string script = fs::path(TESSERA_SOURCE_DIR) / "tests" / "cluster" / "emulated_cluster.sh";
+
+  std::vector<Result> results;
+  for (const Config& c : sweep(quick)) {
+    const fs::path dir = root / c.name();
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const int n = c.size < 512 ? 2 * frames : frames;
+    const std::string cmd = fmt::format(
+        "env TESSERA_SCENE={} TESSERA_FRAMES={} TESSERA_RENDERERS={} TESSERA_COMPOSITORS={} TESSERA_IN_FLIGHT={} "
+        "TESSERA_CODEC={} TESSERA_LOG=warn {} --rate {} --out {} --bin {} > {}/run.log 2>&1",
+        sceneAt(c.size, root), n, c.renderers, c.compositors, c.in_flight, c.codec, script, c.rate, dir.string(),
+        bin.string(), dir.string());
+    std::cerr << "run " << c.name() << " (" << n << " frames)\n";
+    if (std::system(cmd.c_str()) != 0) {
+      std::cerr << "farm failed; see " << (dir / "run.log") << "\n";
+      return 1;
+    }
+    results.push_back(measure(c, dir, n));
+  }
+  std::ofstream csv(root / "results.csv");
+  csv << "rate,codec,in_flight,size,renderers,compositors,fps,latency_ms,render_ms,composite_ms,display_ms,"
+         "busiest_link_bytes_per_frame,busiest_host\n";
+  for (const auto& r : results)
+    csv << fmt::format("{},{},{},{},{},{},{:.3f},{:.1f},{:.1f},{:.1f},{:.1f},{:.0f},{}\n", r.c.rate, r.c.codec,
+                       r.c.in_flight, r.c.size, r.c.renderers, r.c.compositors, r.fps, r.latency_ms, r.render_ms,
+                       r.composite_ms, r.display_ms, r.busiest_bytes, r.busiest_host);
+  std::cout << "| link | codec | in flight | image | farm | fps | latency ms (median) | render / composite / display ms "
+               "| busiest link, bytes per frame |\n|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& r : results)
+    std::cout << fmt::format("| {} | {} | {} | {}^2 | {} | {:.2f} | {:.0f} | {:.0f} / {:.0f} / {:.0f} | {} {:.2f} MB |\n",
+                             r.c.rate, r.c.codec, r.c.in_flight, r.c.size, r.c.shape(), r.fps, r.latency_ms,
+                             r.render_ms, r.composite_ms, r.display_ms, r.busiest_host, r.busiest_bytes / 1e6);
+  if (!quick) {
+    const double one = oneProcessMs(sceneAt(1024, root), root);
+    std::cout << fmt::format("\none process, 1024^2, frame 0, best of 3: {:.0f} ms\n", one);
+    for (const auto& r : results)
+      if (r.c.size == 1024 && r.c.in_flight == 3 && r.c.codec == "lzo")
+        std::cout << fmt::format("efficiency {} {}: fps x one-process time = {:.2f}\n", r.c.shape(), r.c.rate, r.fps * one / 1000);
+    // Goal of a farm on slow links: 100 Mbit/s at least 0.9 of unlimited, for every shape.
+    for (const auto& slow : results) {
+      if (slow.c.rate != "100mbit" || slow.c.size != 1024 || slow.c.in_flight != 3) continue;
+      for (const auto& fast : results)
+        if (fast.c.rate == "unlimited" && fast.c.codec == slow.c.codec && fast.c.renderers == slow.c.renderers &&
+            fast.c.in_flight == 3 && fast.c.size == 1024 && fast.fps > 0)
+          std::cout << fmt::format("100 Mbit/s / unlimited, {} {}: {:.2f}\n", slow.c.shape(), slow.c.codec, slow.fps / fast.fps);
+    }
+    plot(root, results);
+  }
+  std::cout << "\nCSV: " << (root / "results.csv").string() << "\n";
+  return 0;
+}
