@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
       ->envname("TESSERA_SCENE");
   app.add_option("--endpoints", base, "endpoint base (ipc://DIR | tcp://HOST:PORT)")->envname("TESSERA_ENDPOINTS");
   app.add_option("--advertise-host", opt.advertise_host,
-                 "tcp: host renderers use to reach this compositor ('hostname' = this machine's name)")
+                 "tcp: host renderers use to reach this compositor ('hostname' = this machine's name, 'ip' = its address on the route to the master)")
       ->envname("TESSERA_ADVERTISE_HOST");
   CLI11_PARSE(app, argc, argv);
   try {
@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
     opt.width = parsed.width;
     opt.height = parsed.height;
     opt.endpoints = makeEndpoints(base.empty() ? defaultEndpointBase() : base);
+    if (opt.advertise_host == "ip") opt.advertise_host = opt.endpoints.localAddressTowardMaster();
     zmq::context_t ctx(1);
     setupCurve(ctx, opt.endpoints.base);  // on when endpoints leave this host
     return compositor::runStage(opt, ctx, &installStopSignals());

@@ -1,5 +1,8 @@
 #include "common/net/endpoints.h"
 
+#include <arpa/inet.h>
+#include <netdb.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -82,6 +85,31 @@ std::string Endpoints::bind(const std::string& connect_form) const {
   if (!startsWith(connect_form, "tcp://")) return connect_form;
   auto t = parseTcp(connect_form);
   return "tcp://" + envOr("TESSERA_BIND_HOST", t.host) + ":" + std::to_string(t.port);
+}
+
+std::string Endpoints::localAddressTowardMaster() const {
+  if (!startsWith(base, "tcp://")) throw std::invalid_argument("advertise host 'ip' needs tcp endpoints, not " + base);
+  const std::string host = envOr("TESSERA_MASTER_HOST", parseTcp(base).host);
+  addrinfo hints{};
+  hints.ai_family = AF_INET;
+  hints.ai_socktype = SOCK_DGRAM;
+  addrinfo* found = nullptr;
+  if (getaddrinfo(host.c_str(), "9", &hints, &found) != 0 || !found) {
+    throw std::runtime_error("advertise host 'ip': cannot resolve the master's host " + host);
+  }
+  // Connecting a UDP socket only asks the kernel for a route; nothing is sent.
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in local{};
+  socklen_t len = sizeof local;
+  const bool ok = fd >= 0 && connect(fd, found->ai_addr, found->ai_addrlen) == 0 &&
+                  getsockname(fd, reinterpret_cast<sockaddr*>(&local), &len) == 0;
+  if (fd >= 0) close(fd);
+  freeaddrinfo(found);
+  char text[INET_ADDRSTRLEN] = {};
+  if (!ok || !inet_ntop(AF_INET, &local.sin_addr, text, sizeof text)) {
+    throw std::runtime_error("advertise host 'ip': no route to the master's host " + host);
+  }
+  return text;
 }
 
 }  // namespace tessera

@@ -20,6 +20,9 @@ struct Endpoints {
   // Bind forms: tcp binds on TESSERA_BIND_HOST (default: the base host) so containers can
   // bind 0.0.0.0 while peers connect by service name.
   std::string bind(const std::string& connect_form) const;
+  // tcp: the address of this machine's interface that routes to the master (what a peer on
+  // another host can reach us at, without naming hosts: Swarm tasks, DHCP nodes).
+  std::string localAddressTowardMaster() const;
 };
 
 // Validates the base (ipc://, tcp://host:port, inproc://); throws std::invalid_argument.

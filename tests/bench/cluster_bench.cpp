@@ -166,8 +166,8 @@ int main(int argc, char** argv) {
     const int n = c.size < 512 ? 2 * frames : frames;
     const std::string cmd = fmt::format(
         "env TESSERA_SCENE={} TESSERA_FRAMES={} TESSERA_RENDERERS={} TESSERA_COMPOSITORS={} TESSERA_IN_FLIGHT={} "
-        "TESSERA_CODEC={} TESSERA_LOG=warn {} --rate {} --out {} --bin {} > {}/run.log 2>&1",
-        sceneAt(c.size, root), n, c.renderers, c.compositors, c.in_flight, c.codec, script, c.rate, dir.string(),
+        "TESSERA_CODEC={} TESSERA_LOG=warn timeout -s INT {} {} --rate {} --out {} --bin {} > {}/run.log 2>&1",
+        sceneAt(c.size, root), n, c.renderers, c.compositors, c.in_flight, c.codec, 60 + 5 * n, script, c.rate, dir.string(),
         bin.string(), dir.string());
     std::cerr << "run " << c.name() << " (" << n << " frames)\n";
     if (std::system(cmd.c_str()) != 0) {

@@ -7,5 +7,5 @@ host=$TESSERA_SERVICE
 case "$host" in renderer | compositor) host="$host-$TESSERA_REPLICA" ;; esac
 [ -f "$state/hosts/$host.ns" ] || { echo "on_host.sh: no emulated host for $host" >&2; exit 2; }
 export TESSERA_BIND_HOST=$(cat "$state/hosts/$host.ip")
-export TESSERA_ADVERTISE_HOST=$TESSERA_BIND_HOST
+export TESSERA_ADVERTISE_HOST=ip  # what Swarm tasks use: the address on the route to the master
 exec ip netns exec "$(cat "$state/hosts/$host.ns")" "$@"
