@@ -18,7 +18,7 @@ PKGS=(
 )
 # optional: python3-vtk9 for tests/bench/vtk_compare.py
 # Tests, fuzzing, benchmarks' plots, the window test under Xvfb, compose validation.
-[ "${TESSERA_MINIMAL:-0}" = 1 ] || PKGS+=(gnuplot-nox xvfb x11-apps imagemagick clang docker-compose procps)
+[ "${TESSERA_MINIMAL:-0}" = 1 ] || PKGS+=(gnuplot-nox xvfb x11-apps imagemagick clang docker-compose procps iproute2)
 missing=()
 for p in "${PKGS[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
 if [ ${#missing[@]} -gt 0 ]; then
@@ -43,6 +43,12 @@ case "$mode" in
     ;;
   test)
     docker-compose -f compose.yaml config -q
+    # Swarm reads the file differently (no build, restart_policy): check it where the CLI is.
+    if docker stack config --help >/dev/null 2>&1; then
+      TESSERA_ENDPOINTS=tcp://master:5550 docker stack config -c compose.yaml >/dev/null
+    else
+      echo "docker stack config not available: Swarm check of compose.yaml skipped"
+    fi
     tests/fuzz/run.sh "${TESSERA_FUZZ_SECONDS:-15}"
     cd "$BUILD" && ctest --output-on-failure -j2 --timeout 600
     ;;

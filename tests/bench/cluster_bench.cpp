@@ -132,7 +132,7 @@ void plot(const fs::path& out, const std::vector<Result>& results) {
   const std::string gp = fmt::format(
       "set terminal pngcairo size 800,500; set output '{0}/cluster-table3.png';"
       "set title 'Display rate on 100 Mbit/s links, 2 renderers + 1 compositor'; set xlabel 'image edge (pixels)';"
-      "set ylabel 'frames per second'; set logscale x 2; set key top right; set grid;"
+      "set ylabel 'frames per second'; set logscale x 2; set logscale y; set key top right; set grid;"
       "plot '{0}/table3.dat' using 1:2 with linespoints title 'raw', '' using 1:3 with linespoints title 'LZO'",
       out.string());
   if (std::system(("gnuplot -e \"" + gp + "\"").c_str()) != 0) std::cerr << "gnuplot failed; the CSV is there\n";
