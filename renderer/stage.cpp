@@ -5,6 +5,7 @@
 #include <map>
 #include <optional>
 
+#include "common/cpu.h"
 #include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/wire/pixels.h"
@@ -45,7 +46,8 @@ class Stage {
       spdlog::error("renderer could not join the master at {}", opt_.endpoints.masterControl());
       return 1;
     }
-    spdlog::info("renderer rank={} joined backend={}", link_.rank(), caster_ ? backendName(opt_.backend) : "osmesa-mesh");
+    spdlog::info("renderer rank={} joined backend={} simd={}", link_.rank(),
+                 caster_ ? backendName(opt_.backend) : "osmesa-mesh", isaName(cpuIsa()));
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
       pollFor(items, 1, std::chrono::milliseconds(100));

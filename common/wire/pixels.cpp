@@ -4,8 +4,12 @@
 #include <cmath>
 #include <cstring>
 
-#if defined(__F16C__)
+#include "common/cpu.h"
+
+#if defined(__x86_64__)
 #include <immintrin.h>
+// F16C, AVX2 and SSSE3 are in every x86-64-v3 CPU; these run where cpuIsa() says so.
+#define TESSERA_V3 __attribute__((target("avx2,f16c,fma")))
 #endif
 
 namespace tessera {
@@ -55,23 +59,58 @@ float halfToFloat(uint16_t h) {
 // RGBA16F pieces travel as two byte planes: the low bytes of every half, then the high
 // bytes. The high bytes (sign, exponent, top of the mantissa) are smooth and compress
 // well; interleaved with the noisy low bytes they would not (LZ4: 35% of raw against 47%).
-// F16C converts 8 floats per instruction where the CPU has it (every x86-64 since 2012).
-static void floatsToHalfPlanes(const float* in, uint8_t* lo, uint8_t* hi, size_t n) {
-  size_t i = 0;
-#if defined(__F16C__)
+// F16C converts 8 floats per instruction (bit-identical to floatToHalf for every non-NaN).
+#if defined(__x86_64__)
+TESSERA_V3 static size_t floatsToHalfPlanesF16c(const float* in, uint8_t* lo, uint8_t* hi, size_t n) {
   // Eight halves -> their eight low bytes, then their eight high bytes, in one shuffle.
   const __m128i split = _mm_setr_epi8(0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 9, 11, 13, 15);
+  size_t i = 0;
   for (; i + 8 <= n; i += 8) {
     __m128i h = _mm256_cvtps_ph(_mm256_loadu_ps(in + i), _MM_FROUND_TO_NEAREST_INT);
     __m128i planes = _mm_shuffle_epi8(h, split);
     _mm_storel_epi64(reinterpret_cast<__m128i*>(lo + i), planes);
     _mm_storel_epi64(reinterpret_cast<__m128i*>(hi + i), _mm_unpackhi_epi64(planes, planes));
   }
+  return i;
+}
+#endif
+
+static void floatsToHalfPlanes(const float* in, uint8_t* lo, uint8_t* hi, size_t n) {
+  size_t i = 0;
+#if defined(__x86_64__)
+  if (cpuIsa() >= Isa::Avx2) i = floatsToHalfPlanesF16c(in, lo, hi, n);
 #endif
   for (; i < n; ++i) {
     uint16_t h1 = floatToHalf(in[i]);
     lo[i] = (uint8_t)(h1 & 0xFF);
     hi[i] = (uint8_t)(h1 >> 8);
+  }
+}
+
+// "Under" of one row of rgba16f planes; F16C widens four halves per instruction.
+#if defined(__x86_64__)
+TESSERA_V3 static void compositeHalfRowF16c(float* d, const uint8_t* lo, const uint8_t* hi, int w) {
+  for (int x = 0; x < w; ++x, d += 4, lo += 4, hi += 4) {
+    float px[4];
+    uint32_t l, h;
+    std::memcpy(&l, lo, 4);
+    std::memcpy(&h, hi, 4);
+    _mm_storeu_ps(px, _mm_cvtph_ps(_mm_unpacklo_epi8(_mm_cvtsi32_si128((int)l), _mm_cvtsi32_si128((int)h))));
+    const float t = 1.0f - d[3];
+    for (int c = 0; c < 4; ++c) d[c] += t * px[c];
+  }
+}
+#endif
+
+static void compositeHalfRow(float* d, const uint8_t* lo, const uint8_t* hi, int w) {
+#if defined(__x86_64__)
+  if (cpuIsa() >= Isa::Avx2) return compositeHalfRowF16c(d, lo, hi, w);
+#endif
+  for (int x = 0; x < w; ++x, d += 4, lo += 4, hi += 4) {
+    float px[4];
+    for (int c = 0; c < 4; ++c) px[c] = halfToFloat((uint16_t)(lo[c] | hi[c] << 8));
+    const float t = 1.0f - d[3];
+    for (int c = 0; c < 4; ++c) d[c] += t * px[c];
   }
 }
 
@@ -93,7 +132,7 @@ std::vector<std::byte> packPixels(const ImageF& img, const Rect& r, proto::Pixel
   return out;
 }
 
-void compositeUnderRow(float* d, int dst_x, std::span<const std::byte> src, const Rect& src_rect, int row,
+TESSERA_CLONES void compositeUnderRow(float* d, int dst_x, std::span<const std::byte> src, const Rect& src_rect, int row,
                        proto::PixelFormat f) {
   const auto* b = reinterpret_cast<const uint8_t*>(src.data());
   const size_t values = (size_t)src_rect.area() * 4, first = (size_t)row * src_rect.w * 4;
@@ -107,20 +146,7 @@ void compositeUnderRow(float* d, int dst_x, std::span<const std::byte> src, cons
       for (int c = 0; c < 4; ++c) d[c] += t * s[c];
     }
   } else if (f == proto::PixelFormat::RGBA16F) {
-    const uint8_t *lo = b + first, *hi = b + values + first;
-    for (int x = 0; x < w; ++x, d += 4, lo += 4, hi += 4) {
-      float px[4];
-#if defined(__F16C__)
-      uint32_t l, h;
-      std::memcpy(&l, lo, 4);
-      std::memcpy(&h, hi, 4);
-      _mm_storeu_ps(px, _mm_cvtph_ps(_mm_unpacklo_epi8(_mm_cvtsi32_si128((int)l), _mm_cvtsi32_si128((int)h))));
-#else
-      for (int c = 0; c < 4; ++c) px[c] = halfToFloat((uint16_t)(lo[c] | hi[c] << 8));
-#endif
-      const float t = 1.0f - d[3];
-      for (int c = 0; c < 4; ++c) d[c] += t * px[c];
-    }
+    compositeHalfRow(d, b + first, b + values + first, w);
   } else {
     const uint8_t* s = b + 4 * first;
     for (int x = 0; x < w; ++x, d += 4, s += 16) {

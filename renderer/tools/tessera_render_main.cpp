@@ -15,6 +15,7 @@
 
 #include "common/bricks.h"
 #include "common/clock.h"
+#include "common/cpu.h"
 #include "common/io/image_io.h"
 #include "common/scene.h"
 #include "renderer/volume/backend.h"
@@ -166,10 +167,10 @@ int run(int argc, char** argv) {
     std::printf("wrote %s\n", pam.c_str());
   }
   if (print_stats)
-    std::printf("time_ms=%.1f cpu_ms=%.1f%s samples=%llu skipped=%llu terminated=%llu skip_empty=%d\n", best_ms,
-                best_cpu_ms, repeat > 1 ? " (best of repeats)" : "", (unsigned long long)stats.samples,
+    std::printf("time_ms=%.1f cpu_ms=%.1f%s samples=%llu skipped=%llu terminated=%llu skip_empty=%d simd=%s\n",
+                best_ms, best_cpu_ms, repeat > 1 ? " (best of repeats)" : "", (unsigned long long)stats.samples,
                 (unsigned long long)stats.samples_skipped, (unsigned long long)stats.samples_terminated,
-                opt.quality.skip_empty ? 1 : 0);
+                opt.quality.skip_empty ? 1 : 0, isaName(cpuIsa()));
   if (compare_ref) {
     renderer::RenderOptions ropt = opt;
     ropt.quality = namedQuality("reference");

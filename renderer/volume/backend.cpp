@@ -3,6 +3,7 @@
 
 #include <stdexcept>
 
+#include "common/cpu.h"
 #include "renderer/volume/gl_volume.h"
 #include "renderer/volume/raycaster.h"
 
@@ -29,6 +30,7 @@ const char* backendName(BackendKind kind) { return kind == BackendKind::Cpu ? "c
 std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_ptr<const Volume> volume,
                                                  TransferFunction tf) {
   if (kind == BackendKind::Osmesa) return std::make_unique<GlVolumeRenderer>(std::move(volume), std::move(tf));
+  cpuIsa();  // a bad TESSERA_SIMD fails here, on the caller's thread, not in a ray-casting thread
   return std::make_unique<Raycaster>(std::move(volume), std::move(tf));
 }
 

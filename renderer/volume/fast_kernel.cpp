@@ -1,5 +1,7 @@
 // Fast kernel: float, SIMD over 8 consecutive samples of one ray (AVX2 gathers), table
 // classification, empty-space skipping over the min-max hierarchy, early termination.
+// Compiled once per instruction set (TESSERA_KERNEL_ISA = scalar | avx2 | avx512, each its
+// own namespace); kernel_dispatch.cpp calls the one the CPU supports.
 // Every sample's value depends only on its index k (position u0 + k*du, one FMA), never on
 // how samples were grouped or skipped, so skipping cannot change a single bit.
 #include <algorithm>
@@ -17,7 +19,7 @@
 #define TESSERA_AVX2 1
 #endif
 
-namespace tessera::renderer {
+namespace tessera::renderer::TESSERA_KERNEL_ISA {
 
 namespace {
 
@@ -346,4 +348,4 @@ void castFastPair(const FastContext& ctx, const RaySpan* spans, float* out[2], S
   terminated[1] = b.terminated;
 }
 
-}  // namespace tessera::renderer
+}  // namespace tessera::renderer::TESSERA_KERNEL_ISA

@@ -8,7 +8,13 @@
 
 #include "renderer/volume/kernels.h"
 
-namespace tessera::renderer::fast {
+#ifndef TESSERA_KERNEL_ISA
+#error "leaper.h is private to fast_kernel.cpp, which is compiled once per instruction set"
+#endif
+
+// In the instruction set's namespace: an inline function compiled with AVX-512 must never
+// be the copy the linker keeps for the scalar kernel.
+namespace tessera::renderer::TESSERA_KERNEL_ISA::fast {
 
 // Skipped samples must lie this far (voxels) inside an empty node: float positions differ
 // from the exact ones by < 1e-3 voxel for volumes up to 2048^3, so they stay inside.
@@ -101,4 +107,4 @@ struct Leaper {
   }
 };
 
-}  // namespace tessera::renderer::fast
+}  // namespace tessera::renderer::TESSERA_KERNEL_ISA::fast

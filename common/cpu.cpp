@@ -1,0 +1,49 @@
+#include "common/cpu.h"
+
+#include <cstdlib>
+#include <stdexcept>
+
+namespace tessera {
+namespace {
+
+Isa supportedIsa() {
+#if defined(__x86_64__)
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("x86-64-v4")) return Isa::Avx512;
+  if (__builtin_cpu_supports("x86-64-v3")) return Isa::Avx2;
+#endif
+  return Isa::Scalar;
+}
+
+}  // namespace
+
+const char* isaName(Isa isa) {
+  switch (isa) {
+    case Isa::Avx512: return "avx512";
+    case Isa::Avx2: return "avx2";
+    case Isa::Scalar: break;
+  }
+  return "scalar";
+}
+
+Isa chooseIsa(const std::string& requested, Isa supported) {
+  if (requested.empty()) return supported;
+  for (Isa isa : {Isa::Scalar, Isa::Avx2, Isa::Avx512}) {
+    if (requested != isaName(isa)) continue;
+    if (isa > supported) {
+      throw std::invalid_argument("TESSERA_SIMD=" + requested + ": this CPU supports at most " + isaName(supported));
+    }
+    return isa;
+  }
+  throw std::invalid_argument("TESSERA_SIMD=" + requested + ": expected scalar, avx2 or avx512");
+}
+
+Isa cpuIsa() {
+  static const Isa isa = [] {
+    const char* env = std::getenv("TESSERA_SIMD");
+    return chooseIsa(env ? env : "", supportedIsa());
+  }();
+  return isa;
+}
+
+}  // namespace tessera

@@ -1,0 +1,53 @@
+// Picks the fast kernel compiled for the best instruction set this CPU has (common/cpu.h):
+// fast_kernel.cpp is built once per set, each copy in its own namespace.
+#include <spdlog/spdlog.h>
+
+#include "common/cpu.h"
+#include "renderer/volume/kernels.h"
+
+#define TESSERA_DECLARE_KERNEL(isa)                                                                   \
+  namespace tessera::renderer::isa {                                                                  \
+  bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);       \
+  void castFastPair(const FastContext& c, const RaySpan* spans, float* out[2], SampleCounts& counts, \
+                    bool terminated[2]);                                                              \
+  }
+TESSERA_DECLARE_KERNEL(scalar)
+#if TESSERA_X86_KERNELS
+TESSERA_DECLARE_KERNEL(avx2)
+TESSERA_DECLARE_KERNEL(avx512)
+#endif
+
+namespace tessera::renderer {
+namespace {
+
+struct Kernel {
+  decltype(&scalar::castFast) single;
+  decltype(&scalar::castFastPair) pair;
+};
+
+const Kernel& kernel() {
+  static const Kernel k = [] {
+    const Isa isa = cpuIsa();
+    spdlog::debug("ray casting kernel: {}", isaName(isa));
+    switch (isa) {
+#if TESSERA_X86_KERNELS
+      case Isa::Avx512: return Kernel{avx512::castFast, avx512::castFastPair};
+      case Isa::Avx2: return Kernel{avx2::castFast, avx2::castFastPair};
+#endif
+      default: return Kernel{scalar::castFast, scalar::castFastPair};
+    }
+  }();
+  return k;
+}
+
+}  // namespace
+
+bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts) {
+  return kernel().single(c, span, out, counts);
+}
+
+void castFastPair(const FastContext& c, const RaySpan* spans, float* out[2], SampleCounts& counts, bool terminated[2]) {
+  kernel().pair(c, spans, out, counts, terminated);
+}
+
+}  // namespace tessera::renderer

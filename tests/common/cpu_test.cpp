@@ -1,0 +1,40 @@
+// TESSERA_SIMD may lower the instruction set the CPU supports, never raise it.
+#include "common/cpu.h"
+
+#include <gtest/gtest.h>
+
+namespace tessera {
+namespace {
+
+TEST(Cpu, UnsetMeansWhatTheCpuSupports) {
+  EXPECT_EQ(chooseIsa("", Isa::Avx512), Isa::Avx512);
+  EXPECT_EQ(chooseIsa("", Isa::Scalar), Isa::Scalar);
+}
+
+TEST(Cpu, LowerLevelsCanBeForced) {
+  EXPECT_EQ(chooseIsa("scalar", Isa::Avx512), Isa::Scalar);
+  EXPECT_EQ(chooseIsa("avx2", Isa::Avx512), Isa::Avx2);
+  EXPECT_EQ(chooseIsa("avx512", Isa::Avx512), Isa::Avx512);
+}
+
+TEST(Cpu, HigherOrUnknownLevelsAreRefusedByName) {
+  try {
+    chooseIsa("avx512", Isa::Avx2);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "TESSERA_SIMD=avx512: this CPU supports at most avx2");
+  }
+  try {
+    chooseIsa("sse9", Isa::Avx512);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "TESSERA_SIMD=sse9: expected scalar, avx2 or avx512");
+  }
+}
+
+TEST(Cpu, NamesRoundTrip) {
+  for (Isa isa : {Isa::Scalar, Isa::Avx2, Isa::Avx512}) EXPECT_EQ(chooseIsa(isaName(isa), Isa::Avx512), isa);
+}
+
+}  // namespace
+}  // namespace tessera
