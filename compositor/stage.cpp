@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstring>
 #include <map>
+#include <utility>
 
 #include "common/clock.h"
 #include "common/net/curve.h"
@@ -90,7 +91,6 @@ class Stage {
         drops_.drop(rank, why);
         continue;
       }
-      bytes_in_ += m.size();
     }
   }
 
@@ -99,11 +99,9 @@ class Stage {
     st.role = proto::Role::Compositor;
     st.rank = link_.rank();
     st.frame = r.params.frame;
-    st.encode_ms = decode_ms_;
-    decode_ms_ = 0;
-    st.bytes_encoded = bytes_in_;
-    bytes_in_ = 0;
-    if (!r.region) return;  // a spare compositor this frame
+    // A spare compositor this frame: what it decoded counts in its next report.
+    if (!r.region) return;
+    st.decode_ms = std::exchange(decode_ms_, 0.0);
     auto t0 = Clock::now();
     const Rect& reg = *r.region;
     if (frame_.width != r.params.width || frame_.height != r.params.height)
@@ -111,10 +109,7 @@ class Stage {
     if (r.tiles.empty()) st.active_pixels = compositeRegion(reg, r.params.order, r.pieces, row_, frame_);
     else route(r.framebuffers, st);
     st.work_ms = msSince(t0);
-    for (const auto& p : r.pieces) {
-      st.bytes_raw += p.pixels.size();
-      st.active = unite(st.active, p.active);
-    }
+    for (const auto& p : r.pieces) st.active = unite(st.active, p.active);
     auto t1 = Clock::now();
     proto::Strips s;
     s.frame = r.params.frame;
@@ -133,7 +128,9 @@ class Stage {
     for (const auto& p : r.pieces) s.render_ms = std::max(s.render_ms, p.render_ms);
     auto bytes = proto::encode(s, link_.rank(), r.params.codec);
     s.encode_ms = msSince(t1);
-    st.encode_ms += s.encode_ms;
+    st.encode_ms = s.encode_ms;
+    st.bytes_raw = s.stream.size();
+    st.bytes_encoded = bytes.size();
     sendBytes(display(r.params.display_endpoint), std::move(bytes));
     st.dropped = drops_.total();
     link_.report(proto::encode(st, link_.rank()));
@@ -146,7 +143,7 @@ class Stage {
       std::memcpy(img.px.data(), fb.pixels.data(), fb.pixels.size());
       RouteStats rs = routeFramebuffer(img, frame_, 0);
       if (rs.strips_rejected) drops_.drop(fb.renderer, std::to_string(rs.strips_rejected) + " strips rejected");
-      st.active_pixels += (uint64_t)rs.strips_written;
+      st.active_pixels += rs.pixels_written;
     }
   }
 
@@ -171,7 +168,6 @@ class Stage {
   std::vector<float> row_;
   Image8 frame_;
   double decode_ms_ = 0;
-  uint64_t bytes_in_ = 0;
   DropCounter drops_;
 };
 

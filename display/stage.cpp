@@ -59,6 +59,7 @@ class Stage {
     std::optional<proto::FrameParams> params;
     std::map<uint32_t, proto::Strips> strips;  // by compositor
     Clock::time_point first_seen = Clock::now();
+    uint64_t bytes = 0;  // of its Strips messages as received (compressed): this frame's, not the last interval's
   };
 
   void readParams() {
@@ -151,8 +152,9 @@ class Stage {
         drops_.drop(s->compositor, why);
         continue;
       }
-      bytes_in_ += m.size();
-      frames_[s->frame].strips.emplace(s->compositor, std::move(*s));
+      Pending& pending = frames_[s->frame];
+      pending.bytes += m.size();
+      pending.strips.emplace(s->compositor, std::move(*s));
     }
   }
 
@@ -210,7 +212,7 @@ class Stage {
     d.frame = params.frame;
     d.display_ms = last_display_ms_;
     d.route_ms = route_ms;
-    d.bytes_encoded = std::exchange(bytes_in_, 0);
+    d.bytes_encoded = p.bytes;
     d.strips_rejected = rejected_;
     d.dropped = drops_.total();
     link_.report(proto::encode(d, 0));
@@ -255,7 +257,7 @@ class Stage {
   // once at 4 bytes, plus 2 header pixels per row); the race needs about one.
   static constexpr size_t kWaitingFrames = 8;
   std::optional<proto::FrameParams> newest_;
-  uint64_t next_ = 0, presented_ = 0, rejected_ = 0, bytes_in_ = 0;
+  uint64_t next_ = 0, presented_ = 0, rejected_ = 0;
   uint32_t epoch_ = 0;
   bool shutdown_ = false;
   Image8 image_;

@@ -90,6 +90,9 @@ nlohmann::json Metrics::summarize(const std::vector<proto::StageStats>& renderer
   j["latency_ms"] = latency_ms;
   stage(renderers, j, "render");
   stage(compositors, j, "composite");
+  double decode = 0;  // only compositors decode what they receive
+  for (const auto& s : compositors) decode = std::max(decode, s.decode_ms);
+  j["composite_decode_ms_max"] = decode;
   // Sort-first: chunk-tile pairs drawn per chunk (WireGL's overlap factor) and triangles.
   double drawn = 0, chunks = 0, triangles = 0;
   for (const auto& s : renderers) {

@@ -265,6 +265,7 @@ std::vector<std::byte> encode(const StageStats& m, uint32_t sender) {
     w.u32(m.rank);
     w.f64(m.work_ms);
     w.f64(m.encode_ms);
+    w.f64(m.decode_ms);
     w.u64(m.bytes_raw);
     w.u64(m.bytes_encoded);
     w.u64(m.active_pixels);
@@ -284,6 +285,7 @@ Result<StageStats> decodeStageStats(std::span<const std::byte> msg) {
     m.rank = r.u32("rank");
     m.work_ms = detail::readFinite(r, "work_ms");
     m.encode_ms = detail::readFinite(r, "encode_ms");
+    m.decode_ms = detail::readFinite(r, "decode_ms");
     m.bytes_raw = r.u64("bytes_raw");
     m.bytes_encoded = r.u64("bytes_encoded");
     m.active_pixels = r.u64("active_pixels");

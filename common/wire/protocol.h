@@ -226,7 +226,7 @@ struct Framebuffer {                           // renderer -> compositor (router
 // StageStats (type Stats, header frame = frame):
 //   role                                         u8      1   1..Role::Last
 //   rank                                         u32     4
-//   work_ms, encode_ms                           f64 x2  16  finite
+//   work_ms, encode_ms, decode_ms                f64 x3  24  finite
 //   bytes_raw, bytes_encoded, active_pixels      u64 x3  24
 //   active                                       rect    16  sane
 //   dropped                                      u64     8
@@ -235,7 +235,9 @@ struct Framebuffer {                           // renderer -> compositor (router
 //   chunks_drawn, chunks_total, triangles        u64 x3  24
 struct StageStats {                            // renderer/compositor -> master, per frame
   Role role = Role::Renderer; uint32_t rank = 0; uint64_t frame = 0;
-  double work_ms = 0, encode_ms = 0;
+  // What the stage sends: its output before (raw) and after (encoded) the codec, the time
+  // spent encoding it, and the time spent decoding what it received (compositors).
+  double work_ms = 0, encode_ms = 0, decode_ms = 0;
   uint64_t bytes_raw = 0, bytes_encoded = 0, active_pixels = 0;
   Rect active;                                 // renderer: active region of its brick image
   uint64_t dropped = 0;                        // messages dropped so far (cumulative)

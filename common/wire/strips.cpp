@@ -104,6 +104,7 @@ RouteStats routeStrips(std::span<const uint8_t> stream, Image8& dst, uint8_t dis
     } else {
       std::memcpy(dst.at(h.x, h.y), stream.data() + pos, bytes);
       ++s.strips_written;
+      s.pixels_written += h.width;
     }
     pos += bytes;
   }
@@ -175,6 +176,7 @@ RouteStats routeFramebuffer(const Image8& fb, Image8& dst, uint8_t display) {
       } else {
         std::memmove(dst.at(h.x, h.y), fb.at(x, y), 4 * size_t(h.width));
         ++s.strips_written;
+        s.pixels_written += h.width;
       }
       x += h.width;
     }

@@ -30,6 +30,7 @@ struct RouteStats {
   int strips_written = 0;
   int strips_rejected = 0;  // bad check, other display id, or would land outside dst
   bool truncated = false;   // stream ended inside a header or strip
+  uint64_t pixels_written = 0;
   bool operator==(const RouteStats&) const = default;
 };
 // Routes strips into dst by their headers alone. Never writes outside dst, never throws.

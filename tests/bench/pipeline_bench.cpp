@@ -38,7 +38,7 @@ std::vector<Row> readMetrics(const fs::path& p) {
   for (std::string line; std::getline(in, line);) {
     auto j = nlohmann::json::parse(line);
     rows.push_back({j["frame"].get<int>(), j["render_ms_max"], j["render_encode_ms_max"], j["composite_ms_max"],
-                    j["composite_encode_ms_max"], j["display_ms"], j["latency_ms"], j["done_ms"],
+                    j["composite_encode_ms_max"].get<double>() + j["composite_decode_ms_max"].get<double>(), j["display_ms"], j["latency_ms"], j["done_ms"],
                     j["render_bytes_raw"], j["render_bytes_encoded"], j["render_imbalance_time"]});
   }
   std::sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.frame < b.frame; });

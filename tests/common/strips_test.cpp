@@ -67,7 +67,7 @@ TEST(Strips, EncodeRouteRoundTripIsExactAndSkipsEmptyRows) {
   EXPECT_EQ(stream.size(), size_t(rows) * (8 + 4 * 27));
   Image8 dst(40, 30);
   RouteStats s = routeStrips(stream, dst, 2);
-  EXPECT_EQ(s, (RouteStats{rows, 0, false}));
+  EXPECT_EQ(s, (RouteStats{rows, 0, false, rows * 27u}));
   EXPECT_EQ(dst, onlyRect(img, r));
 }
 
@@ -75,7 +75,7 @@ TEST(Strips, EncodeClipsToTheImage) {
   Image8 img = testImage(10, 10, 2);
   auto stream = encodeStrips(img, {-3, 8, 20, 10}, 0);  // clips to 0,8 10x2; row 8 is transparent
   Image8 dst(10, 10);
-  EXPECT_EQ(routeStrips(stream, dst, 0), (RouteStats{1, 0, false}));
+  EXPECT_EQ(routeStrips(stream, dst, 0), (RouteStats{1, 0, false, 10}));
   EXPECT_EQ(dst, onlyRect(img, {0, 8, 10, 2}));
   EXPECT_TRUE(encodeStrips(img, {3, 3, 0, 5}, 0).empty());
 }
@@ -92,7 +92,7 @@ TEST(Strips, HeadersPointingOutsideDstAreRejectedCountedAndNotWritten) {
   EXPECT_EQ(dst, Image8(16, 8)) << "a rejected strip wrote pixels";
   // Rejected strips are skipped by their (checked) width: a good strip after them lands.
   append(stream, strip({10, 7, 6, 1}, 0x11));
-  EXPECT_EQ(routeStrips(stream, dst, 1), (RouteStats{1, 5, false}));
+  EXPECT_EQ(routeStrips(stream, dst, 1), (RouteStats{1, 5, false, 6}));
   EXPECT_EQ(dst.at(10, 7)[0], 0x11);
   EXPECT_EQ(dst.at(15, 7)[3], 0x11);
   EXPECT_EQ(dst.at(9, 7)[0], 0);
@@ -182,11 +182,12 @@ TEST(PackTiles, NonUniformTilesRouteBackExactly) {
     Image8 fb = packedFramebuffer(img, p, 5);
     Image8 dst(37, 23);
     RouteStats s = routeFramebuffer(fb, dst, 5);
-    // One strip per tile row: the sum of the tile heights.
-    EXPECT_EQ(s, (RouteStats{59, 0, false})) << "max_w " << max_w;
+    // One strip per tile row (the sum of the tile heights); the tiles cover all 37x23 pixels.
+    EXPECT_EQ(s, (RouteStats{59, 0, false, 37 * 23})) << "max_w " << max_w;
     EXPECT_EQ(dst, img) << "max_w " << max_w;
     Image8 other(37, 23);
     EXPECT_EQ(routeFramebuffer(fb, other, 4).strips_written, 0) << "display 4 took display 5's strips";
+    EXPECT_EQ(routeFramebuffer(fb, other, 4).pixels_written, 0u);
   }
 }
 
@@ -215,7 +216,7 @@ TEST(RouteFramebuffer, CorruptHeaderEndsOnlyItsRow) {
   fb.at(0, 1)[7] ^= 0x01;  // check byte of row 1's first header (second header pixel)
   Image8 dst(8, 4);
   RouteStats s = routeFramebuffer(fb, dst, 0);
-  EXPECT_EQ(s, (RouteStats{6, 0, false}));
+  EXPECT_EQ(s, (RouteStats{6, 0, false, 6 * 4}));
   EXPECT_EQ(dst.at(0, 1)[0], 0);
   EXPECT_EQ(dst.at(7, 1)[0], 0) << "the row ends at a failed header";
   EXPECT_EQ(dst.at(7, 2)[0], 0x7F);

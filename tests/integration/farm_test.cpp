@@ -52,6 +52,12 @@ TEST_P(FarmMatchesOneProcess, EveryFrameWithinOneLevel) {
     EXPECT_EQ(j["composite_reports"].get<int>(), compositors);
     EXPECT_GT(j["render_bytes_raw"].get<uint64_t>(), 0u);
     EXPECT_LT(j["render_bytes_encoded"].get<uint64_t>(), j["render_bytes_raw"].get<uint64_t>() + 1024);
+    // Compositors report what they send (strips), not what they received; the display
+    // receives exactly those messages. Decoding the pieces is timed on its own.
+    EXPECT_EQ(j["composite_bytes_encoded"].get<uint64_t>(), j["display_bytes_encoded"].get<uint64_t>()) << line;
+    EXPECT_GT(j["composite_bytes_raw"].get<uint64_t>(), 0u);
+    EXPECT_GT(j["composite_decode_ms_max"].get<double>(), 0.0);
+    EXPECT_GT(j["composite_active_pixels"].get<uint64_t>(), 100u);
   }
   EXPECT_EQ(lines, frames);
 }

@@ -53,8 +53,12 @@ TEST_P(SortFirstFarm, FramesAreBitIdenticalToOneProcess) {
   // Every frame reports how much geometry the tiles drew (overlap) and the balance.
   std::ifstream metrics(dir.path() / "out" / "metrics.jsonl");
   int lines = 0;
+  const Image8 first = dir.farmFrame(0);
   for (std::string line; std::getline(metrics, line); ++lines) {
     auto j = nlohmann::json::parse(line);
+    // The tiles cover the image once: compositors route every pixel of it (pixels, not strips).
+    EXPECT_EQ(j["composite_active_pixels"].get<uint64_t>(), uint64_t(first.width) * first.height) << line;
+    EXPECT_EQ(j["composite_bytes_encoded"].get<uint64_t>(), j["display_bytes_encoded"].get<uint64_t>()) << line;
     EXPECT_GE(j["overlap_factor"].get<double>(), 1.0 - 1e-9) << line;
     EXPECT_GT(j["triangles"].get<double>(), 0) << line;
     EXPECT_EQ(j["strips_rejected"].get<int>(), 0);
