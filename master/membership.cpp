@@ -9,15 +9,6 @@ namespace tessera::master {
 
 using proto::Role;
 
-const char* roleName(Role r) {
-  switch (r) {
-    case Role::Renderer: return "renderer";
-    case Role::Compositor: return "compositor";
-    case Role::Display: return "display";
-  }
-  return "?";
-}
-
 double Membership::quarantineS(int strikes) {
   if (strikes <= 0) return 0;
   return std::min(60.0, 5.0 * std::pow(2.0, strikes - 1));

@@ -17,7 +17,7 @@
 namespace tessera::master {
 
 
-const char* roleName(proto::Role r);
+using proto::roleName;
 
 struct Member {
   proto::Role role = proto::Role::Renderer;

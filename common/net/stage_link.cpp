@@ -52,11 +52,22 @@ StageLink::~StageLink() {
 
 bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   auto start = Clock::now();
-  auto expired = [&] { return std::chrono::duration<double>(Clock::now() - start).count() > timeout_s; };
+  auto waited = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  auto expired = [&] { return waited() > timeout_s; };
+  // Never silent: after 2 s, and every 10 s after that, say what this stage waits for.
+  double next_notice = 2;
+  auto notice = [&](const std::string& what) {
+    if (waited() < next_notice) return;
+    spdlog::info("{} waiting {:.0f} s for {} (giving up after {:.0f} s; is tessera-master running with "
+                 "TESSERA_ENDPOINTS={}?)",
+                 proto::roleName(role_), waited(), what, timeout_s, ep_.base);
+    next_notice += 10;
+  };
   // 1. The master's probe proves our subscription is live before we announce ourselves.
   zmq::pollitem_t sub_item[] = {{sub_.handle(), 0, ZMQ_POLLIN, 0}};
   while (true) {
     if ((stop && *stop) || expired()) return false;
+    notice("the master at " + ep_.masterPub());
     pollFor(sub_item, 1, std::chrono::milliseconds(100));
     if (sub_item[0].revents & ZMQ_POLLIN) {
       zmq::message_t m;
@@ -69,6 +80,7 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   sendBytes(ctl_, proto::encode(proto::Hello{role_, (uint32_t)getpid(), advertise_}, 0));
   while (true) {
     if ((stop && *stop) || expired()) return false;
+    notice("the master at " + ep_.masterControl() + " to answer its Hello");
     pollFor(ctl_item, 1, std::chrono::milliseconds(100));
     if (!(ctl_item[0].revents & ZMQ_POLLIN)) continue;
     zmq::message_t m;

@@ -258,6 +258,15 @@ Result<Roster> decodeRoster(std::span<const std::byte> msg) {
   });
 }
 
+const char* roleName(Role r) {
+  switch (r) {
+    case Role::Renderer: return "renderer";
+    case Role::Compositor: return "compositor";
+    case Role::Display: return "display";
+  }
+  return "?";
+}
+
 // ---- per-frame reports ----------------------------------------------------------------
 std::vector<std::byte> encode(const StageStats& m, uint32_t sender) {
   return encodeStructured(Type::Stats, m.frame, sender, [&](ByteWriter& w) {

@@ -56,6 +56,7 @@ enum class Role : uint8_t { Renderer = 1, Compositor = 2, Display = 3, Last = Di
 // RGBA16F pixels travel as two byte planes (low bytes of every half, then high bytes).
 enum class PixelFormat : uint8_t { RGBA8 = 1, RGBA16F = 2, RGBA32F = 3, Last = RGBA32F };
 constexpr bool validRole(uint8_t v) { return v >= 1 && v <= static_cast<uint8_t>(Role::Last); }
+const char* roleName(Role r);
 constexpr bool validPixelFormat(uint8_t v) { return v >= 1 && v <= static_cast<uint8_t>(PixelFormat::Last); }
 size_t bytesPerPixel(PixelFormat f);
 
