@@ -3,7 +3,8 @@
 # need (idempotent; as root, or with sudo), configures and builds into build/, then:
 #   ./setup.sh          set up and build only
 #   ./setup.sh run      ... and run the farm (compose.yaml) on the built-in default scene
-#   ./setup.sh test     ... and run every test (ctest, fuzzers for a bounded time, compose check)
+#   ./setup.sh test     ... and run every test (ctest, fuzzers for a bounded time, compose check,
+#                       the unit tests again under ASan + UBSan)
 # TESSERA_MINIMAL=1 installs only what building and running need (the Docker image).
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -50,7 +51,8 @@ case "$mode" in
       echo "docker stack config not available: Swarm check of compose.yaml skipped"
     fi
     tests/fuzz/run.sh "${TESSERA_FUZZ_SECONDS:-15}"
-    cd "$BUILD" && ctest --output-on-failure -j2 --timeout 600
+    ctest --test-dir "$BUILD" --output-on-failure -j2 --timeout 600
+    tests/sanitizers/run.sh
     ;;
   *) echo "usage: $0 [build|run|test|deps]" >&2; exit 2 ;;
 esac
