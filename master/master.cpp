@@ -31,7 +31,7 @@ class Master {
   Master(const MasterOptions& opt, zmq::context_t& ctx)
       : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router, kMaxControlMessage)),
         window_(opt.in_flight, opt.deadline), base_camera_(opt.scene.camera), quality_(opt.scene.quality),
-        metrics_(opt.metrics_path) {
+        metrics_(opt.metrics_path, opt.frames < 0 ? opt.scene.orbit.frames : opt.frames) {
     bindTo(pub_, opt_.endpoints.bind(opt_.endpoints.masterPub()));
     bindTo(ctl_, opt_.endpoints.bind(opt_.endpoints.masterControl()));
     total_frames_ = opt_.frames < 0 ? opt_.scene.orbit.frames : opt_.frames;
@@ -365,7 +365,7 @@ class Master {
   }
 
   void shutdown(const std::string& reason) {
-    spdlog::info("master shutting down: {} frames={} dropped={}", reason, metrics_.framesDone(), drops_.total());
+    spdlog::info("master shutting down: {}; {}", reason, metrics_.runSummary());
     // PUB is fire-and-forget: say it a few times so every subscriber hears it.
     for (int i = 0; i < 5; ++i) {
       sendBytes(pub_, proto::encode(proto::Shutdown{reason}, kMasterRank));

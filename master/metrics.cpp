@@ -10,7 +10,8 @@
 
 namespace tessera::master {
 
-Metrics::Metrics(const std::string& path) : start_(std::chrono::steady_clock::now()) {
+Metrics::Metrics(const std::string& path, uint64_t total_frames)
+    : start_(std::chrono::steady_clock::now()), run_(total_frames, start_) {
   if (path.empty()) return;
   auto dir = std::filesystem::path(path).parent_path();
   if (!dir.empty()) std::filesystem::create_directories(dir);
@@ -121,12 +122,13 @@ void Metrics::write(uint64_t frame, Frame& f) {
   j["refused_peers"] = refused_;
   // When FrameDone arrived, from the first frame's: throughput = frames / span.
   j["done_ms"] = std::chrono::duration<double, std::milli>(f.done_at - start_).count();
-  spdlog::info("frame={} latency_ms={:.1f} render_ms={:.1f} composite_ms={:.1f} display_ms={:.1f} bytes_raw={} "
+  spdlog::debug("frame={} latency_ms={:.1f} render_ms={:.1f} composite_ms={:.1f} display_ms={:.1f} bytes_raw={} "
                "bytes_encoded={} render_imbalance={:.2f} composite_imbalance={:.2f}",
                frame, f.latency_ms, j["render_ms_max"].get<double>(), j["composite_ms_max"].get<double>(),
                f.d.display_ms, j["render_bytes_raw"].get<uint64_t>(), j["render_bytes_encoded"].get<uint64_t>(),
                j["render_imbalance_time"].get<double>(), j["composite_imbalance_pixels"].get<double>());
   if (out_) out_ << j.dump() << '\n' << std::flush;
+  if (auto progress = run_.add(j, f.done_at)) spdlog::info("{}", *progress);
 }
 
 }  // namespace tessera::master

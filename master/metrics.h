@@ -14,12 +14,14 @@
 #include <nlohmann/json.hpp>
 
 #include "common/wire/protocol.h"
+#include "master/run_summary.h"
 
 namespace tessera::master {
 
 class Metrics {
  public:
-  explicit Metrics(const std::string& path);  // "" = log only
+  // path "" = log only; total_frames 0 = interactive (progress without an estimate).
+  explicit Metrics(const std::string& path, uint64_t total_frames = 0);
 
   void issued(uint64_t frame, uint32_t epoch, int renderers, int compositors);
   void stats(const proto::StageStats& s);
@@ -27,6 +29,7 @@ class Metrics {
   void flushOlderThan(std::chrono::steady_clock::time_point t);
   void flushAll();
   uint64_t framesDone() const { return frames_done_; }
+  std::string runSummary() const { return run_.line(); }
   size_t pending() const { return frames_.size(); }  // frames whose line is not written yet
 
   // Cumulative fault counters, written on every line.
@@ -60,6 +63,7 @@ class Metrics {
   uint64_t frames_done_ = 0;
   uint64_t reassignments_ = 0, reissued_ = 0, refused_ = 0;
   std::chrono::steady_clock::time_point start_;
+  RunSummary run_;
 };
 
 }  // namespace tessera::master

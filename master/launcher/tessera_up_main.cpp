@@ -2,11 +2,23 @@
 //   tessera-up [FILE] [--env KEY=VALUE]... [--dry-run] [--launch-with CMD]
 #include <CLI/CLI.hpp>
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <map>
+#include <optional>
+#include <sstream>
 
 #include "common/net/log.h"
 #include "master/launcher/compose.h"
 #include "master/launcher/launcher.h"
+#include "master/launcher/settings.h"
+
+extern char** environ;
 
 namespace {
 
@@ -29,6 +41,38 @@ bool printPlan(const tessera::launcher::ComposeProject& project,
     all_found = all_found && !p.executable.empty();
   }
   return all_found;
+}
+
+// Checks the user's TESSERA_* settings (--env, environment, the .env beside the file) and
+// puts absolute paths in their place; logs what it found.
+void checkUserSettings(const std::string& file, tessera::launcher::ComposeOptions& options,
+                       const std::shared_ptr<spdlog::logger>& log) {
+  namespace launcher = tessera::launcher;
+  std::map<std::string, std::string> dotenv;
+  const auto dotenv_path = std::filesystem::absolute(file).parent_path() / ".env";
+  if (std::ifstream in{dotenv_path}) {
+    std::stringstream text;
+    text << in.rdbuf();
+    dotenv = launcher::parseDotEnv(text.str(), dotenv_path.string());
+  }
+  std::vector<std::string> names;
+  for (const auto& [k, v] : options.overrides) names.push_back(k);
+  for (const auto& [k, v] : dotenv) names.push_back(k);
+  for (char** e = environ; *e; ++e) names.emplace_back(*e, std::strchr(*e, '=') ? std::strchr(*e, '=') - *e : 0);
+  std::sort(names.begin(), names.end());
+  names.erase(std::unique(names.begin(), names.end()), names.end());
+  auto lookup = [&](const std::string& k) -> std::optional<std::string> {
+    if (auto it = options.overrides.find(k); it != options.overrides.end()) return it->second;
+    if (const char* v = std::getenv(k.c_str())) return std::string(v);
+    if (auto it = dotenv.find(k); it != dotenv.end()) return it->second;
+    return std::nullopt;
+  };
+  const auto checked = launcher::checkSettings(names, lookup, std::filesystem::current_path());
+  for (const auto& w : checked.warnings) log->warn("{}", w);
+  for (const auto& [k, v] : checked.overrides) options.overrides[k] = v;
+  const auto out = lookup("TESSERA_OUT");
+  log->info("frames and metrics go to {}",
+            out && !out->empty() ? *out : (std::filesystem::absolute(file).parent_path() / "out").string());
 }
 
 }  // namespace
@@ -56,6 +100,7 @@ int main(int argc, char** argv) {
       if (eq == 0 || eq == std::string::npos) throw std::runtime_error("--env " + kv + ": expected KEY=VALUE");
       options.overrides[kv.substr(0, eq)] = kv.substr(eq + 1);
     }
+    checkUserSettings(file, options, log);
     const auto project = tessera::launcher::loadCompose(file, options);
     for (const auto& w : project.warnings) log->warn("{}", w);
     tessera::launcher::LaunchOptions launch_options;

@@ -82,7 +82,7 @@ done
 export TESSERA_ENDPOINTS="tcp://$(cat "$state/hosts/master.ip"):5550"
 export TESSERA_DISPLAY_HOST=$(cat "$state/hosts/display.ip")
 export TESSERA_KEYS="$state/keys" TESSERA_CURVE=on TESSERA_WINDOW=off TESSERA_OUT="$out"
-export TESSERA_CLUSTER_STATE="$state"
+export EMULATED_CLUSTER_STATE="$state"
 echo "emulated cluster: ${#hosts[@]} hosts, links $rate, endpoints $TESSERA_ENDPOINTS, output $out"
 set +e
 "$bin/tessera-up" "$root/compose.yaml" --launch-with "$root/tests/cluster/on_host.sh" "$@" 2>&1 | tee "$out/farm.log"

@@ -2,7 +2,7 @@
 # tessera-up --launch-with wrapper of the emulated cluster: runs one stage on its own host
 # (network namespace), bound to and advertising that host's address, as on a real machine.
 set -euo pipefail
-state=${TESSERA_CLUSTER_STATE:?set by emulated_cluster.sh}
+state=${EMULATED_CLUSTER_STATE:?set by emulated_cluster.sh}
 host=$TESSERA_SERVICE
 case "$host" in renderer | compositor) host="$host-$TESSERA_REPLICA" ;; esac
 [ -f "$state/hosts/$host.ns" ] || { echo "on_host.sh: no emulated host for $host" >&2; exit 2; }

@@ -35,6 +35,8 @@ TEST_P(FarmMatchesOneProcess, EveryFrameWithinOneLevel) {
   auto scene = dir.writeScene(6);
   auto run = dir.runFarm(scene, renderers, compositors, frames);
   ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("frame 3 of 3 (100%)"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("run summary: 3 frames in "), std::string::npos) << run.output;
   for (int k = 0; k < frames; ++k) {
     ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " missing\n" << run.output;
     Image8 farm = dir.farmFrame(k);
