@@ -11,30 +11,6 @@
 
 namespace tessera {
 
-Quality namedQuality(const std::string& name) {
-  Quality q;
-  q.name = name;
-  if (name == "reference") {
-    q.step = kL0 / 16;
-    q.early_termination = 2.0;  // > 1: never terminates
-    q.skip_empty = false;
-    q.reference = true;
-  } else if (name == "default") {
-    q.step = kL0;
-    // Stop once what is left of the ray cannot move an 8-bit value by half a level; this
-    // also keeps bricks terminated separately within 1/255 of one whole-volume ray.
-    q.early_termination = 1.0 - 0.5 / 255;
-  } else if (name == "fast") {
-    // Speed from the step alone: a lower early termination would let bricks stop separately
-    // and the farm would differ from one process by (1 - ET) * 255 levels (13 at 0.95).
-    q.step = 2 * kL0;
-    q.early_termination = 1.0 - 0.5 / 255;
-  } else {
-    throw std::invalid_argument("unknown quality '" + name + "' (reference | default | fast)");
-  }
-  return q;
-}
-
 Camera Orbit::at(const Camera& base, int frame) const {
   if (frames <= 1) return base;
   return base.orbited(axis, 360.0 * frame / frames);
@@ -258,8 +234,8 @@ Quality Parser::quality(const YAML::Node& n) const {
     }
   }
   checkKeys(n, "quality", {"step", "early_termination", "skip_empty"});
-  Quality q = namedQuality("default");
-  q.name = "custom";
+  Quality q = namedQuality(QualityName::Default);
+  q.name = QualityName::Custom;
   if (n["step"]) {
     q.step = number(n["step"], "quality.step");
     if (std::string p = stepProblem(q.step); !p.empty()) fail("quality.step", p);
@@ -304,19 +280,21 @@ MeshSpec Parser::mesh(const YAML::Node& n, bool has_volume) const {
 Antialiasing Parser::antialiasing(const YAML::Node& n) const {
   checkKeys(n, "antialiasing", {"method", "samples", "sigma"});
   Antialiasing a;
-  a.method = string(require(n, "antialiasing", "method"), "antialiasing.method");
-  if (a.method != "none" && a.method != "msaa" && a.method != "ssaa" && a.method != "fft")
-    fail("antialiasing.method", "expected none, msaa, ssaa or fft, got '" + a.method + "'");
-  if (a.method == "msaa") a.samples = 4;
-  if (a.method == "ssaa") a.samples = 2;
+  try {
+    a.method = parseAaMethod(string(require(n, "antialiasing", "method"), "antialiasing.method"));
+  } catch (const std::invalid_argument& e) {
+    fail("antialiasing.method", e.what());
+  }
+  if (a.method == AaMethod::Msaa) a.samples = 4;
+  if (a.method == AaMethod::Ssaa) a.samples = 2;
   if (n["samples"]) {
-    if (a.method == "msaa") a.samples = (int)integer(n["samples"], "antialiasing.samples", 1, 4);
-    else if (a.method == "ssaa") a.samples = (int)integer(n["samples"], "antialiasing.samples", 1, 8);
+    if (a.method == AaMethod::Msaa) a.samples = (int)integer(n["samples"], "antialiasing.samples", 1, 4);
+    else if (a.method == AaMethod::Ssaa) a.samples = (int)integer(n["samples"], "antialiasing.samples", 1, 8);
     else fail("antialiasing.samples", "only valid with method msaa or ssaa");
-    if (a.method == "msaa" && a.samples == 3) fail("antialiasing.samples", "msaa takes 1, 2 or 4 samples");
+    if (a.method == AaMethod::Msaa && a.samples == 3) fail("antialiasing.samples", "msaa takes 1, 2 or 4 samples");
   }
   if (n["sigma"]) {
-    if (a.method != "fft") fail("antialiasing.sigma", "only valid with method fft");
+    if (a.method != AaMethod::Fft) fail("antialiasing.sigma", "only valid with method fft");
     a.sigma = number(n["sigma"], "antialiasing.sigma");
     if (!(a.sigma > 0 && a.sigma <= 64)) fail("antialiasing.sigma", "must be in (0, 64] pixels");
   }
@@ -338,7 +316,7 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
               {"volume", "transfer_function", "camera", "image", "quality", "orbit", "mesh", "light", "antialiasing"});
   Scene s;
   s.path = name_for_errors;
-  s.quality = namedQuality("default");
+  s.quality = namedQuality(QualityName::Default);
   // A mesh scene needs a volume only for its isosurface, and a transfer function not at all.
   const bool is_mesh = (bool)root["mesh"];
   s.has_volume = !is_mesh || (bool)root["volume"];
@@ -387,7 +365,7 @@ Scene defaultScene() {
   s.camera = Camera{{0, 0.6, 2.2}, {0, 0, 0}, {0, 1, 0}, 30, false, 1};
   s.width = 1024;
   s.height = 1024;
-  s.quality = namedQuality("default");
+  s.quality = namedQuality(QualityName::Default);
   s.orbit = Orbit{90, {0, 1, 0}};
   return s;
 }

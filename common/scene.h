@@ -12,8 +12,12 @@
 
 namespace tessera {
 
+// The named qualities; Custom is a scene's own step/termination/skipping.
+enum class QualityName : uint8_t { Reference = 1, Default = 2, Fast = 3, Custom = 4, Last = Custom };
+const char* qualityName(QualityName q);  // "reference" | "default" | "fast" | "custom"
+
 struct Quality {
-  std::string name = "default";    // reference | default | fast | custom
+  QualityName name = QualityName::Default;
   double step = 1.0 / 256;         // world units along the ray
   double early_termination = 1.0 - 0.5 / 255;  // stop when accumulated alpha >= this; > 1 disables
   bool skip_empty = true;
@@ -22,7 +26,8 @@ struct Quality {
 };
 // reference: step L0/16, no ET, no skipping; default: step L0, ET 1 - 0.5/255; fast: step 2*L0,
 // ET as default (every preset is farm-exact: see farmAccuracyProblem).
-Quality namedQuality(const std::string& name);  // throws std::invalid_argument
+Quality namedQuality(QualityName name);         // Custom: std::invalid_argument
+Quality namedQuality(const std::string& name);  // a preset by its word; std::invalid_argument names it
 
 struct Orbit {
   int frames = 1;
@@ -39,8 +44,12 @@ struct MeshSpec {
 };
 // Anti-aliasing of geometry: none | msaa (samples 2 or 4) | ssaa (k x k, samples = k) | fft
 // (Gaussian low-pass of the final image, sigma in pixels).
+enum class AaMethod : uint8_t { None, Msaa, Ssaa, Fft };
+const char* aaMethodName(AaMethod m);  // "none" | "msaa" | "ssaa" | "fft"
+// The method a word names; std::invalid_argument naming the word and the choices.
+AaMethod parseAaMethod(const std::string& word);
 struct Antialiasing {
-  std::string method = "none";
+  AaMethod method = AaMethod::None;
   int samples = 1;
   double sigma = 0.6;
   bool operator==(const Antialiasing&) const = default;

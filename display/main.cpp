@@ -1,5 +1,6 @@
 // tessera-display: shows the farm's frames in a window, or writes them as PNG files.
 #include <CLI/CLI.hpp>
+#include <map>
 
 #include "common/net/curve.h"
 #include "common/net/log.h"
@@ -18,8 +19,10 @@ int main(int argc, char** argv) {
       ->envname("TESSERA_SCENE");
   app.add_option("--endpoints", base, "endpoint base (ipc://DIR | tcp://HOST:PORT)")->envname("TESSERA_ENDPOINTS");
   app.add_option("--out", opt.out_dir, "folder for PNG frames (no window)")->envname("TESSERA_OUT");
+  using Window = display::StageOptions::Window;
+  const std::map<std::string, Window> windows{{"auto", Window::Auto}, {"on", Window::On}, {"off", Window::Off}};
   app.add_option("--window", opt.window, "auto | on | off")->envname("TESSERA_WINDOW")
-      ->check(CLI::IsMember({"auto", "on", "off"}));
+      ->transform(CLI::CheckedTransformer(windows));
   app.add_flag("--premultiplied", opt.premultiplied, "also write frame_NNNNNN.pam: exact premultiplied rgba8")
       ->envname("TESSERA_PREMULTIPLIED");
   app.add_option("--background", bg, "r,g,b in [0,1]: PNGs composited over this colour")->delimiter(',')->expected(3);

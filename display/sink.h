@@ -9,13 +9,14 @@
 #include <vector>
 
 #include "common/image.h"
+#include "common/scene.h"
 
 namespace tessera::display {
 
 struct InputEvent {
   double orbit_dx = 0, orbit_dy = 0;  // degrees (drag)
   double zoom = 1;                    // multiply eye distance (wheel)
-  std::string quality;                // "reference" | "default" | "fast" | "" (keys 1/2/3)
+  std::optional<QualityName> quality;  // keys 1/2/3: reference, default, fast
   bool quit = false;                  // window closed, Esc or q
 };
 

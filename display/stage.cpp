@@ -220,7 +220,8 @@ class Stage {
 
   void openSink(const proto::FrameParams& p) {
     if (sink_) return;
-    bool want_window = opt_.window == "on" || (opt_.window == "auto" && windowAvailable());
+    using Window = StageOptions::Window;
+    bool want_window = opt_.window == Window::On || (opt_.window == Window::Auto && windowAvailable());
     if (want_window) {
       sink_ = makeWindowSink(p.width, p.height, "Tessera");
       spdlog::info("display window {}x{}", p.width, p.height);

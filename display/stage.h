@@ -16,7 +16,8 @@ namespace tessera::display {
 struct StageOptions {
   Endpoints endpoints;
   std::string out_dir = "out";  // PNG frames when there is no window
-  std::string window = "auto";  // auto | on | off
+  // auto: a window when a display server answers, else PNG files; on: a window or an error.
+  enum class Window { Auto, On, Off } window = Window::Auto;
   std::optional<std::array<double, 3>> background;  // PNG: composite over this colour
   // The scene's image size (every process loads the same scene): bounds what peers may send.
   int width = 512, height = 512;

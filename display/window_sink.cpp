@@ -178,9 +178,9 @@ class WindowSink final : public Sink {
       case SDL_KEYDOWN:
         if (e.key.repeat) return;
         switch (e.key.keysym.sym) {
-          case SDLK_1: case SDLK_KP_1: ev.quality = "reference"; break;
-          case SDLK_2: case SDLK_KP_2: ev.quality = "default"; break;
-          case SDLK_3: case SDLK_KP_3: ev.quality = "fast"; break;
+          case SDLK_1: case SDLK_KP_1: ev.quality = QualityName::Reference; break;
+          case SDLK_2: case SDLK_KP_2: ev.quality = QualityName::Default; break;
+          case SDLK_3: case SDLK_KP_3: ev.quality = QualityName::Fast; break;
           case SDLK_ESCAPE: case SDLK_q: ev.quit = true; break;
           default: return;
         }
@@ -192,7 +192,7 @@ class WindowSink final : public Sink {
   }
 
   static bool isDragOnly(const InputEvent& ev) {
-    return ev.zoom == 1 && ev.quality.empty() && !ev.quit;
+    return ev.zoom == 1 && !ev.quality && !ev.quit;
   }
 
   SDL_Window* window_ = nullptr;

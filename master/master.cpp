@@ -38,7 +38,7 @@ class Master {
     spdlog::info("master listening pub={} control={} renderers={} compositors={} frames={} in_flight={}",
                  opt_.endpoints.masterPub(), opt_.endpoints.masterControl(), opt_.renderers, opt_.compositors,
                  total_frames_ == 0 ? std::string("interactive") : std::to_string(total_frames_), opt_.in_flight);
-    if (sortFirst() && opt_.scene.antialiasing.method == "fft")
+    if (sortFirst() && opt_.scene.antialiasing.method == AaMethod::Fft)
       spdlog::warn("antialiasing fft is a post filter of the whole image, applied by tessera-render; the farm "
                    "renders this scene without it (use msaa or ssaa for identical farm frames)");
     // Sort-first (geometry) scenes need no volume here: renderers own the mesh.
@@ -353,7 +353,7 @@ class Master {
   void onInput(const proto::Input& in, uint32_t key) {
     try {
       base_camera_ = applyInput(base_camera_, in);
-      if (!in.quality.empty()) quality_ = namedQuality(in.quality);
+      if (in.quality) quality_ = namedQuality(*in.quality);
     } catch (const std::invalid_argument& e) {
       drops_.drop(key, e.what());
     }

@@ -334,7 +334,7 @@ std::vector<std::byte> encode(const Input& m, uint32_t sender) {
     w.f64(m.orbit_dx);
     w.f64(m.orbit_dy);
     w.f64(m.zoom);
-    w.str(m.quality);
+    w.u8(m.quality ? static_cast<uint8_t>(*m.quality) : 0);
   });
 }
 Result<Input> decodeInput(std::span<const std::byte> msg) {
@@ -343,7 +343,11 @@ Result<Input> decodeInput(std::span<const std::byte> msg) {
     m.orbit_dy = detail::readFinite(r, "orbit_dy");
     m.zoom = detail::readFinite(r, "zoom");
     if (r.ok() && m.zoom <= 0) r.fail("zoom " + std::to_string(m.zoom) + " not positive");
-    m.quality = r.str("quality");
+    // 0: unchanged; else a named preset (a display cannot ask for a custom quality).
+    const uint8_t q = r.u8("quality");
+    if (r.ok() && q > static_cast<uint8_t>(QualityName::Fast))
+      r.fail("quality " + std::to_string(q) + " not in 0..3 (unchanged, reference, default, fast)");
+    if (q != 0) m.quality = static_cast<QualityName>(q);
   });
 }
 

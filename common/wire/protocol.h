@@ -136,7 +136,7 @@ struct CompositorRegion {
 //   camera.fov                 f64      8     finite, in (0, 180)
 //   camera.orthographic        bool     1
 //   camera.height              f64      8     finite, > 0
-//   quality.name               str      4+n
+//   quality.name               u8       1     QualityName 1..Last
 //   quality.step               f64      8     finite, > 0
 //   quality.early_termination  f64      8     finite
 //   quality.skip_empty         bool     1
@@ -262,11 +262,11 @@ struct FrameDone {                             // display -> master
 // Input:
 //   orbit_dx, orbit_dy  f64 x2  16   finite
 //   zoom                f64     8    finite, > 0
-//   quality             str     4+n
+//   quality             u8      1    0 = unchanged, else QualityName Reference..Fast
 struct Input {                                 // display -> master (interactive camera)
   double orbit_dx = 0, orbit_dy = 0;           // degrees
   double zoom = 1;                             // multiply eye distance
-  std::string quality;                         // "" = unchanged
+  std::optional<QualityName> quality;          // nullopt = unchanged
   bool operator==(const Input&) const = default;
 };
 

@@ -54,7 +54,7 @@ Camera readCamera(ByteReader& r) {
 }
 
 void writeQuality(ByteWriter& w, const Quality& q) {
-  w.str(q.name);
+  w.u8(static_cast<uint8_t>(q.name));
   w.f64(q.step);
   w.f64(q.early_termination);
   w.boolean(q.skip_empty);
@@ -62,7 +62,10 @@ void writeQuality(ByteWriter& w, const Quality& q) {
 }
 Quality readQuality(ByteReader& r) {
   Quality q;
-  q.name = r.str("quality.name");
+  const uint8_t name = r.u8("quality.name");
+  if (r.ok() && (name < 1 || name > static_cast<uint8_t>(QualityName::Last)))
+    r.fail("quality.name " + std::to_string(name) + " not in 1.." + std::to_string(static_cast<int>(QualityName::Last)));
+  q.name = static_cast<QualityName>(name);
   q.step = readFinite(r, "quality.step");
   q.early_termination = readFinite(r, "quality.early_termination");
   q.skip_empty = r.boolean("quality.skip_empty");

@@ -28,8 +28,8 @@ SceneGeometry loadSceneGeometry(const Scene& scene, uint32_t per_chunk) {
 GlRenderOptions sceneRenderOptions(const Scene& scene) {
   GlRenderOptions o;
   o.light = scene.light;
-  if (scene.antialiasing.method == "msaa") o.samples = scene.antialiasing.samples;
-  if (scene.antialiasing.method == "ssaa") o.supersample = scene.antialiasing.samples;
+  if (scene.antialiasing.method == AaMethod::Msaa) o.samples = scene.antialiasing.samples;
+  if (scene.antialiasing.method == AaMethod::Ssaa) o.supersample = scene.antialiasing.samples;
   return o;
 }
 

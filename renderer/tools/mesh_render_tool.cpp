@@ -26,15 +26,15 @@ struct Frame {
 Frame renderFrame(GlRenderer& r, const SceneGeometry& g, const Camera& cam, int w, int h, const std::vector<Rect>& tiles,
                   const Antialiasing& aa, const GlRenderOptions& base, int repeat) {
   GlRenderOptions o = base;
-  o.samples = aa.method == "msaa" ? aa.samples : 1;
-  o.supersample = aa.method == "ssaa" ? aa.samples : 1;
+  o.samples = aa.method == AaMethod::Msaa ? aa.samples : 1;
+  o.supersample = aa.method == AaMethod::Ssaa ? aa.samples : 1;
   Frame f;
   f.ms = 1e300;
   for (int i = 0; i < repeat; ++i) {
     const auto t0 = std::chrono::steady_clock::now();
     f.image = renderTiles(r, cam, w, h, tiles, g.chunks, o, &f.stats);
     // Whole-image post filter: per tile it would differ near the tile borders.
-    if (aa.method == "fft") lowPassFilter(f.image, aa.sigma);
+    if (aa.method == AaMethod::Fft) lowPassFilter(f.image, aa.sigma);
     f.ms = std::min(f.ms, msSince(t0));
   }
   return f;
@@ -46,10 +46,12 @@ int renderMeshScene(const Scene& scene, const MeshToolOptions& opt) {
   const int w = opt.width > 0 ? opt.width : scene.width, h = opt.height > 0 ? opt.height : scene.height;
   Antialiasing aa = scene.antialiasing;
   if (!opt.aa.empty()) {
-    if (opt.aa != "none" && opt.aa != "msaa" && opt.aa != "ssaa" && opt.aa != "fft")
-      throw std::invalid_argument("--aa: expected none, msaa, ssaa or fft, got '" + opt.aa + "'");
-    aa.method = opt.aa;
-    aa.samples = opt.aa == "msaa" ? 4 : opt.aa == "ssaa" ? 2 : 1;
+    try {
+      aa.method = parseAaMethod(opt.aa);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("--aa: ") + e.what());
+    }
+    aa.samples = aa.method == AaMethod::Msaa ? 4 : aa.method == AaMethod::Ssaa ? 2 : 1;
   }
   if (opt.aa_samples > 0) aa.samples = opt.aa_samples;
 
@@ -69,7 +71,7 @@ int renderMeshScene(const Scene& scene, const MeshToolOptions& opt) {
   if (!opt.pam.empty()) writePam(opt.pam, f.image);
   std::printf("wrote %s (%dx%d, %zu triangles in %zu chunks, %zu tile%s, antialiasing %s %d, frame %d)\n",
               opt.out.c_str(), w, h, g.mesh.triangleCount(), g.chunks.size(), tiles.size(),
-              tiles.size() == 1 ? "" : "s", aa.method.c_str(), aa.samples, opt.frame);
+              tiles.size() == 1 ? "" : "s", aaMethodName(aa.method), aa.samples, opt.frame);
   if (opt.stats) {
     const double overlap = (double)f.stats.chunks / std::max<size_t>(1, g.chunks.size());
     std::printf("time_ms=%.1f%s triangles_drawn=%llu mtri_per_s=%.2f overlap=%.3f load_ms=%.0f upload_ms=%.0f\n", f.ms,
@@ -78,7 +80,7 @@ int renderMeshScene(const Scene& scene, const MeshToolOptions& opt) {
   }
   if (opt.compare_reference || opt.aa_sweep) {
     const std::vector<Rect> whole{Rect{0, 0, w, h}};
-    const Frame ref = renderFrame(r, g, cam, w, h, whole, Antialiasing{"ssaa", 4, 0}, base, 1);
+    const Frame ref = renderFrame(r, g, cam, w, h, whole, Antialiasing{AaMethod::Ssaa, 4, 0}, base, 1);
     if (opt.compare_reference) {
       const ImageError e = compare(f.image, ref.image);
       std::printf("vs 16x supersampled: max_abs=%.6f rmse=%.6f psnr=%.2f dB (reference %.0f ms)\n", e.max_abs, e.rmse,
@@ -86,13 +88,14 @@ int renderMeshScene(const Scene& scene, const MeshToolOptions& opt) {
     }
     if (opt.aa_sweep) {
       std::printf("method,samples,ms,rmse,psnr_db,max_abs\n");
-      const Antialiasing methods[] = {{"none", 1, 0},   {"msaa", 2, 0},   {"msaa", 4, 0},   {"ssaa", 2, 0},
-                                      {"ssaa", 3, 0},   {"fft", 1, 0.5},  {"fft", 1, 0.7},  {"fft", 1, 1.0}};
+      using enum AaMethod;
+      const Antialiasing methods[] = {{None, 1, 0}, {Msaa, 2, 0}, {Msaa, 4, 0}, {Ssaa, 2, 0},
+                                      {Ssaa, 3, 0}, {Fft, 1, 0.5}, {Fft, 1, 0.7}, {Fft, 1, 1.0}};
       for (const Antialiasing& m : methods) {
         const Frame mf = renderFrame(r, g, cam, w, h, whole, m, base, opt.repeat);
         const ImageError e = compare(mf.image, ref.image);
-        std::printf("%s%s,%d,%.1f,%.6f,%.2f,%.4f\n", m.method.c_str(),
-                    m.method == "fft" ? ("(sigma=" + std::to_string(m.sigma).substr(0, 3) + ")").c_str() : "",
+        std::printf("%s%s,%d,%.1f,%.6f,%.2f,%.4f\n", aaMethodName(m.method),
+                    m.method == Fft ? ("(sigma=" + std::to_string(m.sigma).substr(0, 3) + ")").c_str() : "",
                     m.samples, mf.ms, e.rmse, e.psnr, e.max_abs);
       }
     }

@@ -157,7 +157,7 @@ int run(int argc, char** argv) {
   }
   writePng(out, img, bg);
   std::printf("wrote %s (%dx%d, quality %s, %d brick%s, frame %d, backend %s)\n", out.c_str(), w, h,
-              opt.quality.name.c_str(), bricks, bricks == 1 ? "" : "s", frame, backend.c_str());
+              qualityName(opt.quality.name), bricks, bricks == 1 ? "" : "s", frame, backend.c_str());
   if (!raw.empty()) {
     writeRawF32(raw, img);
     std::printf("wrote %s\n", raw.c_str());
@@ -173,7 +173,7 @@ int run(int argc, char** argv) {
                 opt.quality.skip_empty ? 1 : 0, isaName(cpuIsa()));
   if (compare_ref) {
     renderer::RenderOptions ropt = opt;
-    ropt.quality = namedQuality("reference");
+    ropt.quality = namedQuality(QualityName::Reference);
     renderer::RenderStats rs;
     const ImageF ref = renderScene(*chosen, *vol, scene.tf, cam, w, h, bricks, ropt, rs);
     const ImageError e = compare(img, ref);

@@ -22,10 +22,10 @@ namespace {
 Image8 renderOnce(renderer::GlRenderer& r, const renderer::SceneGeometry& g, const Camera& cam, int w, int h,
                   const GlRenderOptions& base, const AaRow& m, double* filter_ms) {
   GlRenderOptions o = base;
-  o.samples = m.method == "msaa" ? m.samples : 1;
-  o.supersample = m.method == "ssaa" ? m.samples : 1;
+  o.samples = m.method == AaMethod::Msaa ? m.samples : 1;
+  o.supersample = m.method == AaMethod::Ssaa ? m.samples : 1;
   Image8 img = r.render(cam, w, h, Rect{0, 0, w, h}, g.chunks, o);
-  if (m.method == "fft") {
+  if (m.method == AaMethod::Fft) {
     const auto t0 = Clock::now();
     renderer::lowPassFilter(img, m.sigma);
     *filter_ms = msSince(t0);
@@ -33,7 +33,7 @@ Image8 renderOnce(renderer::GlRenderer& r, const renderer::SceneGeometry& g, con
   return img;
 }
 
-AaRow row(const std::string& method, int samples = 1, double sigma = 0) {
+AaRow row(AaMethod method, int samples = 1, double sigma = 0) {
   AaRow m;
   m.method = method;
   m.samples = samples;
@@ -44,10 +44,10 @@ AaRow row(const std::string& method, int samples = 1, double sigma = 0) {
 }  // namespace
 
 std::string AaRow::label() const {
-  if (method == "msaa") return fmt::format("msaa {}", samples);
-  if (method == "ssaa") return fmt::format("ssaa {}x{}", samples, samples);
-  if (method == "fft") return fmt::format("fft s={:g}", sigma);
-  return method;
+  if (method == AaMethod::Msaa) return fmt::format("msaa {}", samples);
+  if (method == AaMethod::Ssaa) return fmt::format("ssaa {}x{}", samples, samples);
+  if (method == AaMethod::Fft) return fmt::format("fft s={:g}", sigma);
+  return aaMethodName(method);
 }
 
 AaSweepResult aaSweep(renderer::GlRenderer& r, const renderer::SceneGeometry& g, const Camera& cam, int width,
@@ -57,17 +57,18 @@ AaSweepResult aaSweep(renderer::GlRenderer& r, const renderer::SceneGeometry& g,
   res.height = height;
   res.triangles = g.mesh.triangleCount();
   double unused = 0;
-  const AaRow ref_method = row("ssaa", 4);
+  const AaRow ref_method = row(AaMethod::Ssaa, 4);
   // Warm-up: llvmpipe compiles shaders per state on first use; keep that out of the rows.
-  (void)renderOnce(r, g, cam, width, height, base, row("none"), &unused);
+  (void)renderOnce(r, g, cam, width, height, base, row(AaMethod::None), &unused);
   (void)renderOnce(r, g, cam, width, height, base, ref_method, &unused);
   auto t0 = Clock::now();
   const Image8 ref = renderOnce(r, g, cam, width, height, base, ref_method, &unused);
   res.reference_ms = msSince(t0);
 
-  const std::vector<AaRow> methods = {row("none"),        row("msaa", 2),     row("msaa", 4),     row("ssaa", 2),
-                                      row("ssaa", 3),     row("fft", 1, 0.4), row("fft", 1, 0.6), row("fft", 1, 0.8),
-                                      row("fft", 1, 1.0), row("fft", 1, 1.5)};
+  using enum AaMethod;
+  const std::vector<AaRow> methods = {row(None),        row(Msaa, 2),     row(Msaa, 4),     row(Ssaa, 2),
+                                      row(Ssaa, 3),     row(Fft, 1, 0.4), row(Fft, 1, 0.6), row(Fft, 1, 0.8),
+                                      row(Fft, 1, 1.0), row(Fft, 1, 1.5)};
   Image8 previous;
   for (AaRow m : methods) {
     Image8 img;
@@ -81,7 +82,7 @@ AaSweepResult aaSweep(renderer::GlRenderer& r, const renderer::SceneGeometry& g,
       m.ms = std::min(m.ms, msSince(t0));
       m.filter_ms = std::min(m.filter_ms, filter_ms);
     }
-    if (m.method != "fft") m.filter_ms = 0;
+    if (m.method != AaMethod::Fft) m.filter_ms = 0;
     m.err = compare(img, ref);
     m.same_as_previous = !res.rows.empty() && img.px == previous.px;
     previous = std::move(img);
@@ -95,7 +96,7 @@ void writeAaCsv(const std::string& path, const AaSweepResult& res) {
   if (!f) throw std::runtime_error("cannot write " + path);
   f << "method,samples,sigma,label,ms,filter_ms,rmse,psnr_db,max_abs\n";
   for (const AaRow& m : res.rows)
-    f << fmt::format("{},{},{},{},{:.2f},{:.2f},{:.6f},{:.3f},{:.5f}\n", m.method, m.samples, m.sigma, m.label(), m.ms,
+    f << fmt::format("{},{},{},{},{:.2f},{:.2f},{:.6f},{:.3f},{:.5f}\n", aaMethodName(m.method), m.samples, m.sigma, m.label(), m.ms,
                      m.filter_ms, m.err.rmse, m.err.psnr, m.err.max_abs);
 }
 
@@ -136,7 +137,7 @@ std::string aaMarkdown(const AaSweepResult& res) {
       res.width, res.height, res.triangles, res.reference_ms);
   for (const AaRow& m : res.rows)
     s += fmt::format("| {} | {:.1f} | {} | {:.5f} | {:.2f} | {:.4f} | {} |\n", m.label(), m.ms,
-                     m.method == "fft" ? fmt::format("{:.1f}", m.filter_ms) : "-", m.err.rmse, m.err.psnr,
+                     m.method == AaMethod::Fft ? fmt::format("{:.1f}", m.filter_ms) : "-", m.err.rmse, m.err.psnr,
                      m.err.max_abs, m.same_as_previous ? "bytes identical to the row above" : "");
   return s;
 }

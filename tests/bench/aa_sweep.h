@@ -6,13 +6,14 @@
 #include <vector>
 
 #include "common/image.h"
+#include "common/scene.h"
 #include "renderer/gl/gl_renderer.h"
 #include "renderer/mesh/mesh_scene.h"
 
 namespace tessera::bench {
 
 struct AaRow {
-  std::string method;             // none | msaa | ssaa | fft
+  AaMethod method = AaMethod::None;
   int samples = 1;                // MSAA samples or SSAA factor k (k x k)
   double sigma = 0;               // fft: Gaussian sigma in pixels
   double ms = 0;                  // best of repeats: render + post filter

@@ -201,7 +201,7 @@ Timed timeConfig(const Args& a, const renderer::Raycaster& rc, const Camera& cam
                  const Config& c) {
   renderer::RenderOptions opt;
   opt.threads = a.threads;
-  opt.quality.name = "custom";
+  opt.quality.name = QualityName::Custom;
   opt.quality.step = c.step_l0 * kL0;
   opt.quality.early_termination = c.et;
   opt.quality.skip_empty = c.skip;

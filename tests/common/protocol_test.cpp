@@ -18,7 +18,7 @@ FrameParams sampleParams() {
   p.epoch = 3;
   p.camera.eye = {1.5, -2, 3.25};
   p.camera.fov = 45;
-  p.quality = {"fast", 1.0 / 128, 0.95, true, false};
+  p.quality = {QualityName::Fast, 1.0 / 128, 0.95, true, false};
   p.width = 640;
   p.height = 480;
   p.codec = Codec::Lz4;
@@ -136,7 +136,7 @@ TEST(Protocol, EveryStructuredMessageRoundTrips) {
   expectRoundTrip(st, encode(st, 11), decodeStageStats, Type::Stats);
   FrameDone fd{1000, 16.5, 2.25, 888888, 3, 1};
   expectRoundTrip(fd, encode(fd, 11), decodeFrameDone, Type::FrameDone);
-  Input in{-5.5, 10, 0.9, "reference"};
+  Input in{-5.5, 10, 0.9, QualityName::Reference};
   expectRoundTrip(in, encode(in, 11), decodeInput, Type::Input);
   EXPECT_EQ(decodeHeader(encode(fp, 11))->frame, 42u) << "FrameParams::frame travels in the header";
 }
@@ -182,7 +182,7 @@ TEST(Protocol, TruncatedAtEveryLengthFails) {
   expectTruncationsFail(encode(samplePiece(PixelFormat::RGBA8), 1, Codec::Lzo), decodePiece);
   expectTruncationsFail(encode(sampleStrips(), 1, Codec::Zstd), decodeStrips);
   expectTruncationsFail(encode(sampleFramebuffer(), 1, Codec::Lz4), decodeFramebuffer);
-  expectTruncationsFail(encode(Input{1, 2, 3, "fast"}, 1), decodeInput);
+  expectTruncationsFail(encode(Input{1, 2, 3, QualityName::Fast}, 1), decodeInput);
   expectTruncationsFail(encode(Probe{}, 1), decodeProbe);
 }
 

@@ -74,7 +74,7 @@ TEST(Scene, Qualities) {
   EXPECT_GT(r.early_termination, 1.0);
   EXPECT_DOUBLE_EQ(namedQuality("fast").step, 2 * kL0);
   Scene s = parseScene(std::string(kGood) + "quality: {step: 0.002, skip_empty: false}\n", ".", "s.yaml");
-  EXPECT_EQ(s.quality.name, "custom");
+  EXPECT_EQ(s.quality.name, QualityName::Custom);
   EXPECT_DOUBLE_EQ(s.quality.step, 0.002);
   EXPECT_FALSE(s.quality.skip_empty);
   EXPECT_DOUBLE_EQ(s.quality.early_termination, namedQuality("default").early_termination);
@@ -257,6 +257,16 @@ TEST(Scene, ImageLargerThanTheWireCarriesIsRefused) {
   EXPECT_ERROR(edit("image: [64, 48]", "image: [4096, 4096]"), "<no error>");
 }
 
+TEST(Scene, QualityAndAntialiasingWordsRoundTrip) {
+  for (QualityName q : {QualityName::Reference, QualityName::Default, QualityName::Fast})
+    EXPECT_EQ(namedQuality(qualityName(q)).name, q);
+  EXPECT_THROW(namedQuality("custom"), std::invalid_argument);
+  EXPECT_THROW(namedQuality(QualityName::Custom), std::invalid_argument);
+  for (AaMethod m : {AaMethod::None, AaMethod::Msaa, AaMethod::Ssaa, AaMethod::Fft})
+    EXPECT_EQ(parseAaMethod(aaMethodName(m)), m);
+  EXPECT_THROW(parseAaMethod("fxaa"), std::invalid_argument);
+}
+
 TEST(Scene, FastPresetIsFarmExact) {
   const Quality fast = namedQuality("fast"), def = namedQuality("default");
   EXPECT_EQ(fast.early_termination, def.early_termination);
@@ -267,7 +277,7 @@ TEST(Scene, FastPresetIsFarmExact) {
 
 TEST(Scene, LowEarlyTerminationIsRefusedOnlyForManyBricks) {
   Quality q = namedQuality("default");
-  q.name = "custom";
+  q.name = QualityName::Custom;
   q.early_termination = 0.95;
   EXPECT_EQ(farmAccuracyProblem(q, 1), "");  // one brick: the same rays as tessera-render
   const std::string m = farmAccuracyProblem(q, 3);

@@ -258,7 +258,7 @@ TEST_F(WindowSinkXvfb, PollTranslatesInput) {
 
   const auto ev = sink->poll();
   ASSERT_EQ(ev.size(), 4u);
-  EXPECT_EQ(ev[0].quality, "default");
+  EXPECT_EQ(ev[0].quality, QualityName::Default);
   // 0.3 degree per pixel; 1e-12 covers double rounding of the products.
   EXPECT_NEAR(ev[1].orbit_dx, 15 * 0.3, 1e-12);
   EXPECT_NEAR(ev[1].orbit_dy, -4 * 0.3, 1e-12);

@@ -79,9 +79,9 @@ void writeSeeds(const std::string& dir) {
   fp.order = {1, 0};
   fp.regions = {{0, {0, 0, 64, 16}, "a"}, {1, {0, 16, 64, 16}, "b"}};
   writeSeed(dir, n, encode(fp, 1));
-  writeSeed(dir, n, encode(StageStats{Role::Renderer, 1, 3, 1, 2, 3, 4, 5, {0, 0, 4, 4}, 0}, 1));
+  writeSeed(dir, n, encode(StageStats{Role::Renderer, 1, 3, 1, 2, 0.5, 3, 4, 5, {0, 0, 4, 4}, 0}, 1));
   writeSeed(dir, n, encode(FrameDone{3, 1, 2, 3, 4, 5}, 1));
-  writeSeed(dir, n, encode(Input{1, 2, 1.5, "fast"}, 1));
+  writeSeed(dir, n, encode(Input{1, 2, 1.5, QualityName::Fast}, 1));
   for (uint8_t c = 0; c < kCodecCount; ++c) {
     Piece p;
     p.region = {0, 0, 16, 16};

@@ -9,7 +9,7 @@ BUILD=${BUILD:-$SRC/build-fuzz}
 SECS=${1:-20}
 command -v clang++ >/dev/null || { echo "clang++ not found: apt-get install clang" >&2; exit 2; }
 cmake -S "$SRC" -B "$BUILD" -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DTESSERA_FUZZ=ON -DTESSERA_NATIVE=OFF >/dev/null
+  -DTESSERA_FUZZ=ON >/dev/null
 cmake --build "$BUILD" --target protocol_fuzz strips_fuzz -j2
 mkdir -p "$BUILD/fuzz-artifacts"
 for t in protocol_fuzz strips_fuzz; do

@@ -160,7 +160,7 @@ TEST(FarmFaults, RendererSurvivesAFrameThatThrows) {
   renderer::StageOptions ro{scene, ep, 1};
   FarmDir dir("survives");
   compositor::StageOptions co{ep, ""};
-  display::StageOptions dopt{ep, (dir.path() / "out").string(), "off", std::nullopt};
+  display::StageOptions dopt{ep, (dir.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
   auto master_done = std::async(std::launch::async, [&] { return master::run(mo, ctx, &stop); });
   auto renderer_done = std::async(std::launch::async, [&] { return renderer::runStage(ro, ctx, &stop); });
   auto compositor_done = std::async(std::launch::async, [&] { return compositor::runStage(co, ctx, &stop); });

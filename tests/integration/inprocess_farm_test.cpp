@@ -51,7 +51,7 @@ TEST(InProcessFarm, LostRendererIsDetectedAndItsWorkReassigned) {
   mo.metrics_path = (dir.path() / "metrics.jsonl").string();
   renderer::StageOptions ro{scene, ep, 1};
   compositor::StageOptions co{ep, ""};
-  display::StageOptions dopt{ep, (dir.path() / "out").string(), "off", std::nullopt};
+  display::StageOptions dopt{ep, (dir.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
 
   std::vector<std::future<int>> stages;
   stages.push_back(std::async(std::launch::async, [&] { return master::run(mo, ctx, &stop_all); }));
@@ -105,7 +105,7 @@ TEST(InProcessFarm, InteractiveFramesFollowInputAndIdleFramesAreNotRendered) {
   mo.frames = 0;  // interactive
   renderer::StageOptions ro{scene, ep, 1};
   compositor::StageOptions co{ep, ""};
-  display::StageOptions dopt{ep, (dir.path() / "out").string(), "off", std::nullopt};
+  display::StageOptions dopt{ep, (dir.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
   std::vector<std::future<int>> stages;
   stages.push_back(std::async(std::launch::async, [&] { return master::run(mo, ctx, &stop); }));
   stages.push_back(std::async(std::launch::async, [&] { return renderer::runStage(ro, ctx, &stop); }));

@@ -153,7 +153,7 @@ class Farm {
   master::MasterOptions mo_;
   renderer::StageOptions ro_{scene_, ep_, 1};
   compositor::StageOptions co_{ep_, ""};
-  display::StageOptions do_{ep_, (dir_.path() / "out").string(), "off", std::nullopt};
+  display::StageOptions do_{ep_, (dir_.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
   std::future<int> master_;
   std::vector<std::future<int>> stages_;
 };

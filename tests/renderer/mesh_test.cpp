@@ -276,7 +276,7 @@ TEST(MeshSceneTest, ShippedScenesLoadTheirGeometry) {
   const Scene iso = loadScene(std::string(TESSERA_SOURCE_DIR) + "/scenes/isosurface.yaml");
   ASSERT_TRUE(iso.mesh.has_value());
   EXPECT_TRUE(iso.mesh->file.empty());
-  EXPECT_EQ(iso.antialiasing.method, "msaa");
+  EXPECT_EQ(iso.antialiasing.method, AaMethod::Msaa);
   EXPECT_EQ(sceneRenderOptions(iso).samples, 4);
   const Scene tetra = loadScene(std::string(TESSERA_SOURCE_DIR) + "/scenes/tetra.yaml");
   EXPECT_FALSE(tetra.has_volume);
