@@ -365,7 +365,8 @@ class Master {
   }
 
   void shutdown(const std::string& reason) {
-    spdlog::info("master shutting down: {}; {}", reason, metrics_.runSummary());
+    spdlog::info("master shutting down: {} frames={} dropped={} refused_peers={}; {}", reason, metrics_.framesDone(),
+                 drops_.total(), metrics_.refusedPeers(), metrics_.runSummary());
     // PUB is fire-and-forget: say it a few times so every subscriber hears it.
     for (int i = 0; i < 5; ++i) {
       sendBytes(pub_, proto::encode(proto::Shutdown{reason}, kMasterRank));
@@ -393,8 +394,7 @@ class Master {
 }  // namespace
 
 int run(const MasterOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop) {
-  Master m(opt, ctx);
-  return m.run(stop);
+  return Master(opt, ctx).run(stop);
 }
 
 }  // namespace tessera::master
