@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <ctime>
 #include <memory>
 #include <optional>
@@ -80,7 +81,13 @@ int run(int argc, char** argv) {
   int bricks = 1, frame = 0, threads = 0, repeat = 1;
   bool print_stats = false, compare_ref = false, no_skip = false;
   app.add_option("scene", scene_path, "scene file (default: the built-in hollow shell)");
-  app.add_option("-o,--output", out, "output PNG")->capture_default_str();
+  // The extension says the format: only PNG is written, so any other is refused by name
+  // rather than writing PNG bytes into a file called .jpg.
+  app.add_option("-o,--output", out, "output PNG (.png)")->capture_default_str()->check([](const std::string& path) {
+    const std::string ext = std::filesystem::path(path).extension().string();
+    return ext == ".png" || ext == ".PNG" ? std::string()
+                                          : "'" + path + "': tessera-render writes PNG only; name the file .png";
+  });
   app.add_option("--quality", quality_name, "reference | default | fast (default: the scene's)");
   app.add_option("--bricks", bricks, "split into N bricks and composite them like the farm")->check(CLI::Range(1, 4096));
   app.add_option("--frame", frame, "orbit frame K")->check(CLI::NonNegativeNumber);
