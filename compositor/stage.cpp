@@ -86,11 +86,13 @@ class Stage {
         why = !piece ? piece.error() : claims(piece->renderer);
         if (why.empty()) why = gather_.addPiece(std::move(*piece));
       }
-      decode_ms_ += msSince(t0);
       if (!why.empty()) {
         drops_.drop(rank, why);
         continue;
       }
+      // Per frame: with frames in flight, parts of the next frames arrive between two
+      // composites. Only accepted parts count, so the map is as bounded as the gather.
+      decode_ms_[h->frame] += msSince(t0);
     }
   }
 
@@ -99,9 +101,9 @@ class Stage {
     st.role = proto::Role::Compositor;
     st.rank = link_.rank();
     st.frame = r.params.frame;
-    // A spare compositor this frame: what it decoded counts in its next report.
-    if (!r.region) return;
-    st.decode_ms = std::exchange(decode_ms_, 0.0);
+    if (auto it = decode_ms_.find(st.frame); it != decode_ms_.end()) st.decode_ms = it->second;
+    decode_ms_.erase(decode_ms_.begin(), decode_ms_.upper_bound(st.frame));
+    if (!r.region) return;  // a spare compositor this frame: nothing to report
     auto t0 = Clock::now();
     const Rect& reg = *r.region;
     if (frame_.width != r.params.width || frame_.height != r.params.height)
@@ -167,7 +169,7 @@ class Stage {
   Gather gather_;
   std::vector<float> row_;
   Image8 frame_;
-  double decode_ms_ = 0;
+  std::map<uint64_t, double> decode_ms_;  // by frame
   DropCounter drops_;
 };
 
