@@ -1,13 +1,20 @@
 // Codec throughput and ratio on a 1024x1024 rgba8 frame shaped like a volume rendering
-// (25% of pixels non-empty, smooth colours) and on an all-empty frame. Single thread.
+// (25% of pixels non-empty, smooth colours) and on an all-empty frame, and the PNG file the
+// headless display writes for every frame. Single thread.
 // Counters: bytes_per_second = raw MB/s (both directions), ratio = encoded / raw size.
 #include <benchmark/benchmark.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <cstring>
+#include <filesystem>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "common/image.h"
+#include "common/io/image_io.h"
 #include "common/wire/codec.h"
 #include "common/wire/protocol.h"
 
@@ -106,9 +113,21 @@ void decodePieceBench(benchmark::State& state, tessera::Codec c) {
   setCounters(state, piece.pixels.size(), msg.size());
 }
 
+// The display's per-frame file: un-premultiply, filter, deflate, write (to /tmp).
+void writePngBench(benchmark::State& state) {
+  tessera::Image8 img(kSide, kSide);
+  std::memcpy(img.px.data(), frame(false).data(), img.px.size());
+  const std::string path = "/tmp/tessera-codec-bench-" + std::to_string(getpid()) + ".png";
+  for (auto _ : state) tessera::writePng(path, img, std::nullopt);
+  state.counters["bytes"] = double(std::filesystem::file_size(path));
+  std::filesystem::remove(path);
+  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(img.px.size()));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  benchmark::RegisterBenchmark("write_png/render", writePngBench)->Unit(benchmark::kMillisecond)->UseRealTime();
   for (uint8_t i = 0; i < tessera::kCodecCount; ++i) {
     const auto c = tessera::Codec(i);
     for (bool empty : {false, true}) {

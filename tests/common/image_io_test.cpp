@@ -2,8 +2,10 @@
 #include "common/io/image_io.h"
 
 #include <gtest/gtest.h>
+#include <png.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -45,6 +47,37 @@ TEST(ImageIo, TranslucentPngRoundTripWithinOneLevel) {
   Image8 back = readPng(t.file("b.png"));
   ASSERT_EQ(back.width, 16);
   for (size_t i = 0; i < img.px.size(); ++i) EXPECT_LE(std::abs(back.px[i] - img.px[i]), 1) << "byte " << i;
+}
+
+// What the file stores is straight alpha: every (alpha, premultiplied value) pair, read back
+// raw with libpng, is round(255 * min(1, value / alpha)) (ties up), alpha unchanged, 0 where
+// alpha is 0.
+TEST(ImageIo, PngStoresStraightAlphaForEveryPair) {
+  TempDir t;
+  Image8 img(256, 256);
+  for (int a = 0; a < 256; ++a)
+    for (int v = 0; v < 256; ++v) {
+      uint8_t* p = img.at(v, a);
+      p[0] = p[1] = p[2] = (uint8_t)v;
+      p[3] = (uint8_t)a;
+    }
+  writePng(t.file("pairs.png"), img);
+  png_image png;
+  std::memset(&png, 0, sizeof png);
+  png.version = PNG_IMAGE_VERSION;
+  ASSERT_TRUE(png_image_begin_read_from_file(&png, t.file("pairs.png").c_str()));
+  png.format = PNG_FORMAT_RGBA;
+  std::vector<uint8_t> raw(PNG_IMAGE_SIZE(png));
+  ASSERT_TRUE(png_image_finish_read(&png, nullptr, raw.data(), 0, nullptr));
+  int wrong = 0;
+  for (int a = 0; a < 256; ++a)
+    for (int v = 0; v < 256; ++v) {
+      const uint8_t* p = &raw[4 * (size_t(a) * 256 + v)];
+      // 255 v / a rounded half up, computed exactly in long double (v, a < 256).
+      const int expect = a == 0 ? 0 : (int)std::min<long double>(255, std::floor(255.0L * v / a + 0.5L));
+      wrong += p[0] != expect || p[3] != a;
+    }
+  EXPECT_EQ(wrong, 0);
 }
 
 TEST(ImageIo, BackgroundMakesOpaque) {
