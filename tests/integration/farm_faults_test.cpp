@@ -138,28 +138,30 @@ MetricsLines readMetrics(const FarmDir& dir) {
 
 // The farm finished every frame exactly once and correctly: one metrics line and one PNG
 // per frame, and frames before, right after and long after the fault match tessera-render.
-void expectEveryFrameOnceAndCorrect(const FarmDir& dir, const fs::path& scene, const MetricsLines& m) {
+void expectEveryFrameOnceAndCorrect(const FarmDir& dir, const fs::path& scene, const MetricsLines& m,
+                                    int frames = kFaultFrames) {
   std::vector<int> sorted = m.frames;
   std::sort(sorted.begin(), sorted.end());
-  std::vector<int> expected(kFaultFrames);
+  std::vector<int> expected(frames);
   std::iota(expected.begin(), expected.end(), 0);
   EXPECT_EQ(sorted, expected) << "each frame id must appear once in metrics.jsonl";
-  for (int k = 0; k < kFaultFrames; ++k) EXPECT_TRUE(fs::exists(dir.frame(k))) << "frame " << k;
+  for (int k = 0; k < frames; ++k) EXPECT_TRUE(fs::exists(dir.frame(k))) << "frame " << k;
   // The first frame issued under the last epoch was rendered after the fault.
-  int after = kFaultFrames - 1;
+  int after = frames - 1;
   const auto last_epoch = m.lines.back()["epoch"].get<int>();
   for (const auto& j : m.lines) {
     if (j["epoch"].get<int>() == last_epoch) after = std::min(after, j["frame"].get<int>());
   }
-  for (int k : {0, after, (after + kFaultFrames) / 2, kFaultFrames - 1}) {
+  for (int k : {0, after, (after + frames) / 2, frames - 1}) {
     if (!fs::exists(dir.frame(k))) continue;
     EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 1) << "frame " << k;
   }
 }
 
 // Runs the default farm (2 renderers, 1 compositor) and calls `fault` once frame 1 is out.
-CommandResult runWithFault(FarmDir& dir, const fs::path& scene, const std::function<void()>& fault) {
-  auto farm = std::async(std::launch::async, [&] { return dir.runFarm(scene, 2, 1, kFaultFrames, 240); });
+CommandResult runWithFault(FarmDir& dir, const fs::path& scene, const std::function<void()>& fault,
+                           int frames = kFaultFrames) {
+  auto farm = std::async(std::launch::async, [&] { return dir.runFarm(scene, 2, 1, frames, 240); });
   if (!waitFor([&] { return fs::exists(dir.frame(1)); }, 60s)) {
     ADD_FAILURE() << "the farm produced no frame";
   } else {
@@ -271,10 +273,13 @@ TEST(FarmFaults, KilledCompositorIsRestartedAndEveryFrameIsDoneOnce) {
 }
 
 // A renderer frozen past the master's heartbeat timeout (3 s) is marked lost; once it
-// resumes it must be given work again. Needs the master to re-admit a lost stage.
+// resumes it must be given work again. Needs the master to re-admit a lost stage. A stage
+// lost by the frame deadline is held out 5 s before it is re-admitted, so this run is long
+// enough (about 20 s) for that to happen while frames are still being issued.
 TEST(FarmFaults, FrozenRendererResumesAndGetsWorkAgain) {
   FarmDir dir("stop-renderer");
-  auto scene = dir.writeScene(kFaultFrames, 40, 160, 120);
+  constexpr int kFrames = 4 * kFaultFrames;
+  auto scene = dir.writeScene(kFrames, 40, 160, 120);
   const fs::path sockets = dir.path() / "sockets";
   auto run = runWithFault(dir, scene, [&] {
     auto victims = farmPids(sockets, "tessera-renderer");
@@ -285,12 +290,13 @@ TEST(FarmFaults, FrozenRendererResumesAndGetsWorkAgain) {
     const bool lost = waitFor([&] { return logHas(dir, "lost: no heartbeat") || logHas(dir, "missed its deadline"); }, 60s);
     ASSERT_EQ(kill(victims[0], SIGCONT), 0);
     ASSERT_TRUE(lost) << "the master never marked the frozen renderer lost";
-  });
+    EXPECT_TRUE(waitFor([&] { return logHas(dir, "re-admitted"); }, 60s)) << "the resumed renderer was not re-admitted";
+  }, kFrames);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_EQ(run.output.find("restarting"), std::string::npos) << "nothing died: " << run.output;
   const auto m = readMetrics(dir);
   ASSERT_FALSE(m.lines.empty());
-  expectEveryFrameOnceAndCorrect(dir, scene, m);
+  expectEveryFrameOnceAndCorrect(dir, scene, m, kFrames);
   SCOPED_TRACE("the resumed renderer must get work again");
   expectTwoRenderersWorked(m.lines.back());
 }
