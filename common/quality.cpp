@@ -3,7 +3,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "common/scene.h"
+#include "common/quality.h"
+#include "common/transfer_function.h"  // kL0
 
 namespace tessera {
 

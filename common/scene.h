@@ -7,27 +7,11 @@
 #include <variant>
 
 #include "common/camera.h"
+#include "common/quality.h"
 #include "common/transfer_function.h"
 #include "common/volume.h"
 
 namespace tessera {
-
-// The named qualities; Custom is a scene's own step/termination/skipping.
-enum class QualityName : uint8_t { Reference = 1, Default = 2, Fast = 3, Custom = 4, Last = Custom };
-const char* qualityName(QualityName q);  // "reference" | "default" | "fast" | "custom"
-
-struct Quality {
-  QualityName name = QualityName::Default;
-  double step = 1.0 / 256;         // world units along the ray
-  double early_termination = 1.0 - 0.5 / 255;  // stop when accumulated alpha >= this; > 1 disables
-  bool skip_empty = true;
-  bool reference = false;          // double precision, no skipping, no early termination
-  bool operator==(const Quality&) const = default;
-};
-// reference: step L0/16, no ET, no skipping; default: step L0, ET 1 - 0.5/255; fast: step 2*L0,
-// ET as default (every preset is farm-exact: see farmAccuracyProblem).
-Quality namedQuality(QualityName name);         // Custom: std::invalid_argument
-Quality namedQuality(const std::string& name);  // a preset by its word; std::invalid_argument names it
 
 struct Orbit {
   int frames = 1;
@@ -42,19 +26,6 @@ struct MeshSpec {
   double level = 0.5;       // isosurface level, normalised scalar
   bool operator==(const MeshSpec&) const = default;
 };
-// Anti-aliasing of geometry: none | msaa (samples 2 or 4) | ssaa (k x k, samples = k) | fft
-// (Gaussian low-pass of the final image, sigma in pixels).
-enum class AaMethod : uint8_t { None, Msaa, Ssaa, Fft };
-const char* aaMethodName(AaMethod m);  // "none" | "msaa" | "ssaa" | "fft"
-// The method a word names; std::invalid_argument naming the word and the choices.
-AaMethod parseAaMethod(const std::string& word);
-struct Antialiasing {
-  AaMethod method = AaMethod::None;
-  int samples = 1;
-  double sigma = 0.6;
-  bool operator==(const Antialiasing&) const = default;
-};
-
 struct Scene {
   std::string path;  // file it was loaded from ("" for built-in)
   std::variant<RawVolumeSpec, GeneratorSpec> volume;

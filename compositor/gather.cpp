@@ -17,10 +17,11 @@ size_t partBytes(const Frame& f) {
 
 std::string Gather::check(const proto::FrameParams& p, const proto::Piece& piece) const {
   if (piece.epoch != p.epoch) return "piece epoch differs from FrameParams";
-  if (!p.tiles.empty()) return "sort-last piece for a sort-first frame";
-  if (piece.brick >= p.bricks.size())
-    return "piece for brick " + std::to_string(piece.brick) + " of " + std::to_string(p.bricks.size());
-  if (p.bricks[piece.brick].renderer != piece.renderer) return "piece from a renderer not assigned that brick";
+  const proto::SortLastWork* work = p.sortLast();
+  if (!work) return "sort-last piece for a sort-first frame";
+  if (piece.brick >= work->bricks.size())
+    return "piece for brick " + std::to_string(piece.brick) + " of " + std::to_string(work->bricks.size());
+  if (work->bricks[piece.brick].renderer != piece.renderer) return "piece from a renderer not assigned that brick";
   if (piece.format != p.format) return "piece pixel format differs from FrameParams";
   for (const auto& reg : p.regions)
     if (reg.compositor == rank_ && reg.region != piece.region) return "piece cut for another region";
@@ -84,8 +85,9 @@ size_t Gather::waitingBytes() const {
 
 std::set<uint32_t> Gather::routedRenderers(const proto::FrameParams& p) const {
   std::set<uint32_t> r;
-  for (const auto& t : p.tiles)
-    if (t.compositor == rank_) r.insert(t.renderer);
+  if (const proto::SortFirstWork* work = p.sortFirst())
+    for (const auto& t : work->tiles)
+      if (t.compositor == rank_) r.insert(t.renderer);
   return r;
 }
 
@@ -108,7 +110,7 @@ std::string Gather::addParams(proto::FrameParams p) {
   }
   if (p.frame < next_expected_) return "FrameParams for a finished frame";
   if (!newest_ || p.epoch > newest_->epoch || p.frame > newest_->frame)
-    newest_ = Membership{p.frame, p.epoch, p.bricks.size(), routedRenderers(p)};
+    newest_ = Membership{p.frame, p.epoch, p.sortLast() ? p.sortLast()->bricks.size() : 0, routedRenderers(p)};
   Frame& f = frames_[p.frame];
   f.params = std::move(p);
   auto recheck = [&](auto& parts) {  // parts that came before their parameters
@@ -164,16 +166,17 @@ std::optional<Gather::Ready> Gather::pop() {
   for (auto it = frames_.begin(); it != frames_.end(); ++it) {
     Frame& f = it->second;
     if (!f.params) continue;
-    const bool sort_first = !f.params->tiles.empty();
-    if (sort_first ? f.framebuffers.size() != routedRenderers(*f.params).size()
-                   : f.pieces.size() != f.params->bricks.size())
+    const proto::SortLastWork* sort_last = f.params->sortLast();
+    if (sort_last ? f.pieces.size() != sort_last->bricks.size()
+                  : f.framebuffers.size() != routedRenderers(*f.params).size())
       continue;
     Ready r;
     r.params = std::move(*f.params);
     for (const auto& reg : r.params.regions)
       if (reg.compositor == rank_) r.region = reg.region;
-    for (const auto& t : r.params.tiles)
-      if (t.compositor == rank_) r.tiles.push_back(t.tile);
+    if (const proto::SortFirstWork* work = r.params.sortFirst())
+      for (const auto& t : work->tiles)
+        if (t.compositor == rank_) r.tiles.push_back(t.tile);
     for (auto& [brick, piece] : f.pieces) r.pieces.push_back(std::move(piece));
     for (auto& [renderer, fb] : f.framebuffers) r.framebuffers.push_back(std::move(fb));
     next_expected_ = it->first + 1;

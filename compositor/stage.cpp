@@ -108,7 +108,8 @@ class Stage {
     const Rect& reg = *r.region;
     if (frame_.width != r.params.width || frame_.height != r.params.height)
       frame_ = Image8(r.params.width, r.params.height);
-    if (r.tiles.empty()) st.active_pixels = compositeRegion(reg, r.params.order, r.pieces, row_, frame_);
+    const proto::SortLastWork* sort_last = r.params.sortLast();  // else sort-first: r.tiles are routed
+    if (sort_last) st.active_pixels = compositeRegion(reg, sort_last->order, r.pieces, row_, frame_);
     else route(r.framebuffers, st);
     st.work_ms = msSince(t0);
     for (const auto& p : r.pieces) st.active = unite(st.active, p.active);
@@ -117,7 +118,7 @@ class Stage {
     s.frame = r.params.frame;
     s.epoch = r.params.epoch;
     s.compositor = link_.rank();
-    if (r.tiles.empty()) {
+    if (sort_last) {
       s.stream = encodeStrips(frame_, reg, 0);
     } else {
       for (const Rect& t : r.tiles) {

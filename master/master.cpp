@@ -253,9 +253,7 @@ class Master {
     p.format = opt_.format;
     plan_->fill(p, w);
     p.display_endpoint = opt_.endpoints.display();
-    std::set<uint32_t> renderers, compositors;
-    for (const auto& b : p.bricks) renderers.insert(b.renderer);
-    for (const auto& t : p.tiles) renderers.insert(t.renderer);
+    std::set<uint32_t> renderers = proto::renderersWithWork(p), compositors;
     for (const auto& r : p.regions) compositors.insert(r.compositor);
     window_.issue(frame, cam, renderers, compositors, Clock::now());
     metrics_.issued(frame, p.epoch, (int)w.renderers.size(), (int)p.regions.size());

@@ -10,16 +10,17 @@ void SortFirstPlan::fill(proto::FrameParams& p, const Workers& w) {
   if (r == 0 || m == 0) return;
   auto tiles = balance_ ? balancedTiles(width_, height_, r * tiles_per_renderer_, cost_)
                         : equalTiles(width_, height_, r * tiles_per_renderer_);
+  auto& work = p.work.emplace<proto::SortFirstWork>();
   std::map<uint32_t, Rect> bounds;  // compositor -> bounds of its tiles
   for (size_t i = 0; i < tiles.size(); ++i) {
     int renderer = (int)(i % r);
     const CompositorSlot& c = w.compositors[renderer % m];
-    p.tiles.push_back({w.renderers[renderer], c.rank, tiles[i]});
+    work.tiles.push_back({w.renderers[renderer], c.rank, tiles[i]});
     bounds[c.rank] = unite(bounds[c.rank], tiles[i]);
   }
   for (const CompositorSlot& c : w.compositors)
     if (bounds.count(c.rank)) p.regions.push_back({c.rank, bounds[c.rank], c.endpoint});
-  frames_[p.frame] = {0, CostGrid(width_, height_), p.tiles};
+  frames_[p.frame] = {0, CostGrid(width_, height_), work.tiles};
 }
 
 // A renderer's per-tile times, in FrameParams::tiles order; a frame's costs replace the

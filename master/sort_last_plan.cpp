@@ -15,9 +15,10 @@ void SortLastPlan::reassign(const Workers& w) {
 }
 
 void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
+  auto& work = p.work.emplace<proto::SortLastWork>();
   for (size_t i = 0; i < tree_.bricks.size() && i < w.renderers.size(); ++i)
-    p.bricks.push_back({w.renderers[i], tree_.bricks[i]});
-  p.order = tree_.visibilityOrder(*volume_, p.camera);
+    work.bricks.push_back({w.renderers[i], tree_.bricks[i]});
+  work.order = tree_.visibilityOrder(*volume_, p.camera);
   auto bands = balancedBands(width_, height_, (int)w.compositors.size(), balance_ ? last_active_ : std::vector<Rect>{});
   for (size_t i = 0; i < bands.size(); ++i)
     p.regions.push_back({w.compositors[i].rank, bands[i], w.compositors[i].endpoint});

@@ -79,12 +79,16 @@ class Stage {
     st.role = proto::Role::Renderer;
     st.rank = link_.rank();
     st.frame = p.frame;
-    if (!p.tiles.empty()) return renderTiles(p, st);
+    if (const proto::SortFirstWork* work = p.sortFirst()) return renderTiles(p, *work, st);
+    renderBricks(p, *p.sortLast(), st);
+  }
+
+  void renderBricks(const proto::FrameParams& p, const proto::SortLastWork& work, proto::StageStats& st) {
     if (!caster_) return drops_.drop(~0u, "sort-last FrameParams for a geometry scene");
-    for (uint32_t b = 0; b < p.bricks.size(); ++b) {
-      if (p.bricks[b].renderer != link_.rank()) continue;
+    for (uint32_t b = 0; b < work.bricks.size(); ++b) {
+      if (work.bricks[b].renderer != link_.rank()) continue;
       auto t0 = Clock::now();
-      const Cached& c = render(p, p.bricks[b].brick);
+      const Cached& c = render(p, work.bricks[b].brick);
       st.work_ms += msSince(t0);
       st.active = unite(st.active, c.active);
       st.active_pixels += c.active.area();
@@ -96,9 +100,9 @@ class Stage {
     link_.report(proto::encode(st, link_.rank()));
   }
 
-  void renderTiles(const proto::FrameParams& p, proto::StageStats& st) {
+  void renderTiles(const proto::FrameParams& p, const proto::SortFirstWork& work, proto::StageStats& st) {
     if (!tiles_) return drops_.drop(~0u, "sort-first FrameParams for a volume scene");
-    auto outputs = tiles_->render(p, link_.rank(), st);
+    auto outputs = tiles_->render(p, work, link_.rank(), st);
     auto t0 = Clock::now();
     for (auto& o : outputs) {
       const std::string* endpoint = nullptr;

@@ -14,12 +14,13 @@ TileRenderer::TileRenderer(const Scene& scene)
   gl_.setMesh(geometry_.mesh);
 }
 
-std::vector<TileRenderer::Output> TileRenderer::render(const proto::FrameParams& p, uint32_t rank,
+std::vector<TileRenderer::Output> TileRenderer::render(const proto::FrameParams& p,
+                                                       const proto::SortFirstWork& work, uint32_t rank,
                                                        proto::StageStats& st) {
   using Clock = std::chrono::steady_clock;
   // My tiles, grouped by the compositor that routes them.
   std::map<uint32_t, std::vector<Rect>> groups;
-  for (const auto& t : p.tiles)
+  for (const auto& t : work.tiles)
     if (t.renderer == rank) groups[t.compositor].push_back(t.tile);
   const ViewProjection vp = gl_.viewProjection(p.camera, p.width, p.height);
   st.chunks_total = geometry_.chunks.size();
@@ -60,7 +61,7 @@ std::vector<TileRenderer::Output> TileRenderer::render(const proto::FrameParams&
   }
   // Per-tile costs in the master's order, so it can re-cut the screen by cost.
   std::map<uint32_t, size_t> next;
-  for (const auto& t : p.tiles)
+  for (const auto& t : work.tiles)
     if (t.renderer == rank) st.tile_ms.push_back(ms[t.compositor][next[t.compositor]++]);
   return out;
 }

@@ -21,8 +21,9 @@ class TileRenderer {
     uint32_t compositor = 0;
     proto::Framebuffer framebuffer;
   };
-  // Fills st.tile_ms (per tile of this renderer, in p.tiles order), chunks and triangles.
-  std::vector<Output> render(const proto::FrameParams& p, uint32_t rank, proto::StageStats& st);
+  // Fills st.tile_ms (per tile of this renderer, in work.tiles order), chunks and triangles.
+  std::vector<Output> render(const proto::FrameParams& p, const proto::SortFirstWork& work, uint32_t rank,
+                             proto::StageStats& st);
   size_t chunkCount() const { return geometry_.chunks.size(); }
 
  private:

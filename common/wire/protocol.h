@@ -25,8 +25,10 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <set>
 #include <span>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "common/bricks.h"
@@ -34,12 +36,12 @@
 #include "common/wire/codec.h"
 #include "common/image.h"
 #include "common/result.h"
-#include "common/scene.h"
+#include "common/quality.h"
 
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 1;
+inline constexpr uint16_t kVersion = 2;  // 2: FrameParams carries its mode
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -144,19 +146,35 @@ struct CompositorRegion {
 //   width, height              i32 x2   8     1..16384 each
 //   codec                      u8       1     < kCodecCount
 //   format                     u8       1     1..PixelFormat::Last
-//   bricks                     u32      4     count <= 65536, then per brick (28 bytes):
-//   bricks.renderer            u32      4
-//   bricks.lo, bricks.hi       3x i32   24    per axis 0 <= lo < hi <= 65536
-//   order                      u32      4     count == bricks count, then:
-//   order[i]                   i32      4     together a permutation of 0..count-1
 //   regions                    u32      4     count <= 65536, then per region (>= 24 bytes):
 //   regions.compositor         u32      4
 //   regions.region             rect     16    0 <= x, y, w, h; inside width x height
 //   regions.endpoint           str      4+n
 //   display_endpoint           str      4+n
+//   mode                       u8       1     FrameMode 1..Last; then the mode's work:
+// sort-last (mode 1):
+//   bricks                     u32      4     count <= 65536, then per brick (28 bytes):
+//   bricks.renderer            u32      4
+//   bricks.lo, bricks.hi       3x i32   24    per axis 0 <= lo < hi <= 65536
+//   order                      u32      4     count == bricks count, then:
+//   order[i]                   i32      4     together a permutation of 0..count-1
+// sort-first (mode 2):
 //   tiles                      u32      4     count <= 2^20, then per tile (24 bytes):
 //   tiles.renderer, compositor u32 x2   8
 //   tiles.tile                 rect     16    w, h > 0; 0 <= x, y; inside width x height
+enum class FrameMode : uint8_t { SortLast = 1, SortFirst = 2, Last = SortFirst };
+// Sort-last: renderers draw bricks of the volume over the whole image; compositors blend
+// every brick's piece of their region in `order`.
+struct SortLastWork {
+  std::vector<BrickAssignment> bricks;       // one per renderer that has work
+  std::vector<int> order;                    // brick indices (into `bricks`) front to back
+  bool operator==(const SortLastWork&) const = default;
+};
+// Sort-first: renderers draw whole scenes into screen tiles; compositors only route them.
+struct SortFirstWork {
+  std::vector<TileAssignment> tiles;
+  bool operator==(const SortFirstWork&) const = default;
+};
 struct FrameParams {                                                       // master -> all (PUB)
   uint64_t frame = 0;
   uint32_t epoch = 0;                        // bumped when membership changes; stale work is dropped
@@ -165,13 +183,15 @@ struct FrameParams {                                                       // ma
   int width = 0, height = 0;
   Codec codec = Codec::Lzo;                  // for pieces and strips
   PixelFormat format = PixelFormat::RGBA8;   // of pieces
-  std::vector<BrickAssignment> bricks;       // one per renderer that has work
-  std::vector<int> order;                    // brick indices (into `bricks`) front to back
   std::vector<CompositorRegion> regions;     // sort-last: tile the image; sort-first: each router's tiles' bounds
-  std::vector<TileAssignment> tiles;         // sort-first (geometry) frames; empty for sort-last
   std::string display_endpoint;
+  std::variant<SortLastWork, SortFirstWork> work;  // the mode: each stage dispatches on it once
+  FrameMode mode() const { return work.index() == 0 ? FrameMode::SortLast : FrameMode::SortFirst; }
+  const SortLastWork* sortLast() const { return std::get_if<SortLastWork>(&work); }    // null if sort-first
+  const SortFirstWork* sortFirst() const { return std::get_if<SortFirstWork>(&work); }  // null if sort-last
   bool operator==(const FrameParams&) const = default;
 };
+std::set<uint32_t> renderersWithWork(const FrameParams& p);  // ranks named by its bricks or tiles
 
 // Piece (pixel message, header frame = frame; 61 bytes of metadata):
 //   epoch, renderer, brick  u32 x3  12

@@ -74,7 +74,7 @@ Quality readQuality(ByteReader& r) {
   return q;
 }
 
-void readBricks(ByteReader& r, FrameParams& m) {
+void readBricks(ByteReader& r, SortLastWork& m) {
   const uint32_t n = r.count("bricks", kMaxBricks, 4 + 24);
   m.bricks.resize(n);
   for (uint32_t i = 0; i < n && r.ok(); ++i) {
@@ -91,7 +91,7 @@ void readBricks(ByteReader& r, FrameParams& m) {
   }
 }
 
-void readOrder(ByteReader& r, FrameParams& m) {
+void readOrder(ByteReader& r, SortLastWork& m) {
   const uint32_t n = r.count("order", kMaxBricks, 4);
   if (r.ok() && n != m.bricks.size()) {
     r.fail("order has " + std::to_string(n) + " entries for " + std::to_string(m.bricks.size()) + " bricks");
@@ -111,10 +111,9 @@ void readOrder(ByteReader& r, FrameParams& m) {
   }
 }
 
-void readTiles(ByteReader& r, FrameParams& m) {
+void readTiles(ByteReader& r, const Rect& image, SortFirstWork& m) {
   const uint32_t n = r.count("tiles", 1u << 20, 8 + 16);
   m.tiles.resize(n);
-  const Rect image{0, 0, m.width, m.height};
   for (uint32_t i = 0; i < n && r.ok(); ++i) {
     TileAssignment& t = m.tiles[i];
     t.renderer = r.u32("tiles.renderer");
@@ -154,14 +153,6 @@ std::vector<std::byte> encode(const FrameParams& m, uint32_t sender) {
     w.i32(m.height);
     w.u8(static_cast<uint8_t>(m.codec));
     w.u8(static_cast<uint8_t>(m.format));
-    w.u32(static_cast<uint32_t>(m.bricks.size()));
-    for (const BrickAssignment& b : m.bricks) {
-      w.u32(b.renderer);
-      for (int a = 0; a < 3; ++a) w.i32(b.brick.lo[a]);
-      for (int a = 0; a < 3; ++a) w.i32(b.brick.hi[a]);
-    }
-    w.u32(static_cast<uint32_t>(m.order.size()));
-    for (int v : m.order) w.i32(v);
     w.u32(static_cast<uint32_t>(m.regions.size()));
     for (const CompositorRegion& c : m.regions) {
       w.u32(c.compositor);
@@ -169,13 +160,35 @@ std::vector<std::byte> encode(const FrameParams& m, uint32_t sender) {
       w.str(c.endpoint);
     }
     w.str(m.display_endpoint);
-    w.u32(static_cast<uint32_t>(m.tiles.size()));
-    for (const TileAssignment& t : m.tiles) {
-      w.u32(t.renderer);
-      w.u32(t.compositor);
-      detail::writeRect(w, t.tile);
+    w.u8(static_cast<uint8_t>(m.mode()));
+    if (const auto* sl = std::get_if<SortLastWork>(&m.work)) {
+      w.u32(static_cast<uint32_t>(sl->bricks.size()));
+      for (const BrickAssignment& b : sl->bricks) {
+        w.u32(b.renderer);
+        for (int a = 0; a < 3; ++a) w.i32(b.brick.lo[a]);
+        for (int a = 0; a < 3; ++a) w.i32(b.brick.hi[a]);
+      }
+      w.u32(static_cast<uint32_t>(sl->order.size()));
+      for (int v : sl->order) w.i32(v);
+    } else {
+      const auto& sf = std::get<SortFirstWork>(m.work);
+      w.u32(static_cast<uint32_t>(sf.tiles.size()));
+      for (const TileAssignment& t : sf.tiles) {
+        w.u32(t.renderer);
+        w.u32(t.compositor);
+        detail::writeRect(w, t.tile);
+      }
     }
   });
+}
+
+std::set<uint32_t> renderersWithWork(const FrameParams& p) {
+  std::set<uint32_t> r;
+  if (const SortLastWork* work = p.sortLast())
+    for (const auto& b : work->bricks) r.insert(b.renderer);
+  if (const SortFirstWork* work = p.sortFirst())
+    for (const auto& t : work->tiles) r.insert(t.renderer);
+  return r;
 }
 
 Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
@@ -197,11 +210,19 @@ Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
         uint8_t format = r.u8("format");
         if (r.ok() && !validPixelFormat(format)) r.fail("format " + std::to_string(format) + " unknown");
         m.format = static_cast<PixelFormat>(format);
-        readBricks(r, m);
-        readOrder(r, m);
         readRegions(r, m);
         m.display_endpoint = r.str("display_endpoint");
-        readTiles(r, m);
+        const uint8_t mode = r.u8("mode");
+        if (!r.ok()) return;
+        if (mode == static_cast<uint8_t>(FrameMode::SortLast)) {
+          SortLastWork& sl = m.work.emplace<SortLastWork>();
+          readBricks(r, sl);
+          readOrder(r, sl);
+        } else if (mode == static_cast<uint8_t>(FrameMode::SortFirst)) {
+          readTiles(r, Rect{0, 0, m.width, m.height}, m.work.emplace<SortFirstWork>());
+        } else {
+          r.fail("mode " + std::to_string(mode) + " not in 1.." + std::to_string(static_cast<int>(FrameMode::Last)));
+        }
       });
 }
 

@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "renderer/tools/tool_main.h"
 #include "common/bricks.h"
 #include "common/clock.h"
 #include "common/cpu.h"
@@ -193,10 +194,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tessera-render: error: %s\n", e.what());
-    return 1;
-  }
+  return tessera::toolMain("tessera-render", [&] { return run(argc, argv); });
 }

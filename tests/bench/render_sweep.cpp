@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "renderer/tools/tool_main.h"
 #include "common/clock.h"
 #include "common/io/image_io.h"
 #include "common/scene.h"
@@ -341,10 +342,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tessera-sweep: error: %s\n", e.what());
-    return 1;
-  }
+  return tessera::toolMain("tessera-sweep", [&] { return run(argc, argv); });
 }

@@ -1,6 +1,8 @@
 // PNG and raw float files written to a temporary folder and read back.
 #include "common/io/image_io.h"
 
+#include "tests/common/temp_dir.h"
+
 #include <gtest/gtest.h>
 #include <png.h>
 #include <unistd.h>
@@ -14,19 +16,11 @@ using namespace tessera;
 namespace fs = std::filesystem;
 
 namespace {
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() / ("tessera_image_io_" + std::to_string(getpid()));
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-  std::string file(const std::string& n) const { return (path / n).string(); }
-};
+using test::TempDir;
 }  // namespace
 
 TEST(ImageIo, OpaquePngRoundTripIsExact) {
-  TempDir t;
+  TempDir t("image_io");
   Image8 img(5, 3);
   for (size_t i = 0; i < img.px.size(); ++i) img.px[i] = (i % 4 == 3) ? 255 : (uint8_t)(i * 37);
   writePng(t.file("a.png"), img);
@@ -35,7 +29,7 @@ TEST(ImageIo, OpaquePngRoundTripIsExact) {
 
 TEST(ImageIo, TranslucentPngRoundTripWithinOneLevel) {
   // Tolerance 1/255: un-premultiplying then premultiplying again rounds twice.
-  TempDir t;
+  TempDir t("image_io");
   Image8 img(16, 16);
   for (int y = 0; y < 16; ++y)
     for (int x = 0; x < 16; ++x) {
@@ -53,7 +47,7 @@ TEST(ImageIo, TranslucentPngRoundTripWithinOneLevel) {
 // raw with libpng, is round(255 * min(1, value / alpha)) (ties up), alpha unchanged, 0 where
 // alpha is 0.
 TEST(ImageIo, PngStoresStraightAlphaForEveryPair) {
-  TempDir t;
+  TempDir t("image_io");
   Image8 img(256, 256);
   for (int a = 0; a < 256; ++a)
     for (int v = 0; v < 256; ++v) {
@@ -81,7 +75,7 @@ TEST(ImageIo, PngStoresStraightAlphaForEveryPair) {
 }
 
 TEST(ImageIo, BackgroundMakesOpaque) {
-  TempDir t;
+  TempDir t("image_io");
   ImageF img(2, 1);
   img.px = {0, 0, 0, 0, 0.25f, 0.25f, 0.25f, 0.5f};
   writePng(t.file("c.png"), img, std::array<double, 3>{1.0, 0.0, 0.5});
@@ -92,7 +86,7 @@ TEST(ImageIo, BackgroundMakesOpaque) {
 }
 
 TEST(ImageIo, RawF32Layout) {
-  TempDir t;
+  TempDir t("image_io");
   ImageF img(3, 2);
   img.px[5] = 0.75f;
   writeRawF32(t.file("d.raw"), img);
@@ -108,7 +102,7 @@ TEST(ImageIo, RawF32Layout) {
 }
 
 TEST(ImageIo, ErrorsNameTheFile) {
-  TempDir t;
+  TempDir t("image_io");
   try {
     readPng(t.file("missing.png"));
     FAIL() << "no exception";
@@ -121,7 +115,7 @@ TEST(ImageIo, ErrorsNameTheFile) {
 
 TEST(ImageIo, PremultipliedPamRoundTripIsExact) {
   // Translucent pixels whose colour <= alpha: a PNG could not keep them exactly, a PAM must.
-  TempDir t;
+  TempDir t("image_io");
   Image8 img(7, 5);
   for (size_t i = 0; i < img.px.size(); i += 4) {
     img.px[i + 3] = (uint8_t)(i * 13 % 256);
@@ -132,7 +126,7 @@ TEST(ImageIo, PremultipliedPamRoundTripIsExact) {
 }
 
 TEST(ImageIo, PamOfAnotherTupleTypeIsRefused) {
-  TempDir t;
+  TempDir t("image_io");
   std::ofstream(t.file("s.pam"), std::ios::binary) << "P7\nWIDTH 1\nHEIGHT 1\nDEPTH 4\nMAXVAL 255\nTUPLTYPE RGB_ALPHA\nENDHDR\n"
                                                    << std::string(4, '\x10');
   try {

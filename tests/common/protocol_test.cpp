@@ -23,11 +23,16 @@ FrameParams sampleParams() {
   p.height = 480;
   p.codec = Codec::Lz4;
   p.format = PixelFormat::RGBA16F;
-  p.bricks = {{0, {{0, 0, 0}, {128, 256, 256}}}, {1, {{128, 0, 0}, {256, 256, 256}}}, {1, {{0, 0, 0}, {1, 1, 1}}}};
-  p.order = {2, 0, 1};
   p.regions = {{0, {0, 0, 640, 240}, "ipc:///tmp/c0"}, {1, {0, 240, 640, 240}, "tcp://127.0.0.1:5601"}};
   p.display_endpoint = "ipc:///tmp/display";
-  p.tiles = {{0, 1, {0, 0, 320, 240}}, {1, 0, {320, 0, 320, 1}}};
+  p.work = SortLastWork{{{0, {{0, 0, 0}, {128, 256, 256}}}, {1, {{128, 0, 0}, {256, 256, 256}}}, {1, {{0, 0, 0}, {1, 1, 1}}}},
+                        {2, 0, 1}};
+  return p;
+}
+
+FrameParams sampleSortFirstParams() {
+  FrameParams p = sampleParams();
+  p.work = SortFirstWork{{{0, 1, {0, 0, 320, 240}}, {1, 0, {320, 0, 320, 1}}}};
   return p;
 }
 
@@ -130,15 +135,17 @@ TEST(Protocol, EveryStructuredMessageRoundTrips) {
   expectRoundTrip(Shutdown{"master exiting"}, encode(Shutdown{"master exiting"}, 11), decodeShutdown, Type::Shutdown);
   Roster roster{7, {{Role::Renderer, 0, std::string(16, '\x5a') + "d"}, {Role::Compositor, 3, "x"}}};
   expectRoundTrip(roster, encode(roster, 11), decodeRoster, Type::Roster);
-  FrameParams fp = sampleParams();
-  expectRoundTrip(fp, encode(fp, 11), decodeFrameParams, Type::FrameParams);
+  for (const FrameParams& fp : {sampleParams(), sampleSortFirstParams()}) {
+    expectRoundTrip(fp, encode(fp, 11), decodeFrameParams, Type::FrameParams);
+    EXPECT_EQ(decodeFrameParams(encode(fp, 11))->mode(), fp.mode());
+  }
   StageStats st{Role::Compositor, 2, 99, 4.5, 1.25, 0.75, 4000000, 700000, 12345, {1, 2, 300, 400}, 6, {1.5, 0.25}, 7, 3, 99};
   expectRoundTrip(st, encode(st, 11), decodeStageStats, Type::Stats);
   FrameDone fd{1000, 16.5, 2.25, 888888, 3, 1};
   expectRoundTrip(fd, encode(fd, 11), decodeFrameDone, Type::FrameDone);
   Input in{-5.5, 10, 0.9, QualityName::Reference};
   expectRoundTrip(in, encode(in, 11), decodeInput, Type::Input);
-  EXPECT_EQ(decodeHeader(encode(fp, 11))->frame, 42u) << "FrameParams::frame travels in the header";
+  EXPECT_EQ(decodeHeader(encode(sampleParams(), 11))->frame, 42u) << "FrameParams::frame travels in the header";
 }
 
 TEST(Protocol, PixelMessagesRoundTripWithEveryCodecAndFormat) {
@@ -179,6 +186,7 @@ void expectTruncationsFail(const Bytes& msg, Dec dec) {
 TEST(Protocol, TruncatedAtEveryLengthFails) {
   expectTruncationsFail(encode(Hello{Role::Renderer, 1, "ipc://x"}, 1), decodeHello);
   expectTruncationsFail(encode(sampleParams(), 1), decodeFrameParams);
+  expectTruncationsFail(encode(sampleSortFirstParams(), 1), decodeFrameParams);
   expectTruncationsFail(encode(samplePiece(PixelFormat::RGBA8), 1, Codec::Lzo), decodePiece);
   expectTruncationsFail(encode(sampleStrips(), 1, Codec::Zstd), decodeStrips);
   expectTruncationsFail(encode(sampleFramebuffer(), 1, Codec::Lz4), decodeFramebuffer);
@@ -190,8 +198,8 @@ TEST(Protocol, FramebufferAndTilesAreValidated) {
   Framebuffer fb = sampleFramebuffer();
   fb.pixels.pop_back();
   EXPECT_THROW(encode(fb, 1, Codec::None), std::invalid_argument);
-  FrameParams p = sampleParams();
-  p.tiles[1].tile = {630, 0, 20, 10};  // sticks out of the 640-wide image
+  FrameParams p = sampleSortFirstParams();
+  std::get<SortFirstWork>(p.work).tiles[1].tile = {630, 0, 20, 10};  // sticks out of the 640-wide image
   auto r = decodeFrameParams(encode(p, 1));
   ASSERT_FALSE(r);
   EXPECT_NE(r.error().find("tile 1"), std::string::npos) << r.error();
@@ -199,7 +207,7 @@ TEST(Protocol, FramebufferAndTilesAreValidated) {
 
 TEST(Protocol, TruncatedPayloadWithResealedHeaderFailsOnTheField) {
   FrameParams p = sampleParams();
-  p.tiles.clear();  // display_endpoint is then followed only by the 4-byte tile count
+  p.work = SortFirstWork{};  // display_endpoint is then followed only by the mode and the 4-byte tile count
   Bytes m = encode(p, 1);
   m.resize(m.size() - 14);  // cuts into display_endpoint
   putLE(m, 24, m.size() - kHeaderSize, 4);  // raw_size == encoded_size for codec none
@@ -249,7 +257,7 @@ TEST(Protocol, WrongVersionWrongTypeAndWrongSizeAreNamed) {
   putLE(old, 4, 0, 2);
   auto r = decodeHeartbeat(old);
   ASSERT_FALSE(r);
-  EXPECT_NE(r.error().find("version 0 != 1"), std::string::npos) << r.error();
+  EXPECT_NE(r.error().find("version 0 != " + std::to_string(kVersion)), std::string::npos) << r.error();
   auto w = decodeWelcome(m);
   ASSERT_FALSE(w);
   EXPECT_NE(w.error().find("Heartbeat"), std::string::npos) << w.error();
@@ -323,15 +331,29 @@ TEST(Protocol, FrameParamsInvariantsAreChecked) {
     EXPECT_NE(r.error().find(word), std::string::npos) << r.error();
   };
   FrameParams p = sampleParams();
-  { auto q = p; q.order = {0, 0, 1}; fails(q, "permutation"); }
-  { auto q = p; q.order = {0, 1}; fails(q, "order"); }
-  { auto q = p; q.order = {0, 1, 3}; fails(q, "permutation"); }
+  auto work = [](FrameParams& q) -> SortLastWork& { return std::get<SortLastWork>(q.work); };
+  { auto q = p; work(q).order = {0, 0, 1}; fails(q, "permutation"); }
+  { auto q = p; work(q).order = {0, 1}; fails(q, "order"); }
+  { auto q = p; work(q).order = {0, 1, 3}; fails(q, "permutation"); }
   { auto q = p; q.regions[1].region.h = 241; fails(q, "region 1"); }
-  { auto q = p; q.bricks[1].brick.lo[2] = 256; fails(q, "brick 1"); }
+  { auto q = p; work(q).bricks[1].brick.lo[2] = 256; fails(q, "brick 1"); }
   { auto q = p; q.width = 0; fails(q, "image"); }
   { auto q = p; q.height = 16385; fails(q, "image"); }
   { auto q = p; q.camera.fov = std::numeric_limits<double>::quiet_NaN(); fails(q, "camera.fov"); }
   { auto q = p; q.codec = Codec(9); fails(q, "codec"); }
+}
+
+TEST(Protocol, UnknownFrameModeIsRefused) {
+  FrameParams p = sampleParams();
+  Bytes m = encode(p, 1);
+  const std::string ep = p.display_endpoint;
+  auto at = std::search(m.begin(), m.end(), ep.begin(), ep.end(), [](std::byte b, char c) { return b == std::byte(c); });
+  ASSERT_NE(at, m.end());
+  *(at + ep.size()) = std::byte{3};  // the mode byte follows display_endpoint
+  reseal(m);
+  auto r = decodeFrameParams(m);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("mode 3"), std::string::npos) << r.error();
 }
 
 TEST(Protocol, StructuredMessagesMustUseCodecNone) {

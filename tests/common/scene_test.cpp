@@ -1,6 +1,8 @@
 // Scene parsing: every bad input yields a SceneError naming the file and key; shipped scenes parse.
 #include "common/scene.h"
 
+#include "tests/common/temp_dir.h"
+
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -45,14 +47,7 @@ std::string errorOf(const std::string& yaml, const std::string& base = ".") {
 #define EXPECT_ERROR(yaml, text) \
   EXPECT_NE(errorOf(yaml).find(text), std::string::npos) << "want '" << text << "' in: " << errorOf(yaml)
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() / ("tessera_scene_" + std::to_string(getpid()));
-    fs::create_directories(path / "data");
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
+using test::TempDir;
 }  // namespace
 
 TEST(Scene, ParsesGoodScene) {
@@ -146,7 +141,8 @@ TEST(Scene, BadSizesAndValues) {
 }
 
 TEST(Scene, RawFilesResolveAgainstTheSceneFolder) {
-  TempDir t;
+  TempDir t("scene");
+  fs::create_directories(t.path / "data");
   std::vector<float> f(2 * 2 * 3, 0.5f);
   f[2 + 3] = 1.0f;
   std::ofstream((t.path / "data" / "v.raw").string(), std::ios::binary)
@@ -228,7 +224,8 @@ TEST(Scene, FarAwayCameraIsOutOfRangeNotParallel) {
 }
 
 TEST(Scene, VolumePathThatIsNotARegularFileSaysWhatItIs) {
-  TempDir t;
+  TempDir t("scene");
+  fs::create_directories(t.path / "data");
   const std::string dir = (t.path / "data").string();
   EXPECT_ERROR("volume: {file: " + dir + ", dims: [1, 1, 1], type: uint8}\n", "volume.file: " + dir + " is a directory");
   const std::string fifo = (t.path / "pipe").string();

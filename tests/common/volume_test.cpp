@@ -1,6 +1,8 @@
 // Raw volume loading (all three types, error messages) and the procedural generators.
 #include "common/volume.h"
 
+#include "tests/common/temp_dir.h"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -13,19 +15,7 @@ using namespace tessera;
 namespace fs = std::filesystem;
 
 namespace {
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() / ("tessera_volume_" + std::to_string(getpid()));
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-  std::string write(const std::string& name, const void* data, size_t n) const {
-    std::string f = (path / name).string();
-    std::ofstream(f, std::ios::binary).write(static_cast<const char*>(data), (std::streamsize)n);
-    return f;
-  }
-};
+using test::TempDir;
 
 std::string errorOf(const RawVolumeSpec& s) {
   try {
@@ -49,7 +39,7 @@ TEST(Volume, HalfExtent) {
 }
 
 TEST(Volume, LoadUInt8LayoutAndNormalisation) {
-  TempDir t;
+  TempDir t("volume");
   uint8_t data[2 * 3 * 4];
   for (int i = 0; i < 24; ++i) data[i] = (uint8_t)(i * 10);
   RawVolumeSpec s{t.write("a.raw", data, sizeof data), {2, 3, 4}, VoxelType::UInt8, {1, 1, 1}, false, {0, 255}};
@@ -66,7 +56,7 @@ TEST(Volume, LoadUInt8LayoutAndNormalisation) {
 }
 
 TEST(Volume, LoadUInt16LittleEndian) {
-  TempDir t;
+  TempDir t("volume");
   const uint8_t bytes[4] = {0xff, 0xff, 0x00, 0x01};  // 65535 and 256
   RawVolumeSpec s{t.write("b.raw", bytes, 4), {2, 1, 1}, VoxelType::UInt16, {1, 1, 1}, false, {0, 0}};
   Volume v = loadRawVolume(s);
@@ -78,7 +68,7 @@ TEST(Volume, LoadUInt16LittleEndian) {
 }
 
 TEST(Volume, LoadFloat32DefaultRangeIsDataMinMax) {
-  TempDir t;
+  TempDir t("volume");
   const float f[4] = {-2.0f, 0.0f, 6.0f, 4.0f};
   RawVolumeSpec s{t.write("c.raw", f, sizeof f), {4, 1, 1}, VoxelType::Float32, {1, 1, 1}, false, {0, 0}};
   Volume v = loadRawVolume(s);
@@ -89,7 +79,7 @@ TEST(Volume, LoadFloat32DefaultRangeIsDataMinMax) {
 }
 
 TEST(Volume, ErrorsAreSpecific) {
-  TempDir t;
+  TempDir t("volume");
   uint8_t data[10] = {};
   RawVolumeSpec s{t.write("d.raw", data, 10), {2, 2, 2}, VoxelType::UInt16, {1, 1, 1}, false, {0, 0}};
   std::string e = errorOf(s);
@@ -156,7 +146,7 @@ TEST(Volume, GeneratorRejectsBadSpecs) {
 
 // Issue 8: the loader says what is wrong before it allocates or opens.
 TEST(Volume, NotARegularFileSaysWhatItIs) {
-  TempDir t;
+  TempDir t("volume");
   RawVolumeSpec s{t.path.string(), {1, 1, 1}, VoxelType::UInt8, {1, 1, 1}, false, {0, 255}};
   EXPECT_NE(errorOf(s).find("is a directory"), std::string::npos) << errorOf(s);
   s.file = (t.path / "absent.raw").string();
@@ -164,7 +154,7 @@ TEST(Volume, NotARegularFileSaysWhatItIs) {
 }
 
 TEST(Volume, HugeSparseFileNamesTheBytesInsteadOfBadAlloc) {
-  TempDir t;
+  TempDir t("volume");
   const std::string f = t.write("huge.raw", "", 0);
   const std::array<int, 3> dims{65536, 65536, 64};  // 2^38 voxels of uint8: 256 GiB of file
   std::filesystem::resize_file(f, (uintmax_t)1 << 38);  // sparse: no disk used

@@ -20,8 +20,9 @@ FrameParams params(uint64_t frame, int bricks, uint32_t epoch = 0) {
   p.width = 8;
   p.height = 4;
   p.format = proto::PixelFormat::RGBA32F;
-  for (int b = 0; b < bricks; ++b) p.bricks.push_back({(uint32_t)b, {}});
-  for (int b = 0; b < bricks; ++b) p.order.push_back(bricks - 1 - b);  // back bricks first in index order
+  auto& work = p.work.emplace<proto::SortLastWork>();
+  for (int b = 0; b < bricks; ++b) work.bricks.push_back({(uint32_t)b, {}});
+  for (int b = 0; b < bricks; ++b) work.order.push_back(bricks - 1 - b);  // back bricks first in index order
   p.regions = {{0, {0, 0, 8, 4}, ""}};
   return p;
 }
@@ -97,7 +98,7 @@ TEST(Gather, ResultIsIndependentOfArrivalOrder) {
     ASSERT_TRUE(r);
     std::vector<float> row;
     Image8 out(8, 4);
-    compositeRegion(*r->region, r->params.order, r->pieces, row, out);
+    compositeRegion(*r->region, r->params.sortLast()->order, r->pieces, row, out);
     // Order 2,1,0 (front to back): c = .3*1 + .5*.2 + .25*.1 = .425; a = 1 - .5^3 = .875.
     EXPECT_EQ(out.at(0, 0)[0], (uint8_t)std::lround(0.425 * 255));
     EXPECT_EQ(out.at(0, 0)[3], (uint8_t)std::lround(0.875 * 255));

@@ -75,9 +75,10 @@ void writeSeeds(const std::string& dir) {
   FrameParams fp;
   fp.width = 64;
   fp.height = 32;
-  fp.bricks = {{0, {{0, 0, 0}, {8, 8, 8}}}, {1, {{8, 0, 0}, {16, 8, 8}}}};
-  fp.order = {1, 0};
+  fp.work = SortLastWork{{{0, {{0, 0, 0}, {8, 8, 8}}}, {1, {{8, 0, 0}, {16, 8, 8}}}}, {1, 0}};
   fp.regions = {{0, {0, 0, 64, 16}, "a"}, {1, {0, 16, 64, 16}, "b"}};
+  writeSeed(dir, n, encode(fp, 1));
+  fp.work = SortFirstWork{{{0, 1, {0, 0, 32, 32}}, {1, 0, {32, 0, 32, 32}}}};
   writeSeed(dir, n, encode(fp, 1));
   writeSeed(dir, n, encode(StageStats{Role::Renderer, 1, 3, 1, 2, 0.5, 3, 4, 5, {0, 0, 4, 4}, 0}, 1));
   writeSeed(dir, n, encode(FrameDone{3, 1, 2, 3, 4, 5}, 1));

@@ -14,6 +14,7 @@
 
 #include "common/image.h"
 #include "common/io/image_io.h"
+#include "common/scene.h"
 
 namespace tessera::test {
 
@@ -36,6 +37,17 @@ inline CommandResult runCommand(const std::string& cmd, int timeout_s) {
   int status = pclose(p);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+// The built-in scene at 64x48 on a 32^3 hollow shell: frames in milliseconds, for farms
+// run inside the test process.
+inline Scene smallScene(int frames) {
+  Scene s = defaultScene();
+  s.volume = GeneratorSpec{"hollow-shell", 32, 1};
+  s.width = 64;
+  s.height = 48;
+  s.orbit.frames = frames;
+  return s;
 }
 
 inline std::string bin(const std::string& name) { return std::string(TESSERA_BINARY_DIR) + "/bin/" + name; }

@@ -26,15 +26,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-Scene smallScene(int frames) {
-  Scene s = defaultScene();
-  s.volume = GeneratorSpec{"hollow-shell", 32, 1};
-  s.width = 64;
-  s.height = 48;
-  s.orbit.frames = frames;
-  return s;
-}
-
 TEST(InProcessFarm, LostRendererIsDetectedAndItsWorkReassigned) {
   FarmDir dir("inproc");
   const int frames = 40;

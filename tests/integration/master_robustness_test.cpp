@@ -29,15 +29,6 @@ namespace {
 using namespace std::chrono_literals;
 using proto::Role;
 
-Scene smallScene(int frames) {
-  Scene s = defaultScene();
-  s.volume = GeneratorSpec{"hollow-shell", 32, 1};
-  s.width = 64;
-  s.height = 48;
-  s.orbit.frames = frames;
-  return s;
-}
-
 template <class F>
 bool waitUntil(F done, std::chrono::milliseconds limit, std::function<void()> meanwhile = [] {}) {
   for (auto end = std::chrono::steady_clock::now() + limit; std::chrono::steady_clock::now() < end;) {
@@ -288,7 +279,7 @@ TEST(MasterRobustness, LostStageIsReadmittedWhenHeardFromAgain) {
   uint32_t first_epoch = ~0u;
   auto hasWork = [&](uint32_t newer_than) {
     for (const auto& p : r.drain())
-      for (const auto& b : p.bricks)
+      for (const auto& b : p.sortLast()->bricks)
         if (b.renderer == r.rank() && (newer_than == ~0u || p.epoch > newer_than)) {
           first_epoch = std::min(first_epoch, p.epoch);
           return true;

@@ -18,10 +18,12 @@ TEST(SortLastPlan, OneBrickPerRendererAndOneBandPerCompositor) {
   proto::FrameParams p;
   p.camera = scene.camera;
   plan.fill(p, w);
-  ASSERT_EQ(p.bricks.size(), 2u);
-  EXPECT_EQ(p.bricks[0].renderer, 0u);
-  EXPECT_EQ(p.bricks[1].renderer, 2u);
-  EXPECT_EQ(p.order.size(), 2u);
+  ASSERT_EQ(p.mode(), proto::FrameMode::SortLast);
+  const proto::SortLastWork& work = *p.sortLast();
+  ASSERT_EQ(work.bricks.size(), 2u);
+  EXPECT_EQ(work.bricks[0].renderer, 0u);
+  EXPECT_EQ(work.bricks[1].renderer, 2u);
+  EXPECT_EQ(work.order.size(), 2u);
   ASSERT_EQ(p.regions.size(), 2u);
   EXPECT_EQ(p.regions[1].compositor, 3u);
   EXPECT_EQ(p.regions[1].endpoint, "ep3");
@@ -53,12 +55,14 @@ TEST(SortFirstPlan, TilesDealtToRenderersAndRoutedByCompositorRendererModM) {
   proto::FrameParams p;
   p.frame = 0;
   plan.fill(p, w);
-  ASSERT_EQ(p.tiles.size(), 4u);
+  ASSERT_EQ(p.mode(), proto::FrameMode::SortFirst);
+  const auto& tiles = p.sortFirst()->tiles;
+  ASSERT_EQ(tiles.size(), 4u);
   long long area = 0;
-  for (size_t i = 0; i < p.tiles.size(); ++i) {
-    EXPECT_EQ(p.tiles[i].renderer, w.renderers[i % 2]);
-    EXPECT_EQ(p.tiles[i].compositor, w.compositors[i % 2].rank);
-    area += p.tiles[i].tile.area();
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    EXPECT_EQ(tiles[i].renderer, w.renderers[i % 2]);
+    EXPECT_EQ(tiles[i].compositor, w.compositors[i % 2].rank);
+    area += tiles[i].tile.area();
   }
   EXPECT_EQ(area, 64 * 48);
   EXPECT_EQ(p.regions.size(), 2u);
@@ -70,7 +74,7 @@ TEST(SortFirstPlan, CostsOfAFullyReportedFrameRebalanceTheTiles) {
   proto::FrameParams p0;
   p0.frame = 0;
   plan.fill(p0, w);
-  ASSERT_EQ(p0.tiles.size(), 2u);
+  ASSERT_EQ(p0.sortFirst()->tiles.size(), 2u);
   for (uint32_t r : {0u, 1u}) {
     proto::StageStats s;
     s.frame = 0;
@@ -81,8 +85,9 @@ TEST(SortFirstPlan, CostsOfAFullyReportedFrameRebalanceTheTiles) {
   proto::FrameParams p1;
   p1.frame = 1;
   plan.fill(p1, w);
-  ASSERT_EQ(p1.tiles.size(), 2u);
-  EXPECT_LT(p1.tiles[0].tile.area(), p0.tiles[0].tile.area()) << "the expensive tile should shrink";
+  ASSERT_EQ(p1.sortFirst()->tiles.size(), 2u);
+  EXPECT_LT(p1.sortFirst()->tiles[0].tile.area(), p0.sortFirst()->tiles[0].tile.area())
+      << "the expensive tile should shrink";
 }
 
 }  // namespace
