@@ -154,6 +154,50 @@ void GlRenderer::ensureTargets(int w, int h, int samples) {
   fb_samples_ = samples;
 }
 
+uint64_t GlRenderer::drawChunks(std::span<const Chunk> draw) {
+  uint64_t tris = 0;
+  for (size_t i = 0; i < draw.size();) {
+    // Consecutive chunks go in one call: fewer draws, same fragments in the same order.
+    size_t j = i + 1;
+    uint32_t count = draw[i].triangle_count;
+    while (j < draw.size() && draw[j].first_triangle == draw[i].first_triangle + count)
+      count += draw[j++].triangle_count;
+    if (draw[i].first_triangle + (uint64_t)count > triangles_)
+      throw std::invalid_argument("GlRenderer: chunk beyond the uploaded mesh");
+    if (count > 0)
+      glDrawElements(GL_TRIANGLES, (GLsizei)(3 * count), GL_UNSIGNED_INT,
+                     (const void*)((size_t)draw[i].first_triangle * 12));
+    tris += count;
+    i = j;
+  }
+  return tris;
+}
+
+namespace {
+
+// The k x k box average of GL's bottom-up rows of sw x sh pixels, as a w x h image top to
+// bottom (k = 1: a flip only).
+Image8 boxDownsample(const std::vector<uint8_t>& raw, int sw, int sh, int w, int h, int k) {
+  Image8 out(w, h);
+  const int kk = k * k;
+  for (int y = 0; y < h; ++y) {
+    uint8_t* dst = out.at(0, y);
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 4; ++c) {
+        int sum = 0;
+        for (int dy = 0; dy < k; ++dy) {
+          const int gl_row = sh - 1 - (y * k + dy);  // flip to rows top to bottom
+          const uint8_t* src = &raw[((size_t)gl_row * sw + (size_t)x * k) * 4];
+          for (int dx = 0; dx < k; ++dx) sum += src[dx * 4 + c];
+        }
+        dst[4 * x + c] = (uint8_t)((sum + kk / 2) / kk);
+      }
+  }
+  return out;
+}
+
+}  // namespace
+
 Image8 GlRenderer::render(const Camera& cam, int width, int height, const Rect& tile, const GlRenderOptions& opt,
                           GlRenderStats* stats) {
   const Chunk all{0, (uint32_t)triangles_, bounds_};
@@ -207,21 +251,7 @@ Image8 GlRenderer::render(const Camera& cam, int width, int height, const Rect& 
   gl::Uniform3f(loc_light_, (float)l.x, (float)l.y, (float)l.z);
   gl::Uniform1f(loc_ambient_, opt.ambient);
   gl::BindVertexArray(vao_);
-  uint64_t tris = 0;
-  for (size_t i = 0; i < draw.size();) {
-    // Consecutive chunks go in one call: fewer draws, same fragments in the same order.
-    size_t j = i + 1;
-    uint32_t count = draw[i].triangle_count;
-    while (j < draw.size() && draw[j].first_triangle == draw[i].first_triangle + count)
-      count += draw[j++].triangle_count;
-    if (draw[i].first_triangle + (uint64_t)count > triangles_)
-      throw std::invalid_argument("GlRenderer: chunk beyond the uploaded mesh");
-    if (count > 0)
-      glDrawElements(GL_TRIANGLES, (GLsizei)(3 * count), GL_UNSIGNED_INT,
-                     (const void*)((size_t)draw[i].first_triangle * 12));
-    tris += count;
-    i = j;
-  }
+  const uint64_t tris = drawChunks(draw);
   if (opt.samples > 1) {
     gl::BindFramebuffer(GL_READ_FRAMEBUFFER, fbo_draw_);
     gl::BindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo_resolve_);
@@ -237,21 +267,7 @@ Image8 GlRenderer::render(const Camera& cam, int width, int height, const Rect& 
   const GLenum err = glGetError();
   if (err != GL_NO_ERROR) throw std::runtime_error("OSMesa: GL error " + std::to_string(err) + " while rendering");
 
-  Image8 out(tile.w, tile.h);
-  const int kk = k * k;
-  for (int y = 0; y < tile.h; ++y) {
-    uint8_t* dst = out.at(0, y);
-    for (int x = 0; x < tile.w; ++x)
-      for (int c = 0; c < 4; ++c) {
-        int sum = 0;
-        for (int dy = 0; dy < k; ++dy) {
-          const int gl_row = sh - 1 - (y * k + dy);  // flip to rows top to bottom
-          const uint8_t* src = &raw[((size_t)gl_row * sw + (size_t)x * k) * 4];
-          for (int dx = 0; dx < k; ++dx) sum += src[dx * 4 + c];
-        }
-        dst[4 * x + c] = (uint8_t)((sum + kk / 2) / kk);
-      }
-  }
+  Image8 out = boxDownsample(raw, sw, sh, tile.w, tile.h, k);
   if (stats) {
     stats->ms = msSince(t0);
     stats->triangles = tris;

@@ -64,6 +64,7 @@ class GlRenderer {
  private:
   void makeCurrent();
   void ensureTargets(int width, int height, int samples);
+  uint64_t drawChunks(std::span<const Chunk> draw);  // consecutive chunks in one call; returns triangles
   void releaseTargets();
 
   gl::GlContext context_;

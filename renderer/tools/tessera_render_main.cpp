@@ -27,28 +27,6 @@ namespace {
 
 using namespace tessera;
 
-std::array<double, 3> parseBackground(const std::string& s) {
-  std::array<double, 3> c{};
-  std::stringstream in(s);
-  std::string part;
-  int i = 0;
-  while (std::getline(in, part, ',')) {
-    if (i >= 3) throw std::invalid_argument("--background: expected r,g,b, got '" + s + "'");
-    size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(part, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != part.size() || !(v >= 0 && v <= 1))
-      throw std::invalid_argument("--background: components must be numbers in [0,1], got '" + s + "'");
-    c[i++] = v;
-  }
-  if (i != 3) throw std::invalid_argument("--background: expected r,g,b, got '" + s + "'");
-  return c;
-}
-
 void parseSize(const std::string& s, int& w, int& h) {
   char x = 0;
   int a = 0, b = 0;
@@ -76,43 +54,103 @@ ImageF renderScene(const renderer::VolumeBackend& rc, const Volume& vol, const T
   return out;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app{"tessera-render: CPU ray casting of a Tessera scene in one process"};
-  std::string scene_path, out = "out.png", quality_name, size, raw, pam, background, backend = "cpu";
+struct Args {
+  std::string scene_path, out = "out.png", quality_name, size, raw, pam, backend = "cpu";
+  std::vector<double> background;
   int bricks = 1, frame = 0, threads = 0, repeat = 1;
   bool print_stats = false, compare_ref = false, no_skip = false;
-  app.add_option("scene", scene_path, "scene file (default: the built-in hollow shell)");
-  // The extension says the format: only PNG is written, so any other is refused by name
-  // rather than writing PNG bytes into a file called .jpg.
-  app.add_option("-o,--output", out, "output PNG (.png)")->capture_default_str()->check([](const std::string& path) {
-    const std::string ext = std::filesystem::path(path).extension().string();
-    return ext == ".png" || ext == ".PNG" ? std::string()
-                                          : "'" + path + "': tessera-render writes PNG only; name the file .png";
-  });
-  app.add_option("--quality", quality_name, "reference | default | fast (default: the scene's)");
-  app.add_option("--bricks", bricks, "split into N bricks and composite them like the farm")->check(CLI::Range(1, 4096));
-  app.add_option("--frame", frame, "orbit frame K")->check(CLI::NonNegativeNumber);
-  app.add_option("--size", size, "image size WxH (default: the scene's)");
-  app.add_option("--backend", backend, "volume backend: cpu (ray caster) | osmesa (GLSL on llvmpipe)")
-      ->check(CLI::IsMember({"cpu", "osmesa"}))
-      ->capture_default_str();
-  app.add_option("--threads", threads, "ray-casting threads (0: all cores)")->check(CLI::NonNegativeNumber);
-  app.add_flag("--stats", print_stats, "print time and sample counts");
-  app.add_flag("--compare-reference", compare_ref, "also render at reference quality and print the error");
-  app.add_flag("--no-skip", no_skip, "disable empty-space skipping (for measurements)");
-  app.add_option("--repeat", repeat, "render N times and report the fastest (for measurements)")->check(CLI::Range(1, 1000));
-  app.add_option("--raw", raw, "also write premultiplied RGBA32F");
-  app.add_option("--premultiplied", pam,
-                 "also write premultiplied rgba8 as a PAM file (what farm comparisons use: exact values)");
-  app.add_option("--background", background, "composite over r,g,b in [0,1] instead of writing alpha");
   // Mesh scenes (OSMesa): tiles, anti-aliasing overrides and the anti-aliasing sweep.
   std::string tiles = "1x1", aa;
   int aa_samples = 0;
   bool aa_sweep = false;
-  app.add_option("--tiles", tiles, "mesh scenes: render as CxR tiles and assemble (bit-identical to 1x1)");
-  app.add_option("--aa", aa, "mesh scenes: none | msaa | ssaa | fft (default: the scene's)");
-  app.add_option("--aa-samples", aa_samples, "mesh scenes: MSAA samples (1,2,4) or SSAA factor")->check(CLI::Range(1, 8));
-  app.add_flag("--aa-sweep", aa_sweep, "mesh scenes: CSV of every anti-aliasing method's time and error vs 16x SSAA");
+};
+
+void addOptions(CLI::App& app, Args& a) {
+  app.add_option("scene", a.scene_path, "scene file (default: the built-in hollow shell)");
+  // The extension says the format: only PNG is written, so any other is refused by name
+  // rather than writing PNG bytes into a file called .jpg.
+  app.add_option("-o,--output", a.out, "output PNG (.png)")->capture_default_str()->check([](const std::string& path) {
+    const std::string ext = std::filesystem::path(path).extension().string();
+    return ext == ".png" || ext == ".PNG" ? std::string()
+                                          : "'" + path + "': tessera-render writes PNG only; name the file .png";
+  });
+  app.add_option("--quality", a.quality_name, "reference | default | fast (default: the scene's)");
+  app.add_option("--bricks", a.bricks, "split into N bricks and composite them like the farm")->check(CLI::Range(1, 4096));
+  app.add_option("--frame", a.frame, "orbit frame K")->check(CLI::NonNegativeNumber);
+  app.add_option("--size", a.size, "image size WxH (default: the scene's)");
+  app.add_option("--backend", a.backend, "volume backend: cpu (ray caster) | osmesa (GLSL on llvmpipe)")
+      ->check(CLI::IsMember({"cpu", "osmesa"}))
+      ->capture_default_str();
+  app.add_option("--threads", a.threads, "ray-casting threads (0: all cores)")->check(CLI::NonNegativeNumber);
+  app.add_flag("--stats", a.print_stats, "print time and sample counts");
+  app.add_flag("--compare-reference", a.compare_ref, "also render at reference quality and print the error");
+  app.add_flag("--no-skip", a.no_skip, "disable empty-space skipping (for measurements)");
+  app.add_option("--repeat", a.repeat, "render N times and report the fastest (for measurements)")->check(CLI::Range(1, 1000));
+  app.add_option("--raw", a.raw, "also write premultiplied RGBA32F");
+  app.add_option("--premultiplied", a.pam,
+                 "also write premultiplied rgba8 as a PAM file (what farm comparisons use: exact values)");
+  app.add_option("--background", a.background, "composite over r,g,b in [0,1] instead of writing alpha")
+      ->delimiter(',')
+      ->expected(3)
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--tiles", a.tiles, "mesh scenes: render as CxR tiles and assemble (bit-identical to 1x1)");
+  app.add_option("--aa", a.aa, "mesh scenes: none | msaa | ssaa | fft (default: the scene's)");
+  app.add_option("--aa-samples", a.aa_samples, "mesh scenes: MSAA samples (1,2,4) or SSAA factor")->check(CLI::Range(1, 8));
+  app.add_flag("--aa-sweep", a.aa_sweep, "mesh scenes: CSV of every anti-aliasing method's time and error vs 16x SSAA");
+}
+
+int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<std::array<double, 3>> bg) {
+  renderer::RenderOptions opt;
+  opt.quality = a.quality_name.empty() ? scene.quality : namedQuality(a.quality_name);
+  if (a.no_skip) opt.quality.skip_empty = false;
+  opt.threads = a.threads;
+  const Camera cam = scene.orbit.at(scene.camera, a.frame);
+
+  auto vol = std::make_shared<const Volume>(loadVolume(scene));
+  auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, scene.tf);
+  ImageF img;
+  renderer::RenderStats stats;
+  double best_ms = 1e300, best_cpu_ms = 1e300;
+  for (int r = 0; r < a.repeat; ++r) {
+    stats = {};
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::clock_t c0 = std::clock();
+    img = renderScene(*chosen, *vol, scene.tf, cam, w, h, a.bricks, opt, stats);
+    best_cpu_ms = std::min(best_cpu_ms, 1000.0 * (double)(std::clock() - c0) / CLOCKS_PER_SEC);
+    best_ms = std::min(best_ms, msSince(t0));
+  }
+  writePng(a.out, img, bg);
+  std::printf("wrote %s (%dx%d, quality %s, %d brick%s, frame %d, backend %s)\n", a.out.c_str(), w, h,
+              qualityName(opt.quality.name), a.bricks, a.bricks == 1 ? "" : "s", a.frame, a.backend.c_str());
+  if (!a.raw.empty()) {
+    writeRawF32(a.raw, img);
+    std::printf("wrote %s\n", a.raw.c_str());
+  }
+  if (!a.pam.empty()) {
+    writePam(a.pam, img);
+    std::printf("wrote %s\n", a.pam.c_str());
+  }
+  if (a.print_stats)
+    std::printf("time_ms=%.1f cpu_ms=%.1f%s samples=%llu skipped=%llu terminated=%llu skip_empty=%d simd=%s\n",
+                best_ms, best_cpu_ms, a.repeat > 1 ? " (best of repeats)" : "", (unsigned long long)stats.samples,
+                (unsigned long long)stats.samples_skipped, (unsigned long long)stats.samples_terminated,
+                opt.quality.skip_empty ? 1 : 0, isaName(cpuIsa()));
+  if (a.compare_ref) {
+    renderer::RenderOptions ropt = opt;
+    ropt.quality = namedQuality(QualityName::Reference);
+    renderer::RenderStats rs;
+    const ImageF ref = renderScene(*chosen, *vol, scene.tf, cam, w, h, a.bricks, ropt, rs);
+    const ImageError e = compare(img, ref);
+    std::printf("vs reference: max_abs=%.6f rmse=%.6f psnr=%.2f dB (reference %.0f ms)\n", e.max_abs, e.rmse, e.psnr,
+                rs.ms);
+  }
+  return 0;
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{"tessera-render: CPU ray casting of a Tessera scene in one process"};
+  Args a;
+  addOptions(app, a);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -122,73 +160,27 @@ int run(int argc, char** argv) {
     return 1;
   }
 
-  const Scene scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
+  const Scene scene = a.scene_path.empty() ? defaultScene() : loadScene(a.scene_path);
   std::optional<std::array<double, 3>> bg;
-  if (!background.empty()) bg = parseBackground(background);
+  if (!a.background.empty()) bg = std::array<double, 3>{a.background[0], a.background[1], a.background[2]};
   int w = scene.width, h = scene.height;
-  if (!size.empty()) parseSize(size, w, h);
-  if (scene.mesh) {
-    renderer::MeshToolOptions mo;
-    mo.out = out;
-    mo.width = w;
-    mo.height = h;
-    mo.frame = frame;
-    parseSize(tiles, mo.tile_cols, mo.tile_rows);
-    mo.repeat = repeat;
-    mo.stats = print_stats;
-    mo.compare_reference = compare_ref;
-    mo.aa_sweep = aa_sweep;
-    mo.aa = aa;
-    mo.aa_samples = aa_samples;
-    mo.background = bg;
-    mo.pam = pam;
-    return renderer::renderMeshScene(scene, mo);
-  }
-  renderer::RenderOptions opt;
-  opt.quality = quality_name.empty() ? scene.quality : namedQuality(quality_name);
-  if (no_skip) opt.quality.skip_empty = false;
-  opt.threads = threads;
-  const Camera cam = scene.orbit.at(scene.camera, frame);
-
-  auto vol = std::make_shared<const Volume>(loadVolume(scene));
-  auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(backend), vol, scene.tf);
-  ImageF img;
-  renderer::RenderStats stats;
-  double best_ms = 1e300, best_cpu_ms = 1e300;
-  for (int r = 0; r < repeat; ++r) {
-    stats = {};
-    const auto t0 = std::chrono::steady_clock::now();
-    const std::clock_t c0 = std::clock();
-    img = renderScene(*chosen, *vol, scene.tf, cam, w, h, bricks, opt, stats);
-    best_cpu_ms = std::min(best_cpu_ms, 1000.0 * (double)(std::clock() - c0) / CLOCKS_PER_SEC);
-    best_ms = std::min(best_ms, msSince(t0));
-  }
-  writePng(out, img, bg);
-  std::printf("wrote %s (%dx%d, quality %s, %d brick%s, frame %d, backend %s)\n", out.c_str(), w, h,
-              qualityName(opt.quality.name), bricks, bricks == 1 ? "" : "s", frame, backend.c_str());
-  if (!raw.empty()) {
-    writeRawF32(raw, img);
-    std::printf("wrote %s\n", raw.c_str());
-  }
-  if (!pam.empty()) {
-    writePam(pam, img);
-    std::printf("wrote %s\n", pam.c_str());
-  }
-  if (print_stats)
-    std::printf("time_ms=%.1f cpu_ms=%.1f%s samples=%llu skipped=%llu terminated=%llu skip_empty=%d simd=%s\n",
-                best_ms, best_cpu_ms, repeat > 1 ? " (best of repeats)" : "", (unsigned long long)stats.samples,
-                (unsigned long long)stats.samples_skipped, (unsigned long long)stats.samples_terminated,
-                opt.quality.skip_empty ? 1 : 0, isaName(cpuIsa()));
-  if (compare_ref) {
-    renderer::RenderOptions ropt = opt;
-    ropt.quality = namedQuality(QualityName::Reference);
-    renderer::RenderStats rs;
-    const ImageF ref = renderScene(*chosen, *vol, scene.tf, cam, w, h, bricks, ropt, rs);
-    const ImageError e = compare(img, ref);
-    std::printf("vs reference: max_abs=%.6f rmse=%.6f psnr=%.2f dB (reference %.0f ms)\n", e.max_abs, e.rmse, e.psnr,
-                rs.ms);
-  }
-  return 0;
+  if (!a.size.empty()) parseSize(a.size, w, h);
+  if (!scene.mesh) return renderVolume(scene, a, w, h, bg);
+  renderer::MeshToolOptions mo;
+  mo.out = a.out;
+  mo.width = w;
+  mo.height = h;
+  mo.frame = a.frame;
+  parseSize(a.tiles, mo.tile_cols, mo.tile_rows);
+  mo.repeat = a.repeat;
+  mo.stats = a.print_stats;
+  mo.compare_reference = a.compare_ref;
+  mo.aa_sweep = a.aa_sweep;
+  mo.aa = a.aa;
+  mo.aa_samples = a.aa_samples;
+  mo.background = bg;
+  mo.pam = a.pam;
+  return renderer::renderMeshScene(scene, mo);
 }
 
 }  // namespace

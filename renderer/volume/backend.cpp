@@ -1,7 +1,9 @@
 // Backend selection by name (see backend.h).
 #include "renderer/volume/backend.h"
 
+#include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "common/cpu.h"
 #include "renderer/volume/gl_volume.h"
@@ -18,6 +20,19 @@ RenderStats& RenderStats::operator+=(const RenderStats& o) {
 }
 
 Brick wholeVolume(const Volume& v) { return Brick{{0, 0, 0}, v.dims}; }
+
+void checkRenderArguments(const char* who, const Volume& v, int width, int height, const Brick& brick,
+                          const Quality& q) {
+  const std::string name(who);
+  if (width <= 0 || height <= 0)
+    throw std::invalid_argument(name + ": image size must be positive, got " + std::to_string(width) + "x" +
+                                std::to_string(height));
+  for (int a = 0; a < 3; ++a)
+    if (brick.lo[a] < 0 || brick.hi[a] > v.dims[a] || brick.lo[a] >= brick.hi[a])
+      throw std::invalid_argument(name + ": brick outside the volume or empty on axis " + std::to_string(a));
+  if (!(q.step > 0) || !std::isfinite(q.step))
+    throw std::invalid_argument(name + ": quality.step must be positive and finite");
+}
 
 BackendKind parseBackend(const std::string& name) {
   if (name == "cpu") return BackendKind::Cpu;

@@ -41,6 +41,12 @@ class VolumeBackend {
                         RenderStats* stats = nullptr, Rect* active = nullptr) const = 0;
 };
 
+// The arguments every backend refuses the same way: a non-positive image size, a brick
+// outside the volume or empty, a step that is not positive and finite. Throws
+// std::invalid_argument starting with `who`.
+void checkRenderArguments(const char* who, const Volume& v, int width, int height, const Brick& brick,
+                          const Quality& q);
+
 enum class BackendKind { Cpu, Osmesa };
 // "cpu" | "osmesa"; throws std::invalid_argument naming the value otherwise.
 BackendKind parseBackend(const std::string& name);

@@ -3,6 +3,7 @@
 #include "renderer/volume/gl_volume.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -45,6 +46,33 @@ void checkGl(const char* what) {
   if (err != GL_NO_ERROR) throw std::runtime_error(std::string("OSMesa: GL error ") + std::to_string(err) + " " + what);
 }
 
+// Per-pixel spans in double precision (the CPU caster's own code) for the rows of the
+// footprint: s0 = (u0, k_first), s1 = (du, k_end) per pixel, zero where a ray misses.
+void raySpans(const RayGenerator& gen, const VolumeGeometry& geom, const Brick& brick, double step, const Rect& fp,
+              unsigned threads, std::vector<float>& s0, std::vector<float>& s1) {
+  s0.assign((size_t)fp.w * fp.h * 4, 0.0f);
+  s1.assign((size_t)fp.w * fp.h * 4, 0.0f);
+  std::atomic<bool> too_long{false};
+  parallelRanges(fp.h, threads, [&](long long r0, long long r1) {
+    for (long long r = r0; r < r1; ++r)
+      for (int x = 0; x < fp.w; ++x) {
+        RaySpan span;
+        if (!raySpan(geom, gen.pixelRay(fp.x + x, fp.y + (int)r), brick, step, span)) continue;
+        if (span.k_end >= kMaxSamples) {
+          too_long = true;
+          continue;
+        }
+        float* a = &s0[((size_t)r * fp.w + x) * 4];
+        float* b = &s1[((size_t)r * fp.w + x) * 4];
+        for (int c = 0; c < 3; ++c) a[c] = (float)span.u0[c], b[c] = (float)span.du[c];
+        a[3] = (float)span.k_first;
+        b[3] = (float)span.k_end;
+      }
+  });
+  if (too_long)
+    throw std::invalid_argument("GlVolumeRenderer::render: more than 2^24 samples on one ray (step too small)");
+}
+
 }  // namespace
 
 struct GlVolumeRenderer::Impl {
@@ -67,6 +95,9 @@ struct GlVolumeRenderer::Impl {
   void ensureTable(double step);
   void ensureTargets(int w, int h);
   void uploadSpans(const std::vector<float>& s0, const std::vector<float>& s1, int w, int h);
+  // Draws the footprint `fp` with the spans s0/s1; reads back colours (and sample counts).
+  void castRays(const Quality& q, const Rect& fp, const std::vector<float>& s0, const std::vector<float>& s1,
+                std::vector<float>& rgba, std::vector<float>* counts);
 };
 
 void GlVolumeRenderer::Impl::uploadVolume() {
@@ -194,21 +225,58 @@ GlVolumeRenderer::~GlVolumeRenderer() {
   }
 }
 
+void GlVolumeRenderer::Impl::castRays(const Quality& q, const Rect& fp, const std::vector<float>& s0,
+                                      const std::vector<float>& s1, std::vector<float>& rgba,
+                                      std::vector<float>* counts) {
+  const Volume& v = *volume;
+  makeCurrent();
+  ensureTable(q.step);
+  ensureTargets(fp.w, fp.h);
+  uploadSpans(s0, s1, fp.w, fp.h);
+  gl::BindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glViewport(0, 0, fp.w, fp.h);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  gl::UseProgram(program);
+  gl::Uniform3f(uniform("inv_n"), 1.0f / v.dims[0], 1.0f / v.dims[1], 1.0f / v.dims[2]);
+  gl::Uniform3f(uniform("umax"), (float)(v.dims[0] - 1), (float)(v.dims[1] - 1), (float)(v.dims[2] - 1));
+  gl::Uniform3i(uniform("imax"), std::max(0, v.dims[0] - 2), std::max(0, v.dims[1] - 2), std::max(0, v.dims[2] - 2));
+  gl::Uniform3i(uniform("nb"), nb[0], nb[1], nb[2]);
+  gl::Uniform1f(uniform("et"), (float)std::min(q.early_termination, 2.0));
+  gl::Uniform1i(uniform("skip"), q.skip_empty ? 1 : 0);
+  gl::Uniform1i(uniform("first_nz"), first_nz);
+  gl::Uniform1i(uniform("last_nz"), last_nz);
+  gl::Uniform1f(uniform("table_max"), (float)(TfTable::kEntries - 1));
+  const std::pair<GLenum, unsigned> units[] = {{GL_TEXTURE_3D, tex_vol},   {GL_TEXTURE_1D, tex_table},
+                                               {GL_TEXTURE_3D, tex_dist},  {GL_TEXTURE_2D, tex_span0},
+                                               {GL_TEXTURE_2D, tex_span1}};
+  for (int i = 0; i < 5; ++i) {
+    gl::ActiveTexture(GL_TEXTURE0 + i);
+    glBindTexture(units[i].first, units[i].second);
+  }
+  gl::ActiveTexture(GL_TEXTURE0);
+  gl::BindVertexArray(vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+
+  rgba.assign((size_t)fp.w * fp.h * 4, 0.0f);
+  glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  glReadBuffer(GL_COLOR_ATTACHMENT0);
+  glReadPixels(0, 0, fp.w, fp.h, GL_RGBA, GL_FLOAT, rgba.data());
+  if (counts) {
+    counts->resize(rgba.size());
+    glReadBuffer(GL_COLOR_ATTACHMENT1);
+    glReadPixels(0, 0, fp.w, fp.h, GL_RGBA, GL_FLOAT, counts->data());
+  }
+  checkGl("while ray casting");
+}
+
 ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
                                 RenderStats* stats, Rect* active) const {
   const auto start = std::chrono::steady_clock::now();
   Impl& m = *impl_;
   const Volume& v = *m.volume;
-  if (width <= 0 || height <= 0)
-    throw std::invalid_argument("GlVolumeRenderer::render: image size must be positive, got " + std::to_string(width) +
-                                "x" + std::to_string(height));
-  for (int a = 0; a < 3; ++a)
-    if (brick.lo[a] < 0 || brick.hi[a] > v.dims[a] || brick.lo[a] >= brick.hi[a])
-      throw std::invalid_argument("GlVolumeRenderer::render: brick outside the volume or empty on axis " +
-                                  std::to_string(a));
   const Quality& q = opt.quality;
-  if (!(q.step > 0) || !std::isfinite(q.step))
-    throw std::invalid_argument("GlVolumeRenderer::render: quality.step must be positive and finite");
+  checkRenderArguments("GlVolumeRenderer::render", v, width, height, brick, q);
   std::lock_guard lock(m.mu);
   if (q.reference) {
     // The reference is defined in double precision; GLSL floats cannot give it.
@@ -224,69 +292,10 @@ ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const 
   if (stats) *stats = RenderStats{};
   if (fp.empty()) return img;
 
-  // Per-pixel spans, double precision (the CPU caster's own code), rows of the footprint.
-  std::vector<float> s0((size_t)fp.w * fp.h * 4, 0.0f), s1((size_t)fp.w * fp.h * 4, 0.0f);
-  bool too_long = false;
-  auto setup = [&](int r0, int r1) {
-    for (int r = r0; r < r1; ++r)
-      for (int x = 0; x < fp.w; ++x) {
-        RaySpan span;
-        if (!raySpan(geom, gen.pixelRay(fp.x + x, fp.y + r), brick, q.step, span)) continue;
-        if (span.k_end >= kMaxSamples) {
-          too_long = true;
-          continue;
-        }
-        float* a = &s0[((size_t)r * fp.w + x) * 4];
-        float* b = &s1[((size_t)r * fp.w + x) * 4];
-        for (int c = 0; c < 3; ++c) a[c] = (float)span.u0[c], b[c] = (float)span.du[c];
-        a[3] = (float)span.k_first;
-        b[3] = (float)span.k_end;
-      }
-  };
-  parallelRanges(fp.h, threadCount(opt.threads, fp.h), [&](long long r0, long long r1) { setup((int)r0, (int)r1); });
-  if (too_long)
-    throw std::invalid_argument("GlVolumeRenderer::render: more than 2^24 samples on one ray (step too small)");
-
-  m.makeCurrent();
-  m.ensureTable(q.step);
-  m.ensureTargets(fp.w, fp.h);
-  m.uploadSpans(s0, s1, fp.w, fp.h);
-  gl::BindFramebuffer(GL_FRAMEBUFFER, m.fbo);
-  glViewport(0, 0, fp.w, fp.h);
-  glDisable(GL_DEPTH_TEST);
-  glDisable(GL_BLEND);
-  gl::UseProgram(m.program);
-  gl::Uniform3f(m.uniform("inv_n"), 1.0f / v.dims[0], 1.0f / v.dims[1], 1.0f / v.dims[2]);
-  gl::Uniform3f(m.uniform("umax"), (float)(v.dims[0] - 1), (float)(v.dims[1] - 1), (float)(v.dims[2] - 1));
-  gl::Uniform3i(m.uniform("imax"), std::max(0, v.dims[0] - 2), std::max(0, v.dims[1] - 2), std::max(0, v.dims[2] - 2));
-  gl::Uniform3i(m.uniform("nb"), m.nb[0], m.nb[1], m.nb[2]);
-  gl::Uniform1f(m.uniform("et"), (float)std::min(q.early_termination, 2.0));
-  gl::Uniform1i(m.uniform("skip"), q.skip_empty ? 1 : 0);
-  gl::Uniform1i(m.uniform("first_nz"), m.first_nz);
-  gl::Uniform1i(m.uniform("last_nz"), m.last_nz);
-  gl::Uniform1f(m.uniform("table_max"), (float)(TfTable::kEntries - 1));
-  const std::pair<GLenum, unsigned> units[] = {{GL_TEXTURE_3D, m.tex_vol},   {GL_TEXTURE_1D, m.tex_table},
-                                               {GL_TEXTURE_3D, m.tex_dist},  {GL_TEXTURE_2D, m.tex_span0},
-                                               {GL_TEXTURE_2D, m.tex_span1}};
-  for (int i = 0; i < 5; ++i) {
-    gl::ActiveTexture(GL_TEXTURE0 + i);
-    glBindTexture(units[i].first, units[i].second);
-  }
-  gl::ActiveTexture(GL_TEXTURE0);
-  gl::BindVertexArray(m.vao);
-  glDrawArrays(GL_TRIANGLES, 0, 3);
-
-  std::vector<float> rgba((size_t)fp.w * fp.h * 4);
-  glPixelStorei(GL_PACK_ALIGNMENT, 4);
-  glReadBuffer(GL_COLOR_ATTACHMENT0);
-  glReadPixels(0, 0, fp.w, fp.h, GL_RGBA, GL_FLOAT, rgba.data());
-  std::vector<float> counts;
-  if (stats) {
-    counts.resize(rgba.size());
-    glReadBuffer(GL_COLOR_ATTACHMENT1);
-    glReadPixels(0, 0, fp.w, fp.h, GL_RGBA, GL_FLOAT, counts.data());
-  }
-  checkGl("while ray casting");
+  std::vector<float> s0, s1;
+  raySpans(gen, geom, brick, q.step, fp, threadCount(opt.threads, fp.h), s0, s1);
+  std::vector<float> rgba, counts;
+  m.castRays(q, fp, s0, s1, rgba, stats ? &counts : nullptr);
 
   // FBO row r holds footprint row r (the spans were laid out that way): no flip needed.
   int ax0 = width, ay0 = height, ax1 = -1, ay1 = -1;

@@ -19,6 +19,8 @@ void main() {
 })";
 }
 
+// Over 80 lines on purpose: it returns one GLSL program as text, and the program reads
+// best as the one ray loop it is.
 const char* volumeFragmentShader() {
   return R"(#version 450 core
 layout(binding = 0) uniform sampler3D vol;     // R16, GL_LINEAR, CLAMP_TO_EDGE

@@ -127,21 +127,122 @@ DepthBounds depthBounds(const RayGenerator& gen, const VolumeGeometry& g, const 
   return d;
 }
 
+// What every worker of one render call reads (nothing here changes while they run).
+struct FrameRays {
+  const Volume& volume;
+  const TransferFunction& tf;
+  const Quality& q;
+  const RayGenerator& gen;
+  const VolumeGeometry& geom;
+  const Brick& brick;
+  const Brick& clip;      // the part of `brick` that can be non-empty (with skipping)
+  bool clipping;          // rays are cut to `clip`; the samples cut off count as skipped
+  const DepthBounds* depth;  // per-cell depth bounds of non-empty nodes (perspective + skipping)
+  const FastContext& fast;
+  ImageF& img;
+};
+
+// One worker thread: casts the rays of the tiles it pulls, counts samples, and tracks the
+// rectangle of pixels it made non-transparent. Fast-path rays wait in pairs and are cast
+// two at a time (castFastPair).
+class TileWorker {
+ public:
+  explicit TileWorker(const FrameRays& f) : f_(f), ax0_(f.img.width), ay0_(f.img.height) {}
+
+  void castTile(int tx, int ty, int ex, int ey) {
+    for (int py = ty; py < ey; ++py)
+      for (int px = tx; px < ex; ++px) {
+        RaySpan span;
+        int64_t after = 0;  // samples cut off after the clip box
+        if (!spanOf(px, py, span, after)) continue;
+        if (f_.q.reference) {
+          float* o = f_.img.at(px, py);
+          double d[4];
+          castReference(f_.volume, f_.tf, f_.q.step, span, d, counts);
+          for (int c = 0; c < 4; ++c) o[c] = (float)d[c];
+          mark(px, py);
+        } else {
+          pending_[n_pending_++] = Pending{span, px, py, after};
+          if (n_pending_ == 2) flush();
+        }
+      }
+    flush();
+  }
+
+  Rect active() const { return ax1_ < 0 ? Rect{} : Rect{ax0_, ay0_, ax1_ - ax0_ + 1, ay1_ - ay0_ + 1}; }
+  SampleCounts counts;
+
+ private:
+  struct Pending {
+    RaySpan span;
+    int px, py;
+    int64_t after;
+  };
+
+  // The samples of pixel (px, py) to cast; false if there are none (those skipped are counted).
+  bool spanOf(int px, int py, RaySpan& span, int64_t& after) {
+    const double step = f_.q.step;
+    if (!f_.clipping) return raySpan(f_.geom, f_.gen.pixelRay(px, py), f_.brick, step, span);
+    const DepthBounds* depth = f_.depth;
+    const size_t ci = depth ? (size_t)(py / DepthBounds::kCell) * depth->cols + px / DepthBounds::kCell : 0;
+    if (depth && !(depth->lo[ci] <= depth->hi[ci])) {  // no non-empty node here: count only
+      counts.skipped += (uint64_t)spanSamples(f_.geom, f_.gen.pixelRay(px, py), f_.brick, step);
+      return false;
+    }
+    int64_t before = 0;
+    bool hit = raySpanClipped(f_.geom, f_.gen.pixelRay(px, py), f_.brick, f_.clip, step, span, before, after);
+    if (hit && depth) {
+      int64_t cut_before, cut_after;
+      hit = narrowSpan(depth->lo[ci], depth->hi[ci], step, span, cut_before, cut_after);
+      before += cut_before;
+      after += cut_after;
+    }
+    counts.skipped += (uint64_t)before;
+    if (!hit) counts.skipped += (uint64_t)after;
+    return hit;
+  }
+
+  void mark(int px, int py) {
+    if (f_.img.at(px, py)[3] > 0) {
+      ax0_ = std::min(ax0_, px), ax1_ = std::max(ax1_, px);
+      ay0_ = std::min(ay0_, py), ay1_ = std::max(ay1_, py);
+    }
+  }
+
+  void finish(const Pending& p, bool terminated) {
+    // Samples cut off after a terminated ray count as terminated, as without the clip.
+    (terminated ? counts.terminated : counts.skipped) += (uint64_t)p.after;
+    mark(p.px, p.py);
+  }
+
+  void flush() {
+    if (n_pending_ == 2) {
+      const RaySpan spans[2] = {pending_[0].span, pending_[1].span};
+      float* outs[2] = {f_.img.at(pending_[0].px, pending_[0].py), f_.img.at(pending_[1].px, pending_[1].py)};
+      bool terminated[2];
+      castFastPair(f_.fast, spans, outs, counts, terminated);
+      finish(pending_[0], terminated[0]);
+      finish(pending_[1], terminated[1]);
+    } else if (n_pending_ == 1) {
+      finish(pending_[0], castFast(f_.fast, pending_[0].span, f_.img.at(pending_[0].px, pending_[0].py), counts));
+    }
+    n_pending_ = 0;
+  }
+
+  const FrameRays& f_;
+  int ax0_, ay0_, ax1_ = -1, ay1_ = -1;
+  Pending pending_[2];
+  int n_pending_ = 0;
+};
+
 }  // namespace
 
 ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
                          RenderStats* stats, Rect* active) const {
   const auto start = std::chrono::steady_clock::now();
   const Volume& v = *impl_->volume;
-  if (width <= 0 || height <= 0)
-    throw std::invalid_argument("Raycaster::render: image size must be positive, got " + std::to_string(width) + "x" +
-                                std::to_string(height));
-  for (int a = 0; a < 3; ++a)
-    if (brick.lo[a] < 0 || brick.hi[a] > v.dims[a] || brick.lo[a] >= brick.hi[a])
-      throw std::invalid_argument("Raycaster::render: brick outside the volume or empty on axis " + std::to_string(a));
   const Quality& q = opt.quality;
-  if (!(q.step > 0) || !std::isfinite(q.step))
-    throw std::invalid_argument("Raycaster::render: quality.step must be positive and finite");
+  checkRenderArguments("Raycaster::render", v, width, height, brick, q);
 
   const RayGenerator gen(cam, width, height);  // validates the camera
   const VolumeGeometry geom(v);
@@ -184,91 +285,23 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   SampleCounts total;
   Rect act;
 
+  const FrameRays rays{v, impl_->tf, q, gen, geom, brick, clip, clipping, depth ? &*depth : nullptr, fast, img};
   auto worker = [&] {
-    SampleCounts counts;
-    int ax0 = width, ay0 = height, ax1 = -1, ay1 = -1;
-    auto mark = [&](int px, int py) {
-      if (img.at(px, py)[3] > 0) {
-        ax0 = std::min(ax0, px), ax1 = std::max(ax1, px);
-        ay0 = std::min(ay0, py), ay1 = std::max(ay1, py);
-      }
-    };
-    // Fast path: rays wait here in pairs and are cast two at a time (castFastPair).
-    struct Pending {
-      RaySpan span;
-      int px, py;
-      int64_t after;  // samples cut off after the clip box
-    } pending[2];
-    int n_pending = 0;
-    auto finish = [&](const Pending& p, bool terminated) {
-      // Samples cut off after a terminated ray count as terminated, as without the clip.
-      (terminated ? counts.terminated : counts.skipped) += (uint64_t)p.after;
-      mark(p.px, p.py);
-    };
-    auto flush = [&] {
-      if (n_pending == 2) {
-        const RaySpan spans[2] = {pending[0].span, pending[1].span};
-        float* outs[2] = {img.at(pending[0].px, pending[0].py), img.at(pending[1].px, pending[1].py)};
-        bool terminated[2];
-        castFastPair(fast, spans, outs, counts, terminated);
-        finish(pending[0], terminated[0]);
-        finish(pending[1], terminated[1]);
-      } else if (n_pending == 1) {
-        finish(pending[0], castFast(fast, pending[0].span, img.at(pending[0].px, pending[0].py), counts));
-      }
-      n_pending = 0;
-    };
+    TileWorker w(rays);
     try {
       for (int t = next.fetch_add(1); t < tile_count; t = next.fetch_add(1)) {
         const int tx = fp.x + (t % tiles_x) * kTile, ty = fp.y + (t / tiles_x) * kTile;
-        const int ex = std::min(fp.x + fp.w, tx + kTile), ey = std::min(fp.y + fp.h, ty + kTile);
-        for (int py = ty; py < ey; ++py)
-          for (int px = tx; px < ex; ++px) {
-            RaySpan span;
-            int64_t before = 0, after = 0;  // samples cut off by the clip box
-            if (clipping) {
-              const size_t ci = depth ? (size_t)(py / DepthBounds::kCell) * depth->cols + px / DepthBounds::kCell : 0;
-              if (depth && !(depth->lo[ci] <= depth->hi[ci])) {  // no non-empty node here: count only
-                counts.skipped += (uint64_t)spanSamples(geom, gen.pixelRay(px, py), brick, q.step);
-                continue;
-              }
-              bool hit = raySpanClipped(geom, gen.pixelRay(px, py), brick, clip, q.step, span, before, after);
-              if (hit && depth) {
-                int64_t cut_before, cut_after;
-                hit = narrowSpan(depth->lo[ci], depth->hi[ci], q.step, span, cut_before, cut_after);
-                before += cut_before;
-                after += cut_after;
-              }
-              counts.skipped += (uint64_t)before;
-              if (!hit) {
-                counts.skipped += (uint64_t)after;
-                continue;
-              }
-            } else if (!raySpan(geom, gen.pixelRay(px, py), brick, q.step, span)) {
-              continue;
-            }
-            if (q.reference) {
-              float* o = img.at(px, py);
-              double d[4];
-              castReference(v, impl_->tf, q.step, span, d, counts);
-              for (int c = 0; c < 4; ++c) o[c] = (float)d[c];
-              mark(px, py);
-            } else {
-              pending[n_pending++] = Pending{span, px, py, after};
-              if (n_pending == 2) flush();
-            }
-          }
-        flush();
+        w.castTile(tx, ty, std::min(fp.x + fp.w, tx + kTile), std::min(fp.y + fp.h, ty + kTile));
       }
     } catch (...) {
       next.store(tile_count);  // the other workers stop at their next tile; runParts rethrows
       throw;
     }
     std::lock_guard lock(mu);
-    total.taken += counts.taken;
-    total.skipped += counts.skipped;
-    total.terminated += counts.terminated;
-    if (ax1 >= 0) act = unite(act, Rect{ax0, ay0, ax1 - ax0 + 1, ay1 - ay0 + 1});
+    total.taken += w.counts.taken;
+    total.skipped += w.counts.skipped;
+    total.terminated += w.counts.terminated;
+    act = unite(act, w.active());
   };
 
   runParts(threadCount(opt.threads, std::max(1, tile_count)), [&](unsigned) { worker(); });

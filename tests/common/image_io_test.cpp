@@ -1,6 +1,7 @@
 // PNG and raw float files written to a temporary folder and read back.
 #include "common/io/image_io.h"
 
+#include "tests/common/image_dump.h"
 #include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
@@ -135,4 +136,20 @@ TEST(ImageIo, PamOfAnotherTupleTypeIsRefused) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("RGB_ALPHA_PREMULTIPLIED"), std::string::npos) << e.what();
   }
+}
+
+TEST(ImageIo, AFailingComparisonLeavesExpectedActualAndDiffPngs) {
+  TempDir t("image_mismatch");
+  Image8 expected(3, 2);
+  for (size_t i = 3; i < expected.px.size(); i += 4) expected.px[i] = 255;  // opaque: PNG keeps it exactly
+  Image8 actual = expected;
+  actual.px[4 * 4 + 1] = 5;  // pixel (1, 1), green: 5 levels off
+  const std::string named = test::writeImageMismatch(t.path, "frame_7", expected, actual);
+  EXPECT_NE(named.find("frame_7_{expected,actual,diff}.png"), std::string::npos) << named;
+  EXPECT_EQ(readPng(t.file("frame_7_expected.png")), expected);
+  EXPECT_EQ(readPng(t.file("frame_7_actual.png")), actual);
+  const Image8 diff = readPng(t.file("frame_7_diff.png"));
+  EXPECT_EQ(diff.at(1, 1)[0], 80);  // 5 levels x 16
+  EXPECT_EQ(diff.at(0, 0)[0], 0);
+  EXPECT_EQ(diff.at(0, 0)[3], 255);
 }

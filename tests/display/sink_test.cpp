@@ -267,29 +267,5 @@ TEST_F(WindowSinkXvfb, PollTranslatesInput) {
   EXPECT_TRUE(sink->poll().empty());
 }
 
-TEST_F(WindowSinkXvfb, PresentTime1024) {
-  for (const char* driver : {"", "software"}) {
-    if (*driver) setenv("SDL_RENDER_DRIVER", driver, 1);
-    auto sink = makeWindowSink(1024, 1024, "tessera timing");
-    Image8 frame(1024, 1024);
-    for (size_t i = 0; i < frame.px.size(); ++i) frame.px[i] = (uint8_t)(i * 7 / 5);
-    for (size_t i = 3; i < frame.px.size(); i += 4) frame.px[i] = 255;
-    std::vector<double> ms;
-    for (int i = 0; i < 12; ++i) {
-      const auto t0 = std::chrono::steady_clock::now();
-      sink->present(frame, i, "fps 10.0 latency 120 ms render 50 composite 8 display 6");
-      ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-      sink->poll();
-    }
-    std::sort(ms.begin(), ms.end());
-    std::printf("present 1024x1024 (renderer %s): median %.2f ms, min %.2f ms, max %.2f ms\n",
-                *driver ? driver : "default", ms[ms.size() / 2], ms.front(), ms.back());
-    // Not a timing test: a loose bound that only catches a pathological slowdown.
-    EXPECT_LT(ms[ms.size() / 2], 1000.0);
-    sink.reset();
-    unsetenv("SDL_RENDER_DRIVER");
-  }
-}
-
 }  // namespace
 }  // namespace tessera::display

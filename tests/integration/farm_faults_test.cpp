@@ -98,7 +98,7 @@ TEST(FarmFaults, BadMessagesAreDroppedCountedAndFramesStayCorrect) {
   for (int k : {0, frames - 1}) {
     ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k;
     // 1/255: pieces are quantized to rgba8 once before compositing.
-    EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 1) << "frame " << k;
+    EXPECT_TRUE(dir.matches(dir.farmFrame(k), dir.reference(scene, k), 1, "frame_" + std::to_string(k))) << "frame " << k;
   }
   std::ifstream metrics(dir.path() / "out" / "metrics.jsonl");
   double master = 0, composite = 0, display = 0;
@@ -154,7 +154,7 @@ void expectEveryFrameOnceAndCorrect(const FarmDir& dir, const fs::path& scene, c
   }
   for (int k : {0, after, (after + frames) / 2, frames - 1}) {
     if (!fs::exists(dir.frame(k))) continue;
-    EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 1) << "frame " << k;
+    EXPECT_TRUE(dir.matches(dir.farmFrame(k), dir.reference(scene, k), 1, "frame_" + std::to_string(k))) << "frame " << k;
   }
 }
 
@@ -215,7 +215,7 @@ TEST(FarmFaults, ForgedPartsFromNonMembersAreRefusedAndFramesStayCorrect) {
   auto run = farm.get();
   ASSERT_EQ(run.exit_code, 0) << run.output;
   // 1/255: the sort-last contract; a forged white strip would be 255 levels off.
-  for (int k = 0; k < frames; ++k) EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 1) << "frame " << k;
+  for (int k = 0; k < frames; ++k) EXPECT_TRUE(dir.matches(dir.farmFrame(k), dir.reference(scene, k), 1, "frame_" + std::to_string(k))) << "frame " << k;
   EXPECT_NE(run.output.find("refused peer"), std::string::npos) << "refusals were not logged";
   std::ifstream metrics(dir.path() / "out" / "metrics.jsonl");
   double composite = 0, display = 0;

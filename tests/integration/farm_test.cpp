@@ -42,7 +42,7 @@ TEST_P(FarmMatchesOneProcess, EveryFrameWithinOneLevel) {
     Image8 farm = dir.farmFrame(k);
     Image8 ref = dir.reference(scene, k);
     // 1/255: each brick's piece is quantized to rgba8 once before compositing.
-    EXPECT_LE(maxAbsDiff(farm, ref), 1) << "frame " << k << " in " << dir.path();
+    EXPECT_TRUE(dir.matches(farm, ref, 1, "frame_" + std::to_string(k))) << "frame " << k;
     EXPECT_GT(activeRegion(farm).area(), 100) << "frame " << k << " is (nearly) empty";
   }
   // One metrics line per frame, with every stage's report in it.
@@ -84,7 +84,7 @@ TEST(FarmPixelFormats, Rgba8PiecesStayWithinTwoLevels) {
   auto scene = dir.writeScene(4);
   auto run = dir.runFarm(scene, 4, 1, 2, 120, "--env TESSERA_FORMAT=rgba8");
   ASSERT_EQ(run.exit_code, 0) << run.output;
-  for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 2);
+  for (int k = 0; k < 2; ++k) EXPECT_TRUE(dir.matches(dir.farmFrame(k), dir.reference(scene, k), 2, "frame_" + std::to_string(k)));
 }
 
 // The same farm over TCP on loopback (what a cluster uses, minus the other hosts): the
@@ -99,7 +99,7 @@ TEST(FarmTransports, TcpLoopbackMatchesOneProcess) {
   EXPECT_NE(run.output.find("tcp://127.0.0.1:" + std::to_string(base + 11)), std::string::npos)
       << "compositor 1 should listen on base+11";
   // 1/255: the sort-last contract.
-  for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 1);
+  for (int k = 0; k < 2; ++k) EXPECT_TRUE(dir.matches(dir.farmFrame(k), dir.reference(scene, k), 1, "frame_" + std::to_string(k)));
 }
 
 TEST(FarmPixelFormats, Rgba32fPiecesKeepTheContract) {
@@ -108,7 +108,7 @@ TEST(FarmPixelFormats, Rgba32fPiecesKeepTheContract) {
   auto run = dir.runFarm(scene, 4, 2, 2, 120, "--env TESSERA_FORMAT=rgba32f --env TESSERA_CODEC=lz4");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   // 1/255: float pieces, one rounding at the end.
-  for (int k = 0; k < 2; ++k) EXPECT_LE(maxAbsDiff(dir.farmFrame(k), dir.reference(scene, k)), 1);
+  for (int k = 0; k < 2; ++k) EXPECT_TRUE(dir.matches(dir.farmFrame(k), dir.reference(scene, k), 1, "frame_" + std::to_string(k)));
 }
 
 }  // namespace
@@ -133,7 +133,7 @@ TEST(FarmQuality, FastPresetMatchesOneProcessWithinOneLevel) {
   ASSERT_EQ(run.exit_code, 0) << run.output;
   for (int k = 0; k < 2; ++k) {
     Image8 farm = dir.farmFrame(k);
-    EXPECT_LE(maxAbsDiff(farm, dir.reference(scene, k)), 1) << "frame " << k << " in " << dir.path();
+    EXPECT_TRUE(dir.matches(farm, dir.reference(scene, k), 1, "frame_" + std::to_string(k))) << "frame " << k;
     EXPECT_GT(activeRegion(farm).area(), 100) << "frame " << k << " is (nearly) empty";
   }
 }

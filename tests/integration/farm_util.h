@@ -12,8 +12,11 @@
 #include <random>
 #include <string>
 
+#include <gtest/gtest.h>
+
 #include "common/image.h"
 #include "common/io/image_io.h"
+#include "tests/common/image_dump.h"
 #include "common/scene.h"
 
 namespace tessera::test {
@@ -52,6 +55,14 @@ inline Scene smallScene(int frames) {
 
 inline std::string bin(const std::string& name) { return std::string(TESSERA_BINARY_DIR) + "/bin/" + name; }
 
+// Largest difference of any channel, in rgba8 units.
+inline int maxAbsDiff(const Image8& a, const Image8& b) {
+  if (a.width != b.width || a.height != b.height) return 256;
+  int m = 0;
+  for (size_t i = 0; i < a.px.size(); ++i) m = std::max(m, std::abs(int(a.px[i]) - int(b.px[i])));
+  return m;
+}
+
 class FarmDir {
  public:
   explicit FarmDir(const std::string& name) {
@@ -59,8 +70,10 @@ class FarmDir {
     dir_ = fs::temp_directory_path() / ("tessera-it-" + name + "-" + std::to_string(getpid()) + "-" + std::to_string(rd() % 100000));
     fs::create_directories(dir_);
   }
+  // A failed test keeps its folder (log, frames, and the PNGs of any image mismatch).
   ~FarmDir() {
-    if (!getenv("TESSERA_KEEP_TEST_DIRS")) fs::remove_all(dir_);
+    if (::testing::Test::HasFailure()) std::fprintf(stderr, "test failed: its files are kept in %s\n", dir_.c_str());
+    else if (!getenv("TESSERA_KEEP_TEST_DIRS")) fs::remove_all(dir_);
   }
   const fs::path& path() const { return dir_; }
 
@@ -122,16 +135,20 @@ class FarmDir {
     return readPam(stem + ".pam");
   }
 
+  // Whether `actual` is within `tolerance` rgba8 levels of `expected` on every channel. If
+  // not, writes <name>_expected.png, <name>_actual.png and <name>_diff.png (the largest
+  // channel difference per pixel x 16, opaque grey) into mismatch/ and names them.
+  ::testing::AssertionResult matches(const Image8& actual, const Image8& expected, int tolerance,
+                                     const std::string& name) const {
+    const int diff = maxAbsDiff(actual, expected);
+    if (diff <= tolerance) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << name << ": differs by " << diff << " levels (tolerance " << tolerance
+                                         << "); see " << writeImageMismatch(dir_ / "mismatch", name, expected, actual);
+  }
+
  private:
   fs::path dir_;
 };
 
-// Largest difference of any channel, in rgba8 units.
-inline int maxAbsDiff(const Image8& a, const Image8& b) {
-  if (a.width != b.width || a.height != b.height) return 256;
-  int m = 0;
-  for (size_t i = 0; i < a.px.size(); ++i) m = std::max(m, std::abs(int(a.px[i]) - int(b.px[i])));
-  return m;
-}
 
 }  // namespace tessera::test

@@ -10,6 +10,7 @@
 
 #include "common/image.h"
 #include "common/io/image_io.h"
+#include "tests/common/image_dump.h"
 #include "common/scene.h"
 #include "common/volume.h"
 #include "renderer/volume/raycaster.h"
@@ -44,13 +45,10 @@ inline bool allFinite(const ImageF& img) {
   return true;
 }
 
-// Writes expected/actual PNGs into a folder and returns its path (named in failure messages).
+// Writes expected, actual and difference PNGs and returns their paths (for failure messages).
 inline std::string dumpImages(const std::string& name, const ImageF& expected, const ImageF& actual) {
-  const std::filesystem::path dir = std::filesystem::path(TESSERA_BINARY_DIR) / "test-output" / "renderer" / name;
-  std::filesystem::create_directories(dir);
-  writePng((dir / "expected.png").string(), expected);
-  writePng((dir / "actual.png").string(), actual);
-  return dir.string();
+  return tessera::test::writeImageMismatch(std::filesystem::path(TESSERA_BINARY_DIR) / "test-output" / "renderer", name,
+                                           toRGBA8(expected), toRGBA8(actual));
 }
 
 }  // namespace tessera::renderer::test
