@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -118,37 +119,27 @@ void writePng(const std::string& path, const ImageF& img, std::optional<std::arr
   writeRows(path, img.width, img.height, rgba);
 }
 
+// libpng's simplified API: it normalises every PNG flavour (palette, grey, 16-bit, no
+// alpha) to 8-bit straight RGBA and reports a damaged file as an error message.
 Image8 readPng(const std::string& path) {
-  FilePtr f(std::fopen(path.c_str(), "rb"));
-  if (!f) fail(path, std::string("cannot open: ") + std::strerror(errno));
-  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
-  png_infop info = png ? png_create_info_struct(png) : nullptr;
-  if (!info) {
-    png_destroy_read_struct(&png, nullptr, nullptr);
-    fail(path, "libpng init failed");
+  png_image png{};
+  png.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_file(&png, path.c_str())) {
+    std::string why = png.message;
+    png_image_free(&png);
+    if (!std::filesystem::exists(path)) fail(path, "cannot open: no such file");
+    fail(path, "not a valid PNG file (" + why + ")");
   }
-  Image8 img;
-  if (setjmp(png_jmpbuf(png))) {
-    png_destroy_read_struct(&png, &info, nullptr);
-    fail(path, "not a valid PNG file");
+  png.format = PNG_FORMAT_RGBA;
+  if (png.width > 16384 || png.height > 16384) {
+    png_image_free(&png);
+    fail(path, "image " + std::to_string(png.width) + "x" + std::to_string(png.height) + " larger than 16384x16384");
   }
-  png_init_io(png, f.get());
-  png_read_info(png, info);
-  // Normalise every PNG flavour to 8-bit RGBA.
-  png_set_expand(png);
-  png_set_strip_16(png);
-  png_set_gray_to_rgb(png);
-  png_set_add_alpha(png, 0xff, PNG_FILLER_AFTER);
-  png_read_update_info(png, info);
-  const int w = (int)png_get_image_width(png, info), h = (int)png_get_image_height(png, info);
-  std::vector<uint8_t> rows((size_t)w * h * 4);
-  std::vector<png_bytep> ptrs(h);
-  for (int y = 0; y < h; ++y) ptrs[y] = rows.data() + (size_t)y * w * 4;
-  png_read_image(png, ptrs.data());
-  png_read_end(png, nullptr);
-  png_destroy_read_struct(&png, &info, nullptr);
-  img = Image8(w, h);
-  for (size_t i = 0; i < (size_t)w * h; ++i) {
+  std::vector<uint8_t> rows(PNG_IMAGE_SIZE(png));
+  if (!png_image_finish_read(&png, nullptr, rows.data(), 0, nullptr))
+    fail(path, std::string("not a valid PNG file (") + png.message + ")");
+  Image8 img((int)png.width, (int)png.height);
+  for (size_t i = 0; i < (size_t)img.width * img.height; ++i) {
     const uint8_t* s = &rows[4 * i];
     uint8_t* d = &img.px[4 * i];
     for (int k = 0; k < 3; ++k) d[k] = (uint8_t)((s[k] * s[3] + 127) / 255);  // premultiply, rounded

@@ -46,7 +46,7 @@ MinMaxHierarchy::MinMaxHierarchy(const Volume& v) {
   const size_t count = (size_t)l0.dims[0] * l0.dims[1] * l0.dims[2];
   l0.mn.assign(count, 0);
   l0.mx.assign(count, 0);
-  // Slabs of blocks along z on two threads: ~25 ms for 256^3 on one core.
+  // Slabs of blocks along z, one per thread.
   auto work = [&](int bz0, int bz1) {
     for (int bz = bz0; bz < bz1; ++bz)
       for (int by = 0; by < l0.dims[1]; ++by)

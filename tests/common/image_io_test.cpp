@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 using namespace tessera;
 namespace fs = std::filesystem;
@@ -112,6 +113,31 @@ TEST(ImageIo, ErrorsNameTheFile) {
   }
   std::ofstream(t.file("junk.png")) << "not a png at all";
   EXPECT_THROW(readPng(t.file("junk.png")), std::runtime_error);
+}
+
+TEST(ImageIo, TruncatedOrDamagedPngIsAnErrorNamingTheFile) {
+  TempDir t("image_io");
+  Image8 img(64, 48);
+  for (size_t i = 0; i < img.px.size(); ++i) img.px[i] = (uint8_t)(i * 31 % 251);
+  for (size_t i = 3; i < img.px.size(); i += 4) img.px[i] = 255;
+  writePng(t.file("whole.png"), img);
+  std::ifstream in(t.file("whole.png"), std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  ASSERT_GT(bytes.size(), 100u);
+  auto expectError = [&](const std::string& name, const std::string& content) {
+    std::ofstream(t.file(name), std::ios::binary) << content;
+    try {
+      readPng(t.file(name));
+      ADD_FAILURE() << name << ": read without an error";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("not a valid PNG"), std::string::npos) << e.what();
+    }
+  };
+  expectError("cut.png", bytes.substr(0, bytes.size() / 2));  // the image data ends early
+  std::string damaged = bytes;
+  damaged[damaged.size() / 2] ^= 0x5a;  // a flipped byte in the compressed data: CRC mismatch
+  expectError("flipped.png", damaged);
 }
 
 TEST(ImageIo, PremultipliedPamRoundTripIsExact) {
