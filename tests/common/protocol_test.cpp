@@ -1,6 +1,7 @@
 // Wire protocol: every message round-trips, and every kind of damage is a clean failure
 // with a reason (never a crash, never a partially trusted message).
 #include "common/wire/protocol.h"
+#include "tests/common/protocol_samples.h"
 
 #include <gtest/gtest.h>
 
@@ -10,92 +11,7 @@
 namespace tessera::proto {
 namespace {
 
-using Bytes = std::vector<std::byte>;
-
-FrameParams sampleParams() {
-  FrameParams p;
-  p.frame = 42;
-  p.epoch = 3;
-  p.camera.eye = {1.5, -2, 3.25};
-  p.camera.fov = 45;
-  p.quality = {QualityName::Fast, 1.0 / 128, 0.95, true, false};
-  p.width = 640;
-  p.height = 480;
-  p.codec = Codec::Lz4;
-  p.format = PixelFormat::RGBA16F;
-  p.regions = {{0, {0, 0, 640, 240}, "ipc:///tmp/c0"}, {1, {0, 240, 640, 240}, "tcp://127.0.0.1:5601"}};
-  p.display_endpoint = "ipc:///tmp/display";
-  p.work = SortLastWork{{{0, {{0, 0, 0}, {128, 256, 256}}}, {1, {{128, 0, 0}, {256, 256, 256}}}, {1, {{0, 0, 0}, {1, 1, 1}}}},
-                        {2, 0, 1}};
-  return p;
-}
-
-FrameParams sampleSortFirstParams() {
-  FrameParams p = sampleParams();
-  p.work = SortFirstWork{{{0, 1, {0, 0, 320, 240}}, {1, 0, {320, 0, 320, 1}}}};
-  return p;
-}
-
-Framebuffer sampleFramebuffer() {
-  Framebuffer f;
-  f.frame = 5;
-  f.epoch = 2;
-  f.renderer = 1;
-  f.width = 13;
-  f.height = 7;
-  f.pixels.resize(13 * 7 * 4);
-  for (size_t i = 0; i < f.pixels.size(); ++i) f.pixels[i] = std::byte(uint8_t(i % 11 == 0 ? i : 0));
-  f.render_ms = 2.5;
-  return f;
-}
-
-Piece samplePiece(PixelFormat f) {
-  Piece p;
-  p.frame = 7;
-  p.epoch = 3;
-  p.renderer = 3;
-  p.brick = 2;
-  p.region = {0, 100, 64, 32};
-  p.active = {10, 105, 20, 9};
-  p.format = f;
-  p.pixels.resize(size_t(p.active.area()) * bytesPerPixel(f));
-  for (size_t i = 0; i < p.pixels.size(); ++i) p.pixels[i] = std::byte(uint8_t(i * 7 / 5));
-  p.render_ms = 12.5;
-  p.encode_ms = 0.25;
-  return p;
-}
-
-Strips sampleStrips() {
-  Strips s;
-  s.frame = 9;
-  s.epoch = 3;
-  s.render_ms = 4.5;
-  s.compositor = 1;
-  s.stream.assign(1000, 0);
-  for (size_t i = 0; i < 300; ++i) s.stream[i] = uint8_t(i);
-  s.composite_ms = 3;
-  s.encode_ms = 1;
-  s.active_pixels = 123456789012ull;
-  return s;
-}
-
-// Independent Adler-32 so the test checks the wire format rather than trusting the code.
-uint32_t adler(std::span<const std::byte> p) {
-  uint32_t a = 1, b = 0;
-  for (std::byte x : p) {
-    a = (a + uint8_t(x)) % 65521;
-    b = (b + a) % 65521;
-  }
-  return (b << 16) | a;
-}
-void putLE(Bytes& m, size_t off, uint64_t v, int n) {
-  for (int i = 0; i < n; ++i) m[off + i] = std::byte(uint8_t(v >> (8 * i)));
-}
-// Re-signs a (possibly edited) message so only the field under test is wrong.
-void reseal(Bytes& m) {
-  putLE(m, 28, m.size() - kHeaderSize, 4);
-  putLE(m, 32, adler(std::span(m).subspan(kHeaderSize)), 4);
-}
+using namespace test;
 
 TEST(Protocol, HeaderLayoutOnTheWire) {
   Bytes m = encode(Welcome{Role::Compositor, 5}, 77);
@@ -192,29 +108,6 @@ TEST(Protocol, TruncatedAtEveryLengthFails) {
   expectTruncationsFail(encode(sampleFramebuffer(), 1, Codec::Lz4), decodeFramebuffer);
   expectTruncationsFail(encode(Input{1, 2, 3, QualityName::Fast}, 1), decodeInput);
   expectTruncationsFail(encode(Probe{}, 1), decodeProbe);
-}
-
-TEST(Protocol, FramebufferAndTilesAreValidated) {
-  Framebuffer fb = sampleFramebuffer();
-  fb.pixels.pop_back();
-  EXPECT_THROW(encode(fb, 1, Codec::None), std::invalid_argument);
-  FrameParams p = sampleSortFirstParams();
-  std::get<SortFirstWork>(p.work).tiles[1].tile = {630, 0, 20, 10};  // sticks out of the 640-wide image
-  auto r = decodeFrameParams(encode(p, 1));
-  ASSERT_FALSE(r);
-  EXPECT_NE(r.error().find("tile 1"), std::string::npos) << r.error();
-}
-
-TEST(Protocol, TruncatedPayloadWithResealedHeaderFailsOnTheField) {
-  FrameParams p = sampleParams();
-  p.work = SortFirstWork{};  // display_endpoint is then followed only by the mode and the 4-byte tile count
-  Bytes m = encode(p, 1);
-  m.resize(m.size() - 14);  // cuts into display_endpoint
-  putLE(m, 24, m.size() - kHeaderSize, 4);  // raw_size == encoded_size for codec none
-  reseal(m);
-  auto r = decodeFrameParams(m);
-  ASSERT_FALSE(r);
-  EXPECT_NE(r.error().find("display_endpoint"), std::string::npos) << r.error();
 }
 
 TEST(Protocol, GarbageBytesFailEveryDecoder) {
@@ -322,38 +215,6 @@ TEST(Protocol, PiecePixelCountMustMatchActiveArea) {
   auto r = decodePiece(m);
   ASSERT_FALSE(r);
   EXPECT_NE(r.error().find("pixel bytes"), std::string::npos) << r.error();
-}
-
-TEST(Protocol, FrameParamsInvariantsAreChecked) {
-  auto fails = [](FrameParams p, const std::string& word) {
-    auto r = decodeFrameParams(encode(p, 1));
-    ASSERT_FALSE(r) << "accepted: expected failure naming " << word;
-    EXPECT_NE(r.error().find(word), std::string::npos) << r.error();
-  };
-  FrameParams p = sampleParams();
-  auto work = [](FrameParams& q) -> SortLastWork& { return std::get<SortLastWork>(q.work); };
-  { auto q = p; work(q).order = {0, 0, 1}; fails(q, "permutation"); }
-  { auto q = p; work(q).order = {0, 1}; fails(q, "order"); }
-  { auto q = p; work(q).order = {0, 1, 3}; fails(q, "permutation"); }
-  { auto q = p; q.regions[1].region.h = 241; fails(q, "region 1"); }
-  { auto q = p; work(q).bricks[1].brick.lo[2] = 256; fails(q, "brick 1"); }
-  { auto q = p; q.width = 0; fails(q, "image"); }
-  { auto q = p; q.height = 16385; fails(q, "image"); }
-  { auto q = p; q.camera.fov = std::numeric_limits<double>::quiet_NaN(); fails(q, "camera.fov"); }
-  { auto q = p; q.codec = Codec(9); fails(q, "codec"); }
-}
-
-TEST(Protocol, UnknownFrameModeIsRefused) {
-  FrameParams p = sampleParams();
-  Bytes m = encode(p, 1);
-  const std::string ep = p.display_endpoint;
-  auto at = std::search(m.begin(), m.end(), ep.begin(), ep.end(), [](std::byte b, char c) { return b == std::byte(c); });
-  ASSERT_NE(at, m.end());
-  *(at + ep.size()) = std::byte{3};  // the mode byte follows display_endpoint
-  reseal(m);
-  auto r = decodeFrameParams(m);
-  ASSERT_FALSE(r);
-  EXPECT_NE(r.error().find("mode 3"), std::string::npos) << r.error();
 }
 
 TEST(Protocol, StructuredMessagesMustUseCodecNone) {

@@ -1,0 +1,76 @@
+// FrameParams on the wire: its cross-field invariants (order a permutation, regions and
+// tiles inside the image, a known mode) are checked by the decoder, each failure named.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <limits>
+
+#include "common/wire/protocol.h"
+#include "tests/common/protocol_samples.h"
+
+namespace tessera::proto {
+namespace {
+
+using namespace test;
+
+TEST(Protocol, FramebufferAndTilesAreValidated) {
+  Framebuffer fb = sampleFramebuffer();
+  fb.pixels.pop_back();
+  EXPECT_THROW(encode(fb, 1, Codec::None), std::invalid_argument);
+  FrameParams p = sampleSortFirstParams();
+  std::get<SortFirstWork>(p.work).tiles[1].tile = {630, 0, 20, 10};  // sticks out of the 640-wide image
+  auto r = decodeFrameParams(encode(p, 1));
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("tile 1"), std::string::npos) << r.error();
+}
+
+
+TEST(Protocol, TruncatedPayloadWithResealedHeaderFailsOnTheField) {
+  FrameParams p = sampleParams();
+  p.work = SortFirstWork{};  // display_endpoint is then followed only by the mode and the 4-byte tile count
+  Bytes m = encode(p, 1);
+  m.resize(m.size() - 14);  // cuts into display_endpoint
+  putLE(m, 24, m.size() - kHeaderSize, 4);  // raw_size == encoded_size for codec none
+  reseal(m);
+  auto r = decodeFrameParams(m);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("display_endpoint"), std::string::npos) << r.error();
+}
+
+
+TEST(Protocol, FrameParamsInvariantsAreChecked) {
+  auto fails = [](FrameParams p, const std::string& word) {
+    auto r = decodeFrameParams(encode(p, 1));
+    ASSERT_FALSE(r) << "accepted: expected failure naming " << word;
+    EXPECT_NE(r.error().find(word), std::string::npos) << r.error();
+  };
+  FrameParams p = sampleParams();
+  auto work = [](FrameParams& q) -> SortLastWork& { return std::get<SortLastWork>(q.work); };
+  { auto q = p; work(q).order = {0, 0, 1}; fails(q, "permutation"); }
+  { auto q = p; work(q).order = {0, 1}; fails(q, "order"); }
+  { auto q = p; work(q).order = {0, 1, 3}; fails(q, "permutation"); }
+  { auto q = p; q.regions[1].region.h = 241; fails(q, "region 1"); }
+  { auto q = p; work(q).bricks[1].brick.lo[2] = 256; fails(q, "brick 1"); }
+  { auto q = p; q.width = 0; fails(q, "image"); }
+  { auto q = p; q.height = 16385; fails(q, "image"); }
+  { auto q = p; q.camera.fov = std::numeric_limits<double>::quiet_NaN(); fails(q, "camera.fov"); }
+  { auto q = p; q.codec = Codec(9); fails(q, "codec"); }
+}
+
+
+TEST(Protocol, UnknownFrameModeIsRefused) {
+  FrameParams p = sampleParams();
+  Bytes m = encode(p, 1);
+  const std::string ep = p.display_endpoint;
+  auto at = std::search(m.begin(), m.end(), ep.begin(), ep.end(), [](std::byte b, char c) { return b == std::byte(c); });
+  ASSERT_NE(at, m.end());
+  *(at + ep.size()) = std::byte{3};  // the mode byte follows display_endpoint
+  reseal(m);
+  auto r = decodeFrameParams(m);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("mode 3"), std::string::npos) << r.error();
+}
+
+
+}  // namespace
+}  // namespace tessera::proto
