@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
     if (std::string why = farmAccuracyProblem(opt.scene.quality, opt.renderers); !why.empty())
       throw std::invalid_argument((args.scene_path.empty() ? std::string("built-in scene") : args.scene_path) + ": " + why);
     opt.endpoints = endpoints;
+    opt.run = farmRun();
     opt.codec = parseCodec(codec);
     opt.format = formats.at(format);
     opt.balance = tiling == "balanced";

@@ -1,5 +1,7 @@
 #include "master/master.h"
 
+#include <unistd.h>
+
 #include <chrono>
 #include <memory>
 #include <thread>
@@ -21,7 +23,7 @@ namespace {
 
 // Largest legitimate control message: a Stats with a time per sort-first tile (1024 renderers
 // x 64 tiles x 8 bytes = 512 KiB); ZeroMQ refuses larger ones before reading them.
-constexpr int64_t kMaxControlMessage = 4 << 20;
+constexpr int64_t kMaxControlMessage = 1 << 20;
 using proto::Role;
 
 // The thin loop: wires the PUB and ROUTER sockets to membership, the credit window, the
@@ -32,8 +34,14 @@ class Master {
       : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router, kMaxControlMessage)),
         window_(opt.in_flight, opt.deadline), base_camera_(opt.scene.camera), quality_(opt.scene.quality),
         metrics_(opt.metrics_path, opt.frames < 0 ? opt.scene.orbit.frames : opt.frames) {
+    // No receive bound on the control socket: with makeSocket's 64, libzmq lost messages of
+    // a peer that sent faster than the master read (a third of 300 junk messages, never
+    // seen, so never counted; a member's Stats could be lost the same way). The master
+    // drains this socket every loop (<= 50 ms), and FarmFuzz bounds its peak memory.
+    ctl_.set(zmq::sockopt::rcvhwm, 0);
     bindTo(pub_, opt_.endpoints.bind(opt_.endpoints.masterPub()));
     bindTo(ctl_, opt_.endpoints.bind(opt_.endpoints.masterControl()));
+    note_ = std::make_unique<FarmNote>(opt_.endpoints.base, fmt::format("run '{}', tessera-master pid {}", opt_.run, getpid()));
     total_frames_ = opt_.frames < 0 ? opt_.scene.orbit.frames : opt_.frames;
     spdlog::info("master listening pub={} control={} renderers={} compositors={} frames={} in_flight={}",
                  opt_.endpoints.masterPub(), opt_.endpoints.masterControl(), opt_.renderers, opt_.compositors,
@@ -101,6 +109,12 @@ class Master {
   void probe() { sendBytes(pub_, proto::encode(proto::Probe{}, kMasterRank)); }
 
   void onHello(const std::string& identity, const proto::Hello& h) {
+    if (h.run != opt_.run) {  // a stage of another farm: no rank, no work, and it is told why
+      const std::string why = fmt::format("this farm is run '{}', the {} (pid {}) is of run '{}'", opt_.run,
+                                          roleName(h.role), h.pid, h.run);
+      refuse(why);
+      return sendTo(identity, proto::encode(proto::Shutdown{why + "; check TESSERA_ENDPOINTS"}, kMasterRank));
+    }
     bool joined = false;
     Member& m = members_.join(identity, h, Clock::now(), &joined);
     if (joined && h.role == Role::Compositor) m.endpoint = opt_.endpoints.compositorOn(m.rank, h.endpoint);
@@ -145,20 +159,7 @@ class Master {
   // from compositor 0 (pid 99)"; `culprit` is the first of them.
   std::string waitingFor(uint64_t frame, const Member** culprit) const {
     auto w = window_.waiting(frame);
-    std::vector<std::string> parts;
-    *culprit = nullptr;
-    auto name = [&](Role role, uint32_t rank, const char* what) {
-      const Member* m = members_.find(role, rank);
-      if (!*culprit) *culprit = m;
-      return fmt::format("{} {} {} (pid {})", what, roleName(role), rank, m ? m->pid : 0);
-    };
-    for (uint32_t r : w.renderers) parts.push_back(name(Role::Renderer, r, "stats from"));
-    for (uint32_t c : w.compositors) parts.push_back(name(Role::Compositor, c, "strips from"));
-    if (w.display) {
-      const Member* d = members_.display();
-      if (d) parts.push_back(name(Role::Display, d->rank, "FrameDone from"));
-    }
-    return fmt::format("{}", fmt::join(parts, " and "));
+    return describeWaiting(members_, w.renderers, w.compositors, w.display, culprit);
   }
 
   void warnIfStalled() {
@@ -387,6 +388,7 @@ class Master {
   Quality quality_, last_quality_;
   DropCounter drops_;
   Metrics metrics_;
+  std::unique_ptr<FarmNote> note_;
 };
 
 }  // namespace

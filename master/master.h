@@ -29,6 +29,7 @@ struct MasterOptions {
   bool balance = true;      // sort-last: compositor regions by active pixels; sort-first: tiles by cost
   int tiles_per_renderer = 1;  // sort-first tiles = renderers x this
   std::string metrics_path; // JSON lines; "" = none
+  std::string run;          // this farm's identity (TESSERA_RUN): a Hello of another run is refused
   double heartbeat_timeout_s = 3.0;
   double start_timeout_s = 60.0;
   DeadlineOptions deadline;  // a frame late past this blames the stage that did not deliver

@@ -1,5 +1,8 @@
 #include "master/membership.h"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -104,6 +107,21 @@ proto::Roster Membership::roster() const {
     for (const Member* m : alive(role))
       if (auto id = StageLink::dataIdentity(m->identity); !id.empty()) r.members.push_back({role, m->rank, id});
   return r;
+}
+
+std::string describeWaiting(const Membership& members, const std::vector<uint32_t>& renderers,
+                            const std::vector<uint32_t>& compositors, bool display, const Member** culprit) {
+  std::vector<std::string> parts;
+  *culprit = nullptr;
+  auto name = [&](proto::Role role, uint32_t rank, const char* what) {
+    const Member* m = members.find(role, rank);
+    if (!*culprit) *culprit = m;
+    return fmt::format("{} {} {} (pid {})", what, proto::roleName(role), rank, m ? m->pid : 0);
+  };
+  for (uint32_t r : renderers) parts.push_back(name(proto::Role::Renderer, r, "stats from"));
+  for (uint32_t c : compositors) parts.push_back(name(proto::Role::Compositor, c, "strips from"));
+  if (const Member* d = members.display(); display && d) parts.push_back(name(proto::Role::Display, d->rank, "FrameDone from"));
+  return fmt::format("{}", fmt::join(parts, " and "));
 }
 
 }  // namespace tessera::master

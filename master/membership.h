@@ -71,4 +71,9 @@ class Membership {
   uint32_t epoch_ = 0;
 };
 
+// Who a frame waits for, e.g. "stats from renderer 1 (pid 1234) and strips from compositor 0
+// (pid 99)"; `culprit` gets the first of them (nullptr if none is a member).
+std::string describeWaiting(const Membership& members, const std::vector<uint32_t>& renderers,
+                            const std::vector<uint32_t>& compositors, bool display, const Member** culprit);
+
 }  // namespace tessera::master

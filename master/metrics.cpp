@@ -17,6 +17,14 @@ Metrics::Metrics(const std::string& path, uint64_t total_frames)
   if (!dir.empty()) std::filesystem::create_directories(dir);
   out_.open(path);
   if (!out_) throw std::runtime_error("cannot write metrics file " + path);
+  path_ = path;
+}
+
+Metrics::~Metrics() {
+  if (path_.empty() || wrote_) return;
+  out_.close();
+  std::error_code ignored;
+  std::filesystem::remove(path_, ignored);
 }
 
 void Metrics::issued(uint64_t frame, uint32_t epoch, int renderers, int compositors) {
@@ -128,6 +136,7 @@ void Metrics::write(uint64_t frame, Frame& f) {
                f.d.display_ms, j["render_bytes_raw"].get<uint64_t>(), j["render_bytes_encoded"].get<uint64_t>(),
                j["render_imbalance_time"].get<double>(), j["composite_imbalance_pixels"].get<double>());
   if (out_) out_ << j.dump() << '\n' << std::flush;
+  wrote_ = wrote_ || out_;
   if (auto progress = run_.add(j, f.done_at)) spdlog::info("{}", *progress);
 }
 

@@ -22,6 +22,9 @@ class Metrics {
  public:
   // path "" = log only; total_frames 0 = interactive (progress without an estimate).
   explicit Metrics(const std::string& path, uint64_t total_frames = 0);
+  ~Metrics();  // a metrics file that got no line (a failed start, no frame done) is removed
+  Metrics(const Metrics&) = delete;
+  Metrics& operator=(const Metrics&) = delete;
 
   void issued(uint64_t frame, uint32_t epoch, int renderers, int compositors);
   void stats(const proto::StageStats& s);
@@ -59,6 +62,8 @@ class Metrics {
   void write(uint64_t frame, Frame& f);
 
   std::ofstream out_;
+  std::string path_;
+  bool wrote_ = false;
   std::map<uint64_t, Frame> frames_;
   uint64_t frames_done_ = 0;
   uint64_t reassignments_ = 0, reissued_ = 0, refused_ = 0;

@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <memory>
+#include <mutex>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -175,9 +176,28 @@ bool setupCurve(zmq::context_t& ctx, const std::string& base_endpoint) {
   return true;
 }
 
+// ipc socket files this process bound (path, inode), removed by removeBoundIpcFiles.
+std::mutex g_bound_mu;
+std::vector<std::pair<std::string, ino_t>> g_bound;
+
 void bindTo(zmq::socket_t& s, const std::string& endpoint) {
+  claimIpcEndpoint(endpoint);
   if (g_curve && endpoint.rfind("tcp://", 0) == 0) g_curve->makeServer(s);
   s.bind(endpoint);
+  struct stat st {};
+  if (endpoint.rfind("ipc://", 0) == 0 && stat(endpoint.c_str() + 6, &st) == 0) {
+    std::lock_guard lock(g_bound_mu);
+    g_bound.emplace_back(endpoint.substr(6), st.st_ino);
+  }
+}
+
+void removeBoundIpcFiles() {
+  std::lock_guard lock(g_bound_mu);
+  for (const auto& [path, inode] : g_bound) {
+    struct stat st {};
+    if (stat(path.c_str(), &st) == 0 && st.st_ino == inode) unlink(path.c_str());  // still ours
+  }
+  g_bound.clear();
 }
 
 void connectTo(zmq::socket_t& s, const std::string& endpoint) {

@@ -63,6 +63,9 @@ bool setupCurve(zmq::context_t& ctx, const std::string& base_endpoint);
 // Bind / connect a socket, as a CURVE server / client when CURVE is on for this process.
 void bindTo(zmq::socket_t& s, const std::string& endpoint);
 void connectTo(zmq::socket_t& s, const std::string& endpoint);
+// Removes the ipc:// socket files this process bound (those not taken over since): a stage
+// that ends leaves nothing in its endpoint folder.
+void removeBoundIpcFiles();
 // Handshakes this process refused for a wrong key (0 when CURVE is off).
 uint64_t curveRefused();
 // Turns process-wide CURVE off again (tests that run several farms in one process).

@@ -51,6 +51,8 @@ Endpoints makeEndpoints(const std::string& base) {
   return Endpoints{base};
 }
 
+std::string farmRun() { return envOr("TESSERA_RUN", ""); }
+
 std::string defaultEndpointBase() {
   return envOr("TESSERA_ENDPOINTS",
                "ipc://" + (std::filesystem::temp_directory_path() / ("tessera-" + std::to_string(getuid()))).string());

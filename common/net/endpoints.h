@@ -29,5 +29,8 @@ struct Endpoints {
 Endpoints makeEndpoints(const std::string& base);
 // TESSERA_ENDPOINTS, or ipc://<tmp>/tessera-<uid> when unset.
 std::string defaultEndpointBase();
+// The farm this process belongs to: TESSERA_RUN (tessera-up makes one per run), "" if unset.
+// Stages say it in their Hello; a master refuses a stage of another run.
+std::string farmRun();
 
 }  // namespace tessera

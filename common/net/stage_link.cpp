@@ -77,7 +77,7 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   }
   // 2. Hello until Welcome (the master may still be starting; Hello is idempotent per reply).
   zmq::pollitem_t ctl_item[] = {{ctl_.handle(), 0, ZMQ_POLLIN, 0}};
-  sendBytes(ctl_, proto::encode(proto::Hello{role_, (uint32_t)getpid(), advertise_}, 0));
+  sendBytes(ctl_, proto::encode(proto::Hello{role_, (uint32_t)getpid(), advertise_, farmRun()}, 0));
   while (true) {
     if ((stop && *stop) || expired()) return false;
     notice("the master at " + ep_.masterControl() + " to answer its Hello");
@@ -85,6 +85,11 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
     if (!(ctl_item[0].revents & ZMQ_POLLIN)) continue;
     zmq::message_t m;
     (void)ctl_.recv(m);
+    if (auto refused = proto::decodeShutdown(view(m))) {  // the master will not have this stage
+      spdlog::error("the master at {} refused this {}: {}", ep_.masterControl(), proto::roleName(role_),
+                    refused->reason);
+      return false;
+    }
     auto w = proto::decodeWelcome(view(m));
     if (!w || w->role != role_) {
       spdlog::warn("ignoring unexpected control message while joining: {}", w ? "wrong role" : w.error());

@@ -25,15 +25,17 @@ int stageMain(CLI::App& app, int argc, char** argv, const StageArgs& args, const
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
+  int rc = 1;
   try {
     const Endpoints endpoints = args.endpoints();
     zmq::context_t ctx(1);
     setupCurve(ctx, endpoints.base);  // on when endpoints leave this host
-    return body(endpoints, ctx, &installStopSignals());
+    rc = body(endpoints, ctx, &installStopSignals());
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
-    return 1;
   }
+  removeBoundIpcFiles();
+  return rc;
 }
 
 }  // namespace tessera

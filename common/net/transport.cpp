@@ -1,6 +1,17 @@
 #include "common/net/transport.h"
 
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include <spdlog/spdlog.h>
 
 namespace tessera {
 
@@ -39,6 +50,42 @@ zmq::socket_t makeSocket(zmq::context_t& ctx, zmq::socket_type type, int64_t max
 int64_t maxPixelMessageBytes(int width, int height) {
   const int64_t pixels = int64_t(std::max(width, 1)) * std::max(height, 1);
   return 34 * pixels + (64 << 10);
+}
+
+void claimIpcEndpoint(const std::string& endpoint) {
+  if (endpoint.rfind("ipc://", 0) != 0) return;
+  const std::string path = endpoint.substr(6);
+  struct stat st {};
+  if (lstat(path.c_str(), &st) != 0 || !S_ISSOCK(st.st_mode)) return;
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  if (path.size() >= sizeof addr.sun_path) return;  // ZeroMQ's bind reports this itself
+  std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
+  const int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return;
+  const bool live = connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) == 0;
+  close(fd);
+  if (!live) {
+    spdlog::info("removed {}: a socket file left by a farm that is gone", path);
+    std::filesystem::remove(path);
+    return;
+  }
+  std::ifstream farm(std::filesystem::path(path).parent_path() / "farm");
+  std::string owner;
+  std::getline(farm, owner);
+  throw std::runtime_error(endpoint + " is in use by a live farm" + (owner.empty() ? "" : " (" + owner + ")") +
+                           ": stop it, or give this farm other endpoints (TESSERA_ENDPOINTS)");
+}
+
+FarmNote::FarmNote(const std::string& endpoint_base, const std::string& text) {
+  if (endpoint_base.rfind("ipc://", 0) != 0) return;
+  path_ = (std::filesystem::path(endpoint_base.substr(6)) / "farm").string();
+  std::ofstream(path_) << text << '\n';
+}
+
+FarmNote::~FarmNote() {
+  std::error_code ignored;
+  if (!path_.empty()) std::filesystem::remove(path_, ignored);
 }
 
 }  // namespace tessera

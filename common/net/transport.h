@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <zmq.hpp>
@@ -39,5 +40,25 @@ zmq::socket_t makeSocket(zmq::context_t& ctx, zmq::socket_type type, int64_t max
 // 1/16 (LZO: n + n/16 + 67; LZ4 and zstd less); 64 KiB covers the header and metadata.
 // So: 32*w*h + 2*w*h + 64 KiB (about 8.6 MiB for 512 x 512).
 int64_t maxPixelMessageBytes(int width, int height);
+
+// Before binding an ipc:// endpoint: if its socket file answers, a live process (another
+// farm) holds it, and binding would silently take it over; throws std::runtime_error naming
+// the endpoint and what the folder's `farm` file says of its owner. A file nobody answers
+// on is left by a dead farm: it is removed (and said). Other transports: nothing to do.
+void claimIpcEndpoint(const std::string& endpoint);
+
+// The note an ipc:// farm leaves in its endpoint folder (`farm`: its run and master pid),
+// which claimIpcEndpoint quotes to a second farm; removed with this object. Other
+// transports: nothing.
+class FarmNote {
+ public:
+  FarmNote(const std::string& endpoint_base, const std::string& text);
+  ~FarmNote();
+  FarmNote(const FarmNote&) = delete;
+  FarmNote& operator=(const FarmNote&) = delete;
+
+ private:
+  std::string path_;
+};
 
 }  // namespace tessera

@@ -182,6 +182,7 @@ std::vector<std::byte> encode(const Hello& m, uint32_t sender) {
     w.u8(static_cast<uint8_t>(m.role));
     w.u32(m.pid);
     w.str(m.endpoint);
+    w.str(m.run);
   });
 }
 Result<Hello> decodeHello(std::span<const std::byte> msg) {
@@ -189,6 +190,7 @@ Result<Hello> decodeHello(std::span<const std::byte> msg) {
     m.role = readRole(r);
     m.pid = r.u32("pid");
     m.endpoint = r.str("endpoint");
+    m.run = r.str("run");
   });
 }
 

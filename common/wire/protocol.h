@@ -41,7 +41,7 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 2;  // 2: FrameParams carries its mode
+inline constexpr uint16_t kVersion = 2;  // 2: FrameParams carries its mode, Hello its run
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -73,11 +73,12 @@ struct Header {
 };
 
 // ---- messages ---------------------------------------------------------------------
-// Hello:      role u8 1 (1..Role::Last) | pid u32 4 | endpoint str 4+n
+// Hello:      role u8 1 (1..Role::Last) | pid u32 4 | endpoint str 4+n | run str 4+n
+//             run: the farm's identity (TESSERA_RUN); the master refuses any other
 // Welcome:    role u8 1 (1..Role::Last) | rank u32 4
 // Heartbeat:  role u8 1 (1..Role::Last) | rank u32 4
 struct Hello {                                                             // stage -> master
-  Role role = Role::Renderer; uint32_t pid = 0; std::string endpoint;
+  Role role = Role::Renderer; uint32_t pid = 0; std::string endpoint; std::string run;
   bool operator==(const Hello&) const = default;
 };
 struct Welcome {                                                           // master -> stage

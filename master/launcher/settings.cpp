@@ -40,6 +40,7 @@ const Setting kSettings[] = {
     {"TESSERA_SIMD", Kind::Word, 0, 0, "scalar|avx2|avx512"},
     {"TESSERA_LOG", Kind::Word, 0, 0, "trace|debug|info|warn|warning|error|critical|off"},
     {"TESSERA_ENDPOINTS", Kind::Free},
+    {"TESSERA_RUN", Kind::Free},
     {"TESSERA_MASTER_HOST", Kind::Free},
     {"TESSERA_DISPLAY_HOST", Kind::Free},
     {"TESSERA_BIND_HOST", Kind::Free},

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <map>
 #include <optional>
+#include <random>
 #include <sstream>
 
 #include "common/net/log.h"
@@ -75,6 +76,27 @@ void checkUserSettings(const std::string& file, tessera::launcher::ComposeOption
             out && !out->empty() ? *out : (std::filesystem::absolute(file).parent_path() / "out").string());
 }
 
+// 48 random bits as 12 hex digits: the run's identity (TESSERA_RUN).
+std::string newRunId() {
+  std::random_device rd;
+  const uint64_t bits = ((uint64_t)rd() << 16) ^ rd();
+  char id[16];
+  std::snprintf(id, sizeof id, "%012llx", (unsigned long long)(bits & 0xffffffffffffULL));
+  return id;
+}
+
+// The ipc folder the farm's endpoints live in when it is this run's own (named after the
+// run, as compose.yaml's default makes it); "" otherwise (the user's own endpoints).
+std::filesystem::path runFolder(const tessera::launcher::ComposeProject& project, const std::string& run) {
+  for (const auto& service : project.services) {
+    auto it = service.environment.find("TESSERA_ENDPOINTS");
+    if (it == service.environment.end() || it->second.rfind("ipc://", 0) != 0) continue;
+    const std::filesystem::path folder = it->second.substr(6);
+    if (folder.filename() == run) return folder;
+  }
+  return {};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -101,8 +123,15 @@ int main(int argc, char** argv) {
       options.overrides[kv.substr(0, eq)] = kv.substr(eq + 1);
     }
     checkUserSettings(file, options, log);
+    // One identity per run: stages say it in their Hello and a master refuses another run's;
+    // compose.yaml's default endpoints are a folder named after it, so two farms never meet.
+    if (!options.overrides.count("TESSERA_RUN") && !std::getenv("TESSERA_RUN"))
+      options.overrides["TESSERA_RUN"] = newRunId();
+    const std::string run = options.overrides.count("TESSERA_RUN") ? options.overrides["TESSERA_RUN"]
+                                                                    : std::getenv("TESSERA_RUN");
     const auto project = tessera::launcher::loadCompose(file, options);
     for (const auto& w : project.warnings) log->warn("{}", w);
+    const std::filesystem::path folder = runFolder(project, run);
     tessera::launcher::LaunchOptions launch_options;
     if (!launch_with.empty()) {
       launch_options.launch_with = tessera::launcher::splitCommandLine(launch_with, "--launch-with");
@@ -110,7 +139,11 @@ int main(int argc, char** argv) {
     if (dry_run) {
       return printPlan(project, tessera::launcher::planProcesses(project, launch_options, true)) ? 0 : 1;
     }
-    return tessera::launcher::launch(project, launch_options);
+    if (!folder.empty()) log->info("run {}: sockets in {}", run, folder.string());
+    const int rc = tessera::launcher::launch(project, launch_options);
+    std::error_code ignored;
+    if (!folder.empty()) std::filesystem::remove_all(folder, ignored);  // this run's own: nobody else's
+    return rc;
   } catch (const std::exception& e) {
     log->error("{}", e.what());
     return 2;

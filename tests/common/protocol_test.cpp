@@ -42,7 +42,7 @@ void expectRoundTrip(const T& v, const Bytes& m, Dec dec, Type type) {
 }
 
 TEST(Protocol, EveryStructuredMessageRoundTrips) {
-  Hello hello{Role::Compositor, 4242, "tcp://127.0.0.1:7000"};
+  Hello hello{Role::Compositor, 4242, "tcp://127.0.0.1:7000", "3f9a0c1d2e4b"};
   expectRoundTrip(hello, encode(hello, 11), decodeHello, Type::Hello);
   expectRoundTrip(Welcome{Role::Display, 3}, encode(Welcome{Role::Display, 3}, 11), decodeWelcome, Type::Welcome);
   expectRoundTrip(Heartbeat{Role::Renderer, 9}, encode(Heartbeat{Role::Renderer, 9}, 11), decodeHeartbeat, Type::Heartbeat);
@@ -100,7 +100,7 @@ void expectTruncationsFail(const Bytes& msg, Dec dec) {
 }
 
 TEST(Protocol, TruncatedAtEveryLengthFails) {
-  expectTruncationsFail(encode(Hello{Role::Renderer, 1, "ipc://x"}, 1), decodeHello);
+  expectTruncationsFail(encode(Hello{Role::Renderer, 1, "ipc://x", "run-a"}, 1), decodeHello);
   expectTruncationsFail(encode(sampleParams(), 1), decodeFrameParams);
   expectTruncationsFail(encode(sampleSortFirstParams(), 1), decodeFrameParams);
   expectTruncationsFail(encode(samplePiece(PixelFormat::RGBA8), 1, Codec::Lzo), decodePiece);

@@ -90,7 +90,7 @@ class FarmDir {
   }
 
   // tessera-up on the project's compose.yaml, sockets and output in this folder.
-  // `endpoints` "" = ipc sockets in this folder. Its output goes to farmLog() as it
+  // `endpoints` "" = ipc sockets in this folder; "default" = compose.yaml's own. Its output goes to farmLog() as it
   // happens (tests react to what the farm says) and is returned whole.
   CommandResult runFarm(const fs::path& scene, int renderers, int compositors, int frames, int timeout_s = 120,
                         const std::string& extra = "", const std::string& endpoints = "") const {
@@ -99,7 +99,9 @@ class FarmDir {
                       " --env TESSERA_SCENE=" + scene.string() + " --env TESSERA_RENDERERS=" + std::to_string(renderers) +
                       " --env TESSERA_COMPOSITORS=" + std::to_string(compositors) +
                       " --env TESSERA_FRAMES=" + std::to_string(frames) + " --env TESSERA_OUT=" + (dir_ / "out").string() +
-                      " --env TESSERA_ENDPOINTS=" + (endpoints.empty() ? "ipc://" + (dir_ / "sockets").string() : endpoints) +
+                      (endpoints == "default" ? std::string()
+                                              : " --env TESSERA_ENDPOINTS=" +
+                                                    (endpoints.empty() ? "ipc://" + (dir_ / "sockets").string() : endpoints)) +
                       " --env TESSERA_WINDOW=off " + extra + " > " + (dir_ / "farm.log").string();
     CommandResult r = runCommand(cmd, timeout_s);
     r.output = farmLog() + r.output;  // r.output: what timeout itself said, if anything

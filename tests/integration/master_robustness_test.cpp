@@ -43,8 +43,8 @@ bool waitUntil(F done, std::chrono::milliseconds limit, std::function<void()> me
 // routing-id form), heartbeats only when told, and delivers nothing.
 class FakeStage {
  public:
-  FakeStage(zmq::context_t& ctx, const Endpoints& ep, Role role)
-      : role_(role), sub_(makeSocket(ctx, zmq::socket_type::sub)), ctl_(makeSocket(ctx, zmq::socket_type::dealer)),
+  FakeStage(zmq::context_t& ctx, const Endpoints& ep, Role role, std::string run = "")
+      : role_(role), run_(std::move(run)), sub_(makeSocket(ctx, zmq::socket_type::sub)), ctl_(makeSocket(ctx, zmq::socket_type::dealer)),
         hb_(makeSocket(ctx, zmq::socket_type::dealer)) {
     std::string id(16, 'f');
     id[15] = static_cast<char>('a' + (int)role + std::random_device()() % 16);
@@ -59,14 +59,16 @@ class FakeStage {
   bool join(std::chrono::milliseconds limit) {
     zmq::message_t m;
     if (!waitUntil([&] { return sub_.recv(m, zmq::recv_flags::dontwait).has_value(); }, limit)) return false;
-    sendBytes(ctl_, proto::encode(proto::Hello{role_, 4242, ""}, 0));
+    sendBytes(ctl_, proto::encode(proto::Hello{role_, 4242, "", run_}, 0));
     return waitUntil([&] {
       if (!ctl_.recv(m, zmq::recv_flags::dontwait)) return false;
+      if (auto refused = proto::decodeShutdown(view(m))) refusal_ = refused->reason;
       auto w = proto::decodeWelcome(view(m));
       if (w) rank_ = w->rank;
-      return (bool)w;
-    }, limit);
+      return (bool)w || !refusal_.empty();
+    }, limit) && refusal_.empty();
   }
+  const std::string& refusal() const { return refusal_; }  // the master's reason, if it refused
   void heartbeat() { sendBytes(hb_, proto::encode(proto::Heartbeat{role_, rank_}, rank_), false, true); }
   void report(std::vector<std::byte>&& bytes) { sendBytes(ctl_, std::move(bytes), false, true); }
   std::vector<proto::FrameParams> drain() {
@@ -79,6 +81,7 @@ class FakeStage {
 
  private:
   Role role_;
+  std::string run_, refusal_;
   zmq::socket_t sub_, ctl_, hb_;
   uint32_t rank_ = 0;
 };
@@ -178,7 +181,7 @@ TEST(MasterRobustness, MultipartAndRandomBytesDoNotHangTheMaster) {
     junk.set(zmq::sockopt::linger, 1000);
     junk.connect(farm.endpoints().masterControl());
     std::mt19937 rng(7);
-    auto hello = proto::encode(proto::Hello{Role::Renderer, 1, ""}, 0);
+    auto hello = proto::encode(proto::Hello{Role::Renderer, 1, "", ""}, 0);
     junk.send(zmq::buffer(hello.data(), hello.size()), zmq::send_flags::sndmore);
     junk.send(zmq::str_buffer("trailing frame"), zmq::send_flags::none);
     for (int i = 0; i < 20; ++i) {
@@ -221,6 +224,28 @@ TEST(MasterRobustness, ReportsFromStrangersAreRefusedAndCounted) {
   auto lines = farm.metrics();
   ASSERT_EQ(lines.size(), (size_t)frames);
   EXPECT_GT(lines.back()["refused_peers"].get<uint64_t>(), 0u);
+}
+
+TEST(MasterRobustness, AStageOfAnotherRunIsRefusedToldWhyAndCounted) {
+  const int frames = 30;
+  Farm farm("other-run", smallScene(frames));
+  farm.options().run = "farm-b";
+  farm.startMaster();
+  FakeStage stranger(farm.ctx(), farm.endpoints(), Role::Renderer, "farm-a");
+  EXPECT_FALSE(stranger.join(10s)) << "a renderer of run farm-a joined farm-b";
+  EXPECT_NE(stranger.refusal().find("this farm is run 'farm-b'"), std::string::npos) << stranger.refusal();
+  EXPECT_NE(stranger.refusal().find("of run 'farm-a'"), std::string::npos) << stranger.refusal();
+  // The farm's own stages (run "" here, as the master's option is set only for the master)
+  // would be refused too: give them the master's run through the environment they read.
+  setenv("TESSERA_RUN", "farm-b", 1);
+  farm.startStages(1);
+  EXPECT_EQ(farm.join(60s), 0);
+  unsetenv("TESSERA_RUN");
+  expectOrbitFrames(farm, frames);
+  auto lines = farm.metrics();
+  ASSERT_EQ(lines.size(), (size_t)frames);
+  EXPECT_GE(lines.back()["refused_peers"].get<uint64_t>(), 1u);
+  for (const auto& p : lines) EXPECT_EQ(p["render_reports"].get<int>(), 1) << "the stranger got work";
 }
 
 TEST(MasterRobustness, InputIsRefusedInAFixedLengthRun) {

@@ -16,11 +16,11 @@ std::string controlId(char c) { return std::string(16, c) + "c"; }
 TEST(Membership, RanksPerRoleAndHeartbeatIdentityIsBound) {
   Membership m;
   bool joined = false;
-  Member& r0 = m.join(controlId('a'), {Role::Renderer, 11, ""}, t0, &joined);
+  Member& r0 = m.join(controlId('a'), {Role::Renderer, 11, "", ""}, t0, &joined);
   EXPECT_TRUE(joined);
   EXPECT_EQ(r0.rank, 0u);
-  EXPECT_EQ(m.join(controlId('b'), {Role::Renderer, 12, ""}, t0).rank, 1u);
-  EXPECT_EQ(m.join(controlId('d'), {Role::Display, 13, ""}, t0).rank, 0u);
+  EXPECT_EQ(m.join(controlId('b'), {Role::Renderer, 12, "", ""}, t0).rank, 1u);
+  EXPECT_EQ(m.join(controlId('d'), {Role::Display, 13, "", ""}, t0).rank, 0u);
   EXPECT_EQ(m.count(Role::Renderer), 2);
   // The heartbeat connection of renderer 0 belongs to it; it is no control connection.
   std::string hb = StageLink::heartbeatIdentity(controlId('a'));
@@ -34,17 +34,17 @@ TEST(Membership, RanksPerRoleAndHeartbeatIdentityIsBound) {
 
 TEST(Membership, SecondHelloOnTheSameConnectionIsTheSameMember) {
   Membership m;
-  m.join(controlId('a'), {Role::Renderer, 11, ""}, t0);
+  m.join(controlId('a'), {Role::Renderer, 11, "", ""}, t0);
   bool joined = true;
-  EXPECT_EQ(m.join(controlId('a'), {Role::Renderer, 11, ""}, t0, &joined).rank, 0u);
+  EXPECT_EQ(m.join(controlId('a'), {Role::Renderer, 11, "", ""}, t0, &joined).rank, 0u);
   EXPECT_FALSE(joined);
   EXPECT_EQ(m.count(Role::Renderer), 1);
 }
 
 TEST(Membership, SilentMemberIsLostAndReadmittedWhenHeardAgain) {
   Membership m;
-  Member& r = m.join(controlId('a'), {Role::Renderer, 11, ""}, t0);
-  m.join(controlId('b'), {Role::Renderer, 12, ""}, t0 + 2s);
+  Member& r = m.join(controlId('a'), {Role::Renderer, 11, "", ""}, t0);
+  m.join(controlId('b'), {Role::Renderer, 12, "", ""}, t0 + 2s);
   auto lost = m.expire(t0 + 3s, 2.0);
   ASSERT_EQ(lost.size(), 1u);
   EXPECT_EQ(lost[0]->pid, 11u);
@@ -58,7 +58,7 @@ TEST(Membership, SilentMemberIsLostAndReadmittedWhenHeardAgain) {
 
 TEST(Membership, MemberThatMissedADeadlineWaitsOutItsQuarantine) {
   Membership m;
-  Member& r = m.join(controlId('a'), {Role::Renderer, 11, ""}, t0);
+  Member& r = m.join(controlId('a'), {Role::Renderer, 11, "", ""}, t0);
   m.missedDeadline(r, t0);
   EXPECT_FALSE(r.alive);
   EXPECT_FALSE(m.heard(r, t0 + 1s)) << "heartbeats alone must not bring back a stage that does not deliver";
