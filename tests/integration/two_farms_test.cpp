@@ -3,6 +3,7 @@
 // run (socket files, an empty metrics file) is left behind.
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <future>
 #include <regex>
 #include <thread>
@@ -70,6 +71,21 @@ TEST(TwoFarms, AFarmOnTheEndpointsOfALiveFarmRefusesToStartAndTheLiveOneGoesOn) 
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(a.path() / "sockets")) left.push_back(e.path().filename().string());
   EXPECT_TRUE(left.empty()) << "left in the socket folder: " << left.size() << " entries, first " << left.front();
+}
+
+TEST(TwoFarms, CtrlCLeavesNoSocketBehind) {
+  FarmDir dir("ctrl-c");
+  const auto scene = dir.writeScene(1, 24, 64, 48);
+  // An interactive run (frames 0) waits for input until stopped; timeout sends the Ctrl-C.
+  const auto r = runCommand("timeout --preserve-status -s INT 4 " + bin("tessera-up") + " " TESSERA_SOURCE_DIR
+                            "/compose.yaml --env TESSERA_SCENE=" + scene.string() + " --env TESSERA_FRAMES=0" +
+                                " --env TESSERA_WINDOW=off --env TESSERA_OUT=" + (dir.path() / "out").string(),
+                            60);
+  EXPECT_EQ(r.exit_code, 128 + SIGINT) << r.output;
+  const std::string folder = socketFolder(r.output);
+  ASSERT_FALSE(folder.empty()) << r.output;
+  EXPECT_FALSE(fs::exists(folder)) << "Ctrl-C left the socket folder " << folder;
+  EXPECT_TRUE(fs::exists(dir.frame(0))) << "the farm never rendered: the test proves nothing\n" << r.output;
 }
 
 }  // namespace
