@@ -86,4 +86,13 @@ bool RayGenerator::project(const Vec3& p, double& sx, double& sy) const {
   return !cam_.orthographic || z >= 0;
 }
 
+Camera fittedCamera(const Vec3& half_extent) {
+  Camera c;
+  const double radius = length(half_extent);  // the box's bounding sphere
+  const double distance = 1.05 * radius / std::sin(c.fov / 2 * std::numbers::pi / 180);
+  c.eye = normalize(Vec3{0, 0.3, 1}) * distance;
+  c.target = {0, 0, 0};
+  return c;
+}
+
 }  // namespace tessera

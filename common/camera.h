@@ -18,6 +18,11 @@ struct Camera {
   Camera orbited(const Vec3& axis, double degrees) const;
 };
 
+// The camera ParaView's Reset Camera gives: looking at the centre of a box with these half
+// extents from the front and a little above (+z, +y), far enough that the whole box fits
+// the 30-degree view with a margin.
+Camera fittedCamera(const Vec3& half_extent);
+
 struct Ray {
   Vec3 origin, dir;  // dir normalized
 };

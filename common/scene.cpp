@@ -5,9 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <initializer_list>
-#include <sstream>
 
 namespace tessera {
 
@@ -29,7 +27,7 @@ class Parser {
 
   static std::string describe(const YAML::Node& n) {
     if (n.IsScalar()) return "'" + n.Scalar() + "'";
-    if (n.IsSequence()) return "a list";
+    if (n.IsSequence()) return n.size() == 0 ? "an empty list" : "a list of " + std::to_string(n.size());
     if (n.IsMap()) return "a map";
     return "nothing";
   }
@@ -185,8 +183,15 @@ std::variant<RawVolumeSpec, GeneratorSpec> Parser::volume(const YAML::Node& n) c
 }
 
 TransferFunction Parser::transferFunction(const YAML::Node& n) const {
+  if (n.IsScalar()) {
+    try {
+      return transferFunctionPreset(n.Scalar());
+    } catch (const std::invalid_argument& e) {
+      fail("transfer_function", e.what());
+    }
+  }
   if (!n.IsSequence() || n.size() == 0)
-    fail("transfer_function", "expected a non-empty list of [s, r, g, b, a], got " + describe(n));
+    fail("transfer_function", "expected a preset name or a non-empty list of [s, r, g, b, a], got " + describe(n));
   std::vector<TfPoint> pts;
   for (size_t i = 0; i < n.size(); ++i) {
     const std::string path = "transfer_function[" + std::to_string(i) + "]";
@@ -301,6 +306,21 @@ Antialiasing Parser::antialiasing(const YAML::Node& n) const {
   return a;
 }
 
+// The half extents of the scene's box, from the volume's dims and spacing (no voxel read).
+Vec3 sceneHalfExtent(const Scene& s) {
+  Volume shape;
+  if (!s.has_volume || s.mesh) return {0.5, 0.5, 0.5};
+  if (const auto* raw = std::get_if<RawVolumeSpec>(&s.volume)) {
+    shape.dims = raw->dims;
+    shape.spacing = raw->spacing;
+  } else {
+    const auto& g = std::get<GeneratorSpec>(s.volume);
+    shape.dims = {g.size, g.size, g.size};
+    shape.spacing = g.spacing;
+  }
+  return shape.halfExtent();
+}
+
 }  // namespace
 
 Scene parseScene(const std::string& yaml_text, const std::string& base_dir, const std::string& name_for_errors) {
@@ -322,13 +342,16 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
   s.has_volume = !is_mesh || (bool)root["volume"];
   if (s.has_volume) s.volume = p.volume(p.require(root, "", "volume"));
   if (is_mesh) s.mesh = p.mesh(root["mesh"], s.has_volume);
-  if (!is_mesh || root["transfer_function"]) s.tf = p.transferFunction(p.require(root, "", "transfer_function"));
+  // Left out: the default colour map over the data's range, as ParaView shows a new volume.
+  if (root["transfer_function"]) s.tf = p.transferFunction(root["transfer_function"]);
+  else if (!is_mesh) s.tf = transferFunctionPreset("cool-to-warm");
   if (root["light"]) {
     s.light = p.vec3(root["light"], "light");
     if (!(length(s.light) > 0)) p.fail("light", "must be non-zero (leave it out for a headlight)");
   }
   if (root["antialiasing"]) s.antialiasing = p.antialiasing(root["antialiasing"]);
-  s.camera = p.camera(p.require(root, "", "camera"));
+  // Left out: fitted to the volume's box (a mesh is fitted to the unit box).
+  s.camera = root["camera"] ? p.camera(root["camera"]) : fittedCamera(sceneHalfExtent(s));
   if (root["image"]) {
     YAML::Node im = root["image"];
     if (!im.IsSequence() || im.size() != 2) p.fail("image", "expected [width, height], got " + Parser::describe(im));
@@ -339,47 +362,6 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
   if (root["quality"]) s.quality = p.quality(root["quality"]);
   if (root["orbit"]) s.orbit = p.orbit(root["orbit"]);
   return s;
-}
-
-Scene loadScene(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw SceneError(path + ": cannot open scene file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::filesystem::path base = std::filesystem::path(path).parent_path();
-  Scene s = parseScene(ss.str(), base.empty() ? "." : base.string(), path);
-  s.path = path;
-  return s;
-}
-
-Scene defaultScene() {
-  Scene s;
-  s.path = "";
-  s.volume = GeneratorSpec{"hollow-shell", 256, 1, {1, 1, 1}};
-  // Shell values peak at 0.5 (semi-transparent orange), the core at 1.0 (bright, nearly opaque).
-  s.tf = TransferFunction({{0.00, 0.0, 0.0, 0.0, 0.0},
-                           {0.05, 1.0, 0.45, 0.1, 0.0},
-                           {0.50, 1.0, 0.55, 0.15, 0.06},
-                           {0.70, 1.0, 0.8, 0.5, 0.2},
-                           {1.00, 1.0, 1.0, 0.9, 0.9}});
-  s.camera = Camera{{0, 0.6, 2.2}, {0, 0, 0}, {0, 1, 0}, 30, false, 1};
-  s.width = 1024;
-  s.height = 1024;
-  s.quality = namedQuality(QualityName::Default);
-  s.orbit = Orbit{90, {0, 1, 0}};
-  return s;
-}
-
-Volume loadVolume(const Scene& scene) {
-  const std::string name = scene.path.empty() ? "<default scene>" : scene.path;
-  try {
-    if (const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume)) return loadRawVolume(*raw);
-    return generateVolume(std::get<GeneratorSpec>(scene.volume));
-  } catch (const SceneError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw SceneError(name + ": volume: " + e.what());
-  }
 }
 
 }  // namespace tessera

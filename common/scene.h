@@ -65,6 +65,8 @@ struct SceneError : std::runtime_error {
 Scene parseScene(const std::string& yaml_text, const std::string& base_dir,
                  const std::string& name_for_errors = "<scene>");
 Scene loadScene(const std::string& path);
+// The scene as YAML with every default filled in; parseScene of it gives the same Scene.
+std::string sceneYaml(const Scene& s);
 // The built-in default scene (a hollow shell) that runs with no file.
 Scene defaultScene();
 // "" when a farm of `renderers` (one brick each, or more) renders `q` within the accuracy

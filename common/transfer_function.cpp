@@ -56,4 +56,25 @@ double correctOpacity(double alpha, double d) {
   return -std::expm1(std::log1p(-alpha) * (d / kL0));
 }
 
+TransferFunction transferFunctionPreset(const std::string& name) {
+  // Colour control points (s, r, g, b); opacity is added as a linear ramp.
+  using Stops = std::vector<std::array<double, 4>>;
+  Stops stops;
+  if (name == "cool-to-warm")  // Moreland, "Diverging Color Maps for Scientific Visualization" (2009)
+    stops = {{0.0, 0.231, 0.298, 0.753}, {0.5, 0.865, 0.865, 0.865}, {1.0, 0.706, 0.016, 0.150}};
+  else if (name == "viridis")  // matplotlib's viridis at five stops
+    stops = {{0.0, 0.267, 0.005, 0.329},
+             {0.25, 0.229, 0.322, 0.546},
+             {0.5, 0.128, 0.567, 0.551},
+             {0.75, 0.369, 0.789, 0.383},
+             {1.0, 0.993, 0.906, 0.144}};
+  else if (name == "grayscale")
+    stops = {{0.0, 0.0, 0.0, 0.0}, {1.0, 1.0, 1.0, 1.0}};
+  else
+    throw std::invalid_argument("unknown transfer function preset '" + name + "' (cool-to-warm | viridis | grayscale)");
+  std::vector<TfPoint> points;
+  for (const auto& [sv, r, g, b] : stops) points.push_back({sv, r, g, b, kPresetOpacity * sv});
+  return TransferFunction(std::move(points));
+}
+
 }  // namespace tessera

@@ -2,6 +2,7 @@
 // Colours are linear RGB; alpha is opacity per reference length L0 = 1/256 of the unit box.
 #pragma once
 #include <array>
+#include <string>
 #include <vector>
 
 namespace tessera {
@@ -32,5 +33,17 @@ class TransferFunction {
 
 // Opacity correction for a step of length d: a = 1 - (1 - alpha)^(d / L0).
 double correctOpacity(double alpha, double d);
+
+// The colour maps a scene may name instead of listing points (`transfer_function: viridis`),
+// each with opacity rising linearly from 0 at the range's low end to kPresetOpacity at its
+// high end, as ParaView's default opacity ramp does. Opacity is per L0 = 1/256 of the box:
+// 0.02 lets a ray cross the whole box at the top value and keep 1 - 0.98^256 = 99.4% of it,
+// so the outer values veil the inner ones without hiding them:
+//   cool-to-warm  (the default) Moreland's diverging map, ParaView's default
+//   viridis       perceptually uniform (van der Walt and Smith, matplotlib 2.0)
+//   grayscale     black to white
+// Throws std::invalid_argument naming the word and the choices.
+inline constexpr double kPresetOpacity = 0.02;
+TransferFunction transferFunctionPreset(const std::string& name);
 
 }  // namespace tessera

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -145,15 +146,12 @@ Volume loadRawVolume(const RawVolumeSpec& spec) {
   v.dims = spec.dims;
   v.spacing = spec.spacing;
   v.values.resize(count);
-  double lo = spec.range[0], hi = spec.range[1];
+  float mn = INFINITY, mx = -INFINITY;
   if (spec.type == VoxelType::UInt8) {
-    if (!spec.has_range) lo = 0, hi = 255;
     for (size_t i = 0; i < count; ++i) v.values[i] = (float)(raw[i]);
   } else if (spec.type == VoxelType::UInt16) {
-    if (!spec.has_range) lo = 0, hi = 65535;
     for (size_t i = 0; i < count; ++i) v.values[i] = (float)readLE<uint16_t>(&raw[2 * i]);
   } else {
-    float mn = INFINITY, mx = -INFINITY;
     for (size_t i = 0; i < count; ++i) {
       float x = readLE<float>(&raw[4 * i]);
       if (!std::isfinite(x)) {
@@ -162,13 +160,15 @@ Volume loadRawVolume(const RawVolumeSpec& spec) {
                     std::to_string(i / nx % ny) + ", " + std::to_string(i / (nx * ny)) + "), linear index " +
                     std::to_string(i));
       }
-      mn = std::min(mn, x);
-      mx = std::max(mx, x);
       v.values[i] = x;
     }
-    if (!spec.has_range) lo = mn, hi = mx;
   }
-  // Normalise in double; a constant float volume (lo == hi) maps to 0 everywhere.
+  for (float x : v.values) mn = std::min(mn, x), mx = std::max(mx, x);
+  // Like ParaView: with no declared range, colours and opacity span the data's own values.
+  const double lo = spec.has_range ? spec.range[0] : mn, hi = spec.has_range ? spec.range[1] : mx;
+  v.data_range = {mn, mx};
+  v.mapped_range = {lo, hi};
+  // Normalise in double; a constant volume (lo == hi) maps to 0 everywhere.
   const double scale = hi > lo ? 1.0 / (hi - lo) : 0.0;
   for (float& x : v.values) x = (float)std::clamp((x - lo) * scale, 0.0, 1.0);
   return v;
@@ -285,7 +285,26 @@ Volume generateVolume(const GeneratorSpec& spec) {
   else if (spec.name == "marschner-lobb") marschnerLobb(v);
   else if (spec.name == "noise-cloud") noiseCloud(v, spec.seed);
   else throw std::invalid_argument("unknown generator '" + spec.name + "' (hollow-shell | marschner-lobb | noise-cloud)");
+  const auto [mn, mx] = std::minmax_element(v.values.begin(), v.values.end());
+  v.data_range = {*mn, *mx};
+  v.mapped_range = {0, 1};
   return v;
+}
+
+std::string rangeProblem(const Volume& v) {
+  const auto [lo, hi] = v.mapped_range;
+  const auto [mn, mx] = v.data_range;
+  if (lo <= mx && hi >= mn && !(mn == mx && lo == mn)) return "";
+  auto num = [](double x) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", x);
+    return std::string(b);
+  };
+  const std::string data = "the data's values run " + num(mn) + " .. " + num(mx);
+  if (mn == mx) return "every voxel has the value " + num(mn) + ": the image shows one constant colour or nothing";
+  return "range [" + num(lo) + ", " + num(hi) + "] lies " + (lo > mx ? "above" : "below") + " every value (" + data +
+         "): every voxel maps to the transfer function's " + (lo > mx ? "first" : "last") +
+         " point, so the image is likely empty or uniform; leave range out to span the data";
 }
 
 }  // namespace tessera

@@ -15,6 +15,9 @@ struct Volume {
   std::array<int, 3> dims{0, 0, 0};
   std::array<double, 3> spacing{1, 1, 1};
   std::vector<float> values;  // normalised, size dims[0]*dims[1]*dims[2]
+  // In the file's units: the smallest and largest value of the data, and the range that
+  // was mapped to 0..1 (the scene's `range`, else the data's own).
+  std::array<double, 2> data_range{0, 1}, mapped_range{0, 1};
 
   size_t index(int x, int y, int z) const { return x + (size_t)dims[0] * (y + (size_t)dims[1] * z); }
   float at(int x, int y, int z) const { return values[index(x, y, z)]; }
@@ -32,7 +35,7 @@ struct RawVolumeSpec {
   std::array<int, 3> dims{0, 0, 0};
   VoxelType type = VoxelType::UInt8;
   std::array<double, 3> spacing{1, 1, 1};
-  bool has_range = false;
+  bool has_range = false;               // else the data's own min..max is mapped to 0..1
   std::array<double, 2> range{0, 255};
 };
 
@@ -62,5 +65,8 @@ size_t voxelTypeSize(VoxelType t);
 Volume loadRawVolume(const RawVolumeSpec& spec);
 // Throws std::invalid_argument for an unknown name or size < 2.
 Volume generateVolume(const GeneratorSpec& spec);
+// "" if the mapped range meets the data's values, else a sentence saying that every voxel
+// maps to one end of the transfer function and what to do.
+std::string rangeProblem(const Volume& v);
 
 }  // namespace tessera

@@ -38,6 +38,9 @@ int main(int argc, char** argv) {
     // Each brick ends its rays on its own: below this the farm could not match tessera-render.
     if (std::string why = farmAccuracyProblem(opt.scene.quality, opt.renderers); !why.empty())
       throw std::invalid_argument((args.scene_path.empty() ? std::string("built-in scene") : args.scene_path) + ": " + why);
+    if (opt.scene.mesh && opt.scene.antialiasing.method == AaMethod::Fft)
+      spdlog::warn("antialiasing fft is a post filter of the whole image, applied by tessera-render; the farm "
+                   "renders this scene without it (use msaa or ssaa for identical farm frames)");
     opt.endpoints = endpoints;
     opt.run = farmRun();
     opt.codec = parseCodec(codec);

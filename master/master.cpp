@@ -46,9 +46,9 @@ class Master {
     spdlog::info("master listening pub={} control={} renderers={} compositors={} frames={} in_flight={}",
                  opt_.endpoints.masterPub(), opt_.endpoints.masterControl(), opt_.renderers, opt_.compositors,
                  total_frames_ == 0 ? std::string("interactive") : std::to_string(total_frames_), opt_.in_flight);
-    if (sortFirst() && opt_.scene.antialiasing.method == AaMethod::Fft)
-      spdlog::warn("antialiasing fft is a post filter of the whole image, applied by tessera-render; the farm "
-                   "renders this scene without it (use msaa or ssaa for identical farm frames)");
+    if (total_frames_ == 0)
+      spdlog::info("interactive run: a frame is rendered when the display window sends input (drag: orbit, wheel: "
+                   "zoom, h: help); without a window only the first frame is rendered. Ctrl-C or closing the window stops it");
     // Sort-first (geometry) scenes need no volume here: renderers own the mesh.
     if (sortFirst())
       plan_ = std::make_unique<SortFirstPlan>(width(), height(), opt_.balance, opt_.tiles_per_renderer);

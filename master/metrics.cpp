@@ -109,8 +109,10 @@ nlohmann::json Metrics::summarize(const std::vector<proto::StageStats>& renderer
     chunks = std::max(chunks, (double)s.chunks_total);
     triangles += (double)s.triangles;
   }
-  j["overlap_factor"] = chunks > 0 ? drawn / chunks : 0.0;
-  j["triangles"] = triangles;
+  if (chunks > 0) {  // only geometry frames have them
+    j["overlap_factor"] = drawn / chunks;
+    j["triangles"] = triangles;
+  }
   j["display_ms"] = done.display_ms;
   j["route_ms"] = done.route_ms;
   j["display_bytes_encoded"] = done.bytes_encoded;
@@ -137,6 +139,13 @@ void Metrics::write(uint64_t frame, Frame& f) {
                j["render_imbalance_time"].get<double>(), j["composite_imbalance_pixels"].get<double>());
   if (out_) out_ << j.dump() << '\n' << std::flush;
   wrote_ = wrote_ || out_;
+  if (!warned_empty_ && j["composite_reports"].get<size_t>() > 0 && j["composite_active_pixels"].get<double>() == 0) {
+    warned_empty_ = true;  // once a run: an empty frame is usually the scene, not the farm
+    spdlog::warn("frame {} has no visible pixel: is the camera looking at the volume, and does the transfer "
+                 "function give the data's values any opacity? (tessera-info SCENE shows the values, the "
+                 "range they are mapped from and the full scene)",
+                 frame);
+  }
   if (auto progress = run_.add(j, f.done_at)) spdlog::info("{}", *progress);
 }
 

@@ -63,7 +63,7 @@ class Metrics {
 
   std::ofstream out_;
   std::string path_;
-  bool wrote_ = false;
+  bool wrote_ = false, warned_empty_ = false;
   std::map<uint64_t, Frame> frames_;
   uint64_t frames_done_ = 0;
   uint64_t reassignments_ = 0, reissued_ = 0, refused_ = 0;

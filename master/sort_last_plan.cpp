@@ -2,13 +2,18 @@
 
 #include <algorithm>
 
+#include <spdlog/spdlog.h>
+
 #include "master/balance.h"
 
 namespace tessera::master {
 
 SortLastPlan::SortLastPlan(std::shared_ptr<const Volume> volume, const TransferFunction& tf, int width, int height,
                            bool balance)
-    : volume_(std::move(volume)), tf_(tf), width_(width), height_(height), balance_(balance) {}
+    : volume_(std::move(volume)), tf_(tf), width_(width), height_(height), balance_(balance) {
+  // Said once, by the master: a range that misses the data makes every frame empty or uniform.
+  if (std::string why = rangeProblem(*volume_); !why.empty()) spdlog::warn("volume: {}", why);
+}
 
 void SortLastPlan::reassign(const Workers& w) {
   tree_ = splitBricks(*volume_, std::max<int>(1, (int)w.renderers.size()), &tf_);

@@ -14,6 +14,7 @@ Endpoints StageArgs::endpoints() const {
 }
 
 void addStageArgs(CLI::App& app, StageArgs& args, const std::string& scene_help) {
+  app.option_defaults()->always_capture_default();  // every --help shows the defaults
   app.add_option("scene", args.scene_path, scene_help)->envname("TESSERA_SCENE");
   app.add_option("--endpoints", args.endpoint_base, "endpoint base (ipc://DIR | tcp://HOST:PORT)")
       ->envname("TESSERA_ENDPOINTS");

@@ -21,7 +21,8 @@ struct StageArgs {
   Endpoints endpoints() const;
 };
 
-// Adds the positional scene (TESSERA_SCENE) and --endpoints (TESSERA_ENDPOINTS).
+// Adds the positional scene (TESSERA_SCENE) and --endpoints (TESSERA_ENDPOINTS); call it
+// first: every option added after it shows its default in --help.
 void addStageArgs(CLI::App& app, StageArgs& args, const std::string& scene_help);
 
 using StageBody = std::function<int(const Endpoints&, zmq::context_t&, const std::atomic<bool>* stop)>;

@@ -10,6 +10,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"tessera-keys: create the CURVE keys of a Tessera farm"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   std::string dir = "keys";
   bool force = false;
   app.add_option("dir", dir, "folder for farm.key and farm.pub")->envname("TESSERA_KEYS")->capture_default_str();

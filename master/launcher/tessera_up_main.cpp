@@ -102,6 +102,7 @@ std::filesystem::path runFolder(const tessera::launcher::ComposeProject& project
 int main(int argc, char** argv) {
   auto log = tessera::setupLogging("tessera-up");
   CLI::App app{"Runs a compose.yaml farm as local processes (no container engine)."};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   std::string file = "compose.yaml";
   std::vector<std::string> env_args;
   bool dry_run = false;

@@ -107,6 +107,7 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   const Camera cam = scene.orbit.at(scene.camera, a.frame);
 
   auto vol = std::make_shared<const Volume>(loadVolume(scene));
+  if (std::string why = rangeProblem(*vol); !why.empty()) std::fprintf(stderr, "tessera-render: warning: %s\n", why.c_str());
   auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, scene.tf);
   ImageF img;
   renderer::RenderStats stats;
@@ -149,6 +150,7 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
 
 int run(int argc, char** argv) {
   CLI::App app{"tessera-render: CPU ray casting of a Tessera scene in one process"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   Args a;
   addOptions(app, a);
   try {

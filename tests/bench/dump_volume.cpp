@@ -13,6 +13,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"tessera-dump-volume: write a built-in generated volume as raw little-endian float32"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   tessera::GeneratorSpec spec;
   std::string out_path;
   app.add_option("generator", spec.name, "hollow-shell | marschner-lobb | noise-cloud")->required();

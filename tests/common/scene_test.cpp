@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 
 using namespace tessera;
 namespace fs = std::filesystem;
@@ -101,12 +102,52 @@ TEST(Scene, UnknownKeysNameTheirPath) {
 TEST(Scene, MissingKeys) {
   EXPECT_ERROR(edit("eye: [0, 0, 2.5], ", ""), "camera.eye: missing required key");
   EXPECT_ERROR(edit("name: hollow-shell, ", ""), "volume.generator.name: missing required key");
-  std::string no_tf = kGood;
-  no_tf.erase(no_tf.find("transfer_function"), no_tf.find("camera") - no_tf.find("transfer_function"));
-  EXPECT_ERROR(no_tf, "transfer_function: missing required key");
   EXPECT_ERROR("volume: {file: a.raw, type: uint8}\n", "volume.dims: missing required key");
   EXPECT_ERROR("", "expected a map");
   EXPECT_ERROR("volume: [1, 2\n", "YAML syntax error");
+}
+
+TEST(Scene, AVolumeAloneGetsTheDefaultColourMapAndAFittedCamera) {
+  const Scene s = parseScene("volume: {generator: {name: hollow-shell, size: 16, seed: 1}, spacing: [1, 1, 2]}\n", ".",
+                             "s.yaml");
+  EXPECT_EQ(s.tf, transferFunctionPreset("cool-to-warm"));
+  EXPECT_EQ(s.tf.eval(0)[3], 0.0) << "the data's lowest value must be transparent";
+  EXPECT_DOUBLE_EQ(s.tf.eval(1)[3], kPresetOpacity);
+  // Box 0.25 x 0.25 x 0.5 (half extents): the camera looks at its centre from far enough
+  // that the bounding sphere fits the 30-degree view.
+  EXPECT_EQ(s.camera.target, (Vec3{0, 0, 0}));
+  const double radius = std::sqrt(0.25 * 0.25 * 2 + 0.5 * 0.5);
+  EXPECT_NEAR(length(s.camera.eye), 1.05 * radius / std::sin(15 * std::numbers::pi / 180), 1e-12);
+  EXPECT_GT(s.camera.eye.z, 0);
+  EXPECT_GT(s.camera.eye.y, 0);
+}
+
+TEST(Scene, TransferFunctionPresetsByName) {
+  for (const char* name : {"cool-to-warm", "viridis", "grayscale"}) {
+    const Scene s = parseScene(std::string("volume: {generator: {name: hollow-shell, size: 16}}\ntransfer_function: ") +
+                                   name + "\n",
+                               ".", "s.yaml");
+    EXPECT_EQ(s.tf, transferFunctionPreset(name)) << name;
+  }
+  EXPECT_ERROR("volume: {generator: {name: hollow-shell, size: 16}}\ntransfer_function: jet\n",
+               "transfer_function: unknown transfer function preset 'jet' (cool-to-warm | viridis | grayscale)");
+}
+
+TEST(Scene, EffectiveSceneYamlParsesBackToTheSameScene) {
+  for (const std::string& yaml : {std::string(kGood), std::string("volume: {generator: {name: noise-cloud, size: 8}}\n"),
+                                 std::string("volume: {generator: {name: hollow-shell, size: 8}}\nquality: {step: "
+                                             "0.01, early_termination: 0.9, skip_empty: false}\norbit: {frames: 7}\n")}) {
+    const Scene a = parseScene(yaml, ".", "a.yaml");
+    const Scene b = parseScene(sceneYaml(a), ".", "b.yaml");
+    EXPECT_EQ(b.tf, a.tf) << sceneYaml(a);
+    EXPECT_EQ(b.camera, a.camera) << sceneYaml(a);
+    EXPECT_EQ(b.quality, a.quality) << sceneYaml(a);
+    EXPECT_EQ(b.width, a.width);
+    EXPECT_EQ(b.height, a.height);
+    EXPECT_EQ(b.orbit.frames, a.orbit.frames);
+    EXPECT_EQ(std::get<GeneratorSpec>(b.volume).name, std::get<GeneratorSpec>(a.volume).name);
+    EXPECT_EQ(std::get<GeneratorSpec>(b.volume).size, std::get<GeneratorSpec>(a.volume).size);
+  }
 }
 
 TEST(Scene, WrongTypes) {
@@ -136,7 +177,7 @@ TEST(Scene, BadSizesAndValues) {
   std::string empty_tf = kGood;
   empty_tf.replace(empty_tf.find("transfer_function"), empty_tf.find("camera") - empty_tf.find("transfer_function"),
                    "transfer_function: []\n");
-  EXPECT_ERROR(empty_tf, "transfer_function: expected a non-empty list");
+  EXPECT_ERROR(empty_tf, "transfer_function: expected a preset name or a non-empty list of [s, r, g, b, a], got an empty list");
   EXPECT_ERROR(std::string(kGood) + "orbit: {frames: 0}\n", "orbit.frames: must be in 1..");
 }
 

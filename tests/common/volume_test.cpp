@@ -45,8 +45,11 @@ TEST(Volume, LoadUInt8LayoutAndNormalisation) {
   RawVolumeSpec s{t.write("a.raw", data, sizeof data), {2, 3, 4}, VoxelType::UInt8, {1, 1, 1}, false, {0, 255}};
   Volume v = loadRawVolume(s);
   EXPECT_EQ(v.dims, (std::array<int, 3>{2, 3, 4}));
-  EXPECT_FLOAT_EQ(v.at(1, 2, 3), 230.0f / 255);  // x fastest: 1 + 2*(2 + 3*3) = 23
-  EXPECT_FLOAT_EQ(v.at(1, 0, 0), 10.0f / 255);
+  // No range: the data's own 0..230 maps to 0..1, like ParaView's first colour map.
+  EXPECT_FLOAT_EQ(v.at(1, 2, 3), 1.0f);  // x fastest: 1 + 2*(2 + 3*3) = 23, the largest value
+  EXPECT_FLOAT_EQ(v.at(1, 0, 0), 10.0f / 230);
+  EXPECT_EQ(v.data_range, (std::array<double, 2>{0, 230}));
+  EXPECT_EQ(v.mapped_range, (std::array<double, 2>{0, 230}));
   s.has_range = true;
   s.range = {10, 110};
   v = loadRawVolume(s);
@@ -60,11 +63,27 @@ TEST(Volume, LoadUInt16LittleEndian) {
   const uint8_t bytes[4] = {0xff, 0xff, 0x00, 0x01};  // 65535 and 256
   RawVolumeSpec s{t.write("b.raw", bytes, 4), {2, 1, 1}, VoxelType::UInt16, {1, 1, 1}, false, {0, 0}};
   Volume v = loadRawVolume(s);
-  EXPECT_FLOAT_EQ(v.values[0], 1.0f);
-  EXPECT_FLOAT_EQ(v.values[1], 256.0f / 65535);
+  EXPECT_FLOAT_EQ(v.values[0], 1.0f);  // 65535 is the largest value
+  EXPECT_FLOAT_EQ(v.values[1], 0.0f);  // 256 the smallest
+  EXPECT_EQ(v.data_range, (std::array<double, 2>{256, 65535}));
   s.has_range = true;
   s.range = {0, 512};
   EXPECT_FLOAT_EQ(loadRawVolume(s).values[1], 0.5f);
+}
+
+TEST(Volume, ARangeThatMissesTheDataIsNamedWithTheDataValues) {
+  TempDir t("volume");
+  uint16_t values[4] = {0, 250, 500, 1000};
+  RawVolumeSpec s{t.write("g.raw", values, sizeof values), {4, 1, 1}, VoxelType::UInt16, {1, 1, 1}, true, {5000, 6000}};
+  const std::string why = rangeProblem(loadRawVolume(s));
+  EXPECT_NE(why.find("range [5000, 6000] lies above every value"), std::string::npos) << why;
+  EXPECT_NE(why.find("0 .. 1000"), std::string::npos) << why;
+  s.range = {-10, -1};
+  EXPECT_NE(rangeProblem(loadRawVolume(s)).find("lies below"), std::string::npos);
+  s.range = {500, 6000};  // overlaps the data: fine
+  EXPECT_EQ(rangeProblem(loadRawVolume(s)), "");
+  s.has_range = false;
+  EXPECT_EQ(rangeProblem(loadRawVolume(s)), "");
 }
 
 TEST(Volume, LoadFloat32DefaultRangeIsDataMinMax) {

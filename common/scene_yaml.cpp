@@ -1,0 +1,126 @@
+// The scene as YAML with every default filled in (what `tessera-info` prints, as `docker
+// compose config` prints the effective file): parsing it again gives the same Scene.
+#include <yaml-cpp/yaml.h>
+
+#include <charconv>
+
+#include "common/scene.h"
+
+namespace tessera {
+namespace {
+
+// The shortest text that parses back to the same double: 0.231, not 0.23100000000000001.
+std::string num(double v) {
+  char buf[32];
+  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
+}
+
+void vec(YAML::Emitter& e, const Vec3& v) {
+  e << YAML::Flow << YAML::BeginSeq << num(v.x) << num(v.y) << num(v.z) << YAML::EndSeq;
+}
+
+template <class T, size_t N>
+void list(YAML::Emitter& e, const std::array<T, N>& a) {
+  e << YAML::Flow << YAML::BeginSeq;
+  for (const T& x : a) {
+    if constexpr (std::is_floating_point_v<T>) e << num(x);
+    else e << x;
+  }
+  e << YAML::EndSeq;
+}
+
+const char* typeWord(VoxelType t) {
+  return t == VoxelType::UInt8 ? "uint8" : t == VoxelType::UInt16 ? "uint16" : "float32";
+}
+
+void volume(YAML::Emitter& e, const Scene& s) {
+  e << YAML::Key << "volume" << YAML::Value << YAML::BeginMap;
+  if (const auto* raw = std::get_if<RawVolumeSpec>(&s.volume)) {
+    e << YAML::Key << "file" << YAML::Value << raw->file;
+    e << YAML::Key << "dims" << YAML::Value;
+    list(e, raw->dims);
+    e << YAML::Key << "type" << YAML::Value << typeWord(raw->type);
+    e << YAML::Key << "spacing" << YAML::Value;
+    list(e, raw->spacing);
+    if (raw->has_range) {  // left out, the data's own min..max is mapped
+      e << YAML::Key << "range" << YAML::Value;
+      list(e, raw->range);
+    }
+  } else {
+    const auto& g = std::get<GeneratorSpec>(s.volume);
+    e << YAML::Key << "generator" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "name"
+      << YAML::Value << g.name << YAML::Key << "size" << YAML::Value << g.size << YAML::Key << "seed" << YAML::Value
+      << g.seed << YAML::EndMap;
+    e << YAML::Key << "spacing" << YAML::Value;
+    list(e, g.spacing);
+  }
+  e << YAML::EndMap;
+}
+
+void camera(YAML::Emitter& e, const Camera& c) {
+  e << YAML::Key << "camera" << YAML::Value << YAML::BeginMap;
+  e << YAML::Key << "eye" << YAML::Value;
+  vec(e, c.eye);
+  e << YAML::Key << "target" << YAML::Value;
+  vec(e, c.target);
+  e << YAML::Key << "up" << YAML::Value;
+  vec(e, c.up);
+  if (c.orthographic) e << YAML::Key << "orthographic" << YAML::Value << true << YAML::Key << "height" << YAML::Value << num(c.height);
+  else e << YAML::Key << "fov" << YAML::Value << num(c.fov);
+  e << YAML::EndMap;
+}
+
+void quality(YAML::Emitter& e, const Quality& q) {
+  e << YAML::Key << "quality" << YAML::Value;
+  if (q.name != QualityName::Custom) {
+    e << qualityName(q.name);
+    return;
+  }
+  e << YAML::BeginMap << YAML::Key << "step" << YAML::Value << num(q.step) << YAML::Key << "early_termination"
+    << YAML::Value << num(q.early_termination) << YAML::Key << "skip_empty" << YAML::Value << q.skip_empty << YAML::EndMap;
+}
+
+}  // namespace
+
+std::string sceneYaml(const Scene& s) {
+  YAML::Emitter e;
+  e << YAML::BeginMap;
+  if (s.has_volume) volume(e, s);
+  if (s.mesh) {
+    e << YAML::Key << "mesh" << YAML::Value;
+    if (!s.mesh->file.empty()) e << s.mesh->file;
+    else
+      e << YAML::BeginMap << YAML::Key << "isosurface" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
+        << "of" << YAML::Value << "volume" << YAML::Key << "level" << YAML::Value << num(s.mesh->level) << YAML::EndMap
+        << YAML::EndMap;
+  }
+  if (!s.tf.points().empty()) {
+    e << YAML::Key << "transfer_function" << YAML::Value << YAML::BeginSeq;
+    for (const TfPoint& p : s.tf.points())
+      e << YAML::Flow << YAML::BeginSeq << num(p.s) << num(p.r) << num(p.g) << num(p.b) << num(p.a) << YAML::EndSeq;
+    e << YAML::EndSeq;
+  }
+  camera(e, s.camera);
+  e << YAML::Key << "image" << YAML::Value << YAML::Flow << YAML::BeginSeq << s.width << s.height << YAML::EndSeq;
+  quality(e, s.quality);
+  e << YAML::Key << "orbit" << YAML::Value << YAML::BeginMap << YAML::Key << "frames" << YAML::Value << s.orbit.frames
+    << YAML::Key << "axis" << YAML::Value;
+  vec(e, s.orbit.axis);
+  e << YAML::EndMap;
+  if (length(s.light) > 0) {
+    e << YAML::Key << "light" << YAML::Value;
+    vec(e, s.light);
+  }
+  if (s.mesh) {
+    e << YAML::Key << "antialiasing" << YAML::Value << YAML::BeginMap << YAML::Key << "method" << YAML::Value
+      << aaMethodName(s.antialiasing.method);
+    if (s.antialiasing.method == AaMethod::Msaa || s.antialiasing.method == AaMethod::Ssaa)
+      e << YAML::Key << "samples" << YAML::Value << s.antialiasing.samples;
+    if (s.antialiasing.method == AaMethod::Fft) e << YAML::Key << "sigma" << YAML::Value << num(s.antialiasing.sigma);
+    e << YAML::EndMap;
+  }
+  e << YAML::EndMap;
+  return std::string(e.c_str()) + "\n";
+}
+
+}  // namespace tessera

@@ -1,0 +1,129 @@
+// A scientist's first volume: a scene of three lines renders the data with the default
+// colour map over the data's own values and a fitted camera; a range that misses the data
+// is said; tessera-info reports the values exactly.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "tests/integration/farm_util.h"
+
+namespace tessera::test {
+namespace {
+
+// A 32^3 uint16 ball: 1000 at the centre falling to 0 at radius 12 voxels, 0 outside; the
+// values run 0..1000, far below the type's 65535.
+fs::path writeBall(const FarmDir& dir) {
+  const int n = 32;
+  std::vector<uint16_t> v((size_t)n * n * n);
+  for (int z = 0; z < n; ++z)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const double r = std::sqrt(std::pow(x - 16, 2) + std::pow(y - 16, 2) + std::pow(z - 16, 2));
+        v[x + n * (y + (size_t)n * z)] = (uint16_t)std::lround(std::max(0.0, 1000 * (1 - r / 12)));
+      }
+  const fs::path p = dir.path() / "ball.raw";
+  std::ofstream(p, std::ios::binary).write(reinterpret_cast<const char*>(v.data()), (std::streamsize)(v.size() * 2));
+  return p;
+}
+
+fs::path writeSceneFile(const FarmDir& dir, const std::string& name, const std::string& text) {
+  const fs::path p = dir.path() / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+TEST(FirstContact, AThreeLineSceneRendersTheDataOverItsOwnRange) {
+  FarmDir dir("three-lines");
+  writeBall(dir);
+  const auto scene = writeSceneFile(dir, "ball.yaml", "volume: {file: ball.raw, dims: [32, 32, 32], type: uint16}\n");
+  const std::string pam = (dir.path() / "ball.pam").string();
+  const auto r = runCommand(bin("tessera-render") + " " + scene.string() + " --size 96x96 -o " +
+                                (dir.path() / "ball.png").string() + " --premultiplied " + pam,
+                            120);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("warning"), std::string::npos) << r.output;
+  const Image8 img = readPam(pam);
+  // The ball fills the middle of the fitted view; its rim (low values) is cool, its core
+  // (high values) warm: the colour map spans the data, not 0..65535.
+  int visible = 0, cool = 0, warm = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const uint8_t* p = img.at(x, y);
+      if (p[3] < 8) continue;
+      ++visible;
+      cool += p[2] > p[0] + 8;
+      warm += p[0] > p[2] + 8;
+    }
+  EXPECT_GT(visible, img.width * img.height / 10) << "the ball covers too little of the image";
+  EXPECT_GT(cool, 0) << "no pixel shows the low end of the colour map";
+  EXPECT_GT(warm, 0) << "no pixel shows the high end of the colour map";
+  EXPECT_EQ(img.at(0, 0)[3], 0) << "the fitted view should leave the corners empty";
+}
+
+TEST(FirstContact, ARangeOutsideTheDataIsSaidWithTheDataValues) {
+  FarmDir dir("bad-range");
+  writeBall(dir);
+  const auto scene = writeSceneFile(dir, "ball.yaml",
+                                    "volume: {file: ball.raw, dims: [32, 32, 32], type: uint16, range: [5000, 6000]}\n");
+  const auto r = runCommand(bin("tessera-render") + " " + scene.string() + " --size 32x32 -o " +
+                                (dir.path() / "ball.png").string(),
+                            120);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("warning: range [5000, 6000] lies above every value (the data's values run 0 .. 1000)"),
+            std::string::npos)
+      << r.output;
+}
+
+TEST(FirstContact, AFarmWhoseFramesShowNothingSaysSoOnce) {
+  FarmDir dir("looking-away");
+  const auto scene = writeSceneFile(dir, "away.yaml",
+                                    "volume: {generator: {name: hollow-shell, size: 24}}\n"
+                                    "camera: {eye: [0, 0, 3], target: [0, 0, 6]}\nimage: [48, 32]\n"
+                                    "orbit: {frames: 4, axis: [0, 0, 1]}\n");
+  const auto r = dir.runFarm(scene, 1, 1, 4);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string warning = "has no visible pixel: is the camera looking at the volume";
+  const size_t at = r.output.find(warning);
+  EXPECT_NE(at, std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find(warning, at + 1), std::string::npos) << "said more than once\n" << r.output;
+}
+
+TEST(FirstContact, TesseraInfoReportsTheValuesAndTheirHistogramExactly) {
+  FarmDir dir("info");
+  std::vector<uint8_t> v(8 * 8 * 8, 0);  // 256 voxels of 0, 192 of 100, 64 of 200
+  for (size_t i = 256; i < 448; ++i) v[i] = 100;
+  for (size_t i = 448; i < 512; ++i) v[i] = 200;
+  std::ofstream(dir.path() / "k.raw", std::ios::binary).write(reinterpret_cast<const char*>(v.data()), 512);
+  const auto scene = writeSceneFile(dir, "k.yaml", "volume: {file: k.raw, dims: [8, 8, 8], type: uint8}\n");
+  const std::string png = (dir.path() / "hist.png").string();
+  const auto r = runCommand(bin("tessera-info") + " " + scene.string() + " --bins 4 --plot " + png, 60);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("volume: 8 x 8 x 8 voxels, uint8"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("values: 0 .. 200; mapped to the transfer function: 0 .. 200 (no range given"),
+            std::string::npos)
+      << r.output;
+  // Bins of width 50 over 0..200 (the last one includes 200).
+  for (const char* line : {"0 .. 50", "50 .. 100", "100 .. 150", "150 .. 200"}) {
+    EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
+  }
+  std::vector<unsigned long long> counts;
+  std::istringstream in(r.output);
+  for (std::string l; std::getline(in, l);) {
+    double a, b;
+    unsigned long long c;
+    if (std::sscanf(l.c_str(), " %lf .. %lf %llu", &a, &b, &c) == 3) counts.push_back(c);
+  }
+  EXPECT_EQ(counts, (std::vector<unsigned long long>{256, 0, 192, 64})) << r.output;
+  EXPECT_NE(r.output.find("transfer_function:"), std::string::npos) << "the effective scene is missing\n" << r.output;
+  EXPECT_NE(r.output.find("camera:"), std::string::npos) << r.output;
+  const Image8 plot = readPng(png);
+  EXPECT_EQ(plot.width, 16);
+}
+
+}  // namespace
+}  // namespace tessera::test
