@@ -99,6 +99,14 @@ nlohmann::json Metrics::summarize(const std::vector<proto::StageStats>& renderer
   j["latency_ms"] = latency_ms;
   stage(renderers, j, "render");
   stage(compositors, j, "composite");
+  // A frame whose every image was reused (the camera did not move) was not rendered: it
+  // says so instead of a render time of a few microseconds.
+  uint64_t made = 0, reused = 0;
+  for (const auto& s : renderers) made += s.images_made, reused += s.images_reused;
+  j["render_images_made"] = made;
+  j["render_images_reused"] = reused;
+  j["rerendered"] = made > 0 || reused == 0;
+  if (!j["rerendered"].get<bool>()) j.erase("render_ms_max"), j.erase("render_imbalance_time");
   double decode = 0;  // only compositors decode what they receive
   for (const auto& s : compositors) decode = std::max(decode, s.decode_ms);
   j["composite_decode_ms_max"] = decode;
@@ -134,9 +142,9 @@ void Metrics::write(uint64_t frame, Frame& f) {
   j["done_ms"] = std::chrono::duration<double, std::milli>(f.done_at - start_).count();
   spdlog::debug("frame={} latency_ms={:.1f} render_ms={:.1f} composite_ms={:.1f} display_ms={:.1f} bytes_raw={} "
                "bytes_encoded={} render_imbalance={:.2f} composite_imbalance={:.2f}",
-               frame, f.latency_ms, j["render_ms_max"].get<double>(), j["composite_ms_max"].get<double>(),
+               frame, f.latency_ms, j.value("render_ms_max", 0.0), j["composite_ms_max"].get<double>(),
                f.d.display_ms, j["render_bytes_raw"].get<uint64_t>(), j["render_bytes_encoded"].get<uint64_t>(),
-               j["render_imbalance_time"].get<double>(), j["composite_imbalance_pixels"].get<double>());
+               j.value("render_imbalance_time", 0.0), j["composite_imbalance_pixels"].get<double>());
   if (out_) out_ << j.dump() << '\n' << std::flush;
   wrote_ = wrote_ || out_;
   if (!warned_empty_ && j["composite_reports"].get<size_t>() > 0 && j["composite_active_pixels"].get<double>() == 0) {

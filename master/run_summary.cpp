@@ -24,22 +24,23 @@ uint64_t counter(const nlohmann::json& j, const char* key) {
 RunSummary::RunSummary(uint64_t total_frames, Clock::time_point start) : total_(total_frames), start_(start) {}
 
 double RunSummary::fps() const {
-  const size_t n = render_.size();
+  const size_t n = latency_.size();
   const double span = seconds(last_done_ - first_done_);
   return n > 1 && span > 0 ? (double)(n - 1) / span : 0;
 }
 
 std::optional<std::string> RunSummary::add(const nlohmann::json& j, Clock::time_point done_at,
                                            std::chrono::milliseconds every) {
-  if (render_.empty()) first_done_ = done_at;
+  if (latency_.empty()) first_done_ = done_at;
   last_done_ = done_at;
-  render_.push_back(j.value("render_ms_max", 0.0));
+  if (j.contains("render_ms_max")) render_.push_back(j["render_ms_max"].get<double>());
+  else ++reused_;  // not rendered again: no render time to take the median of
   composite_.push_back(j.value("composite_ms_max", 0.0));
   display_.push_back(j.value("display_ms", 0.0));
   latency_.push_back(j.value("latency_ms", 0.0));
   bytes_ += j.value("render_bytes_encoded", 0.0) + j.value("composite_bytes_encoded", 0.0);
   last_ = j;
-  const uint64_t n = render_.size();
+  const uint64_t n = latency_.size();
   const bool last = total_ > 0 && n >= total_;
   if (n > 1 && !last && done_at - last_progress_ < every) return std::nullopt;
   last_progress_ = done_at;
@@ -49,15 +50,23 @@ std::optional<std::string> RunSummary::add(const nlohmann::json& j, Clock::time_
   return fmt::format("frame {} of {} ({:.0f}%), {:.2f} fps{}", n, total_, 100.0 * (double)n / (double)total_, rate, left);
 }
 
+// "240 ms", "240 ms (9 of 10 frames reused the image: the view did not change)".
+std::string RunSummary::renderPart() const {
+  std::string s = render_.empty() ? "none" : fmt::format("{:.0f} ms", median(render_));
+  if (reused_ > 0)
+    s += fmt::format(" ({} of {} frames reused the image: the view did not change)", reused_, latency_.size());
+  return s;
+}
+
 std::string RunSummary::line(Clock::time_point now) const {
-  const size_t n = render_.size();
+  const size_t n = latency_.size();
   const uint64_t dropped = counter(last_, "master_dropped") + counter(last_, "render_dropped") +
                            counter(last_, "composite_dropped") + counter(last_, "display_dropped");
   return fmt::format(
-      "run summary: {} frames in {:.1f} s, {:.2f} fps; median per frame: render {:.0f} ms, composite {:.1f} ms, "
+      "run summary: {} frames in {:.1f} s, {:.2f} fps; median per frame: render {}, composite {:.1f} ms, "
       "display {:.0f} ms, latency {:.0f} ms; {:.2f} MB per frame between stages; dropped {} messages, "
       "{} strips rejected, {} stages reassigned",
-      n, seconds(now - start_), fps(), median(render_), median(composite_), median(display_), median(latency_),
+      n, seconds(now - start_), fps(), renderPart(), median(composite_), median(display_), median(latency_),
       n ? bytes_ / (double)n / 1e6 : 0.0, dropped, counter(last_, "strips_rejected"), counter(last_, "reassignments"));
 }
 

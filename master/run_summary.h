@@ -26,9 +26,11 @@ class RunSummary {
 
  private:
   double fps() const;
+  std::string renderPart() const;
   uint64_t total_;
   Clock::time_point start_, first_done_, last_done_, last_progress_;
   std::vector<double> render_, composite_, display_, latency_;
+  uint64_t reused_ = 0;  // frames not rendered again
   double bytes_ = 0;
   nlohmann::json last_;  // cumulative counters of the newest frame
 };

@@ -88,7 +88,7 @@ class Stage {
     for (uint32_t b = 0; b < work.bricks.size(); ++b) {
       if (work.bricks[b].renderer != link_.rank()) continue;
       auto t0 = Clock::now();
-      const Cached& c = render(p, work.bricks[b].brick);
+      const Cached& c = render(p, work.bricks[b].brick, st);
       st.work_ms += msSince(t0);
       st.active = unite(st.active, c.active);
       st.active_pixels += c.active.area();
@@ -103,6 +103,7 @@ class Stage {
   void renderTiles(const proto::FrameParams& p, const proto::SortFirstWork& work, proto::StageStats& st) {
     if (!tiles_) return drops_.drop(~0u, "sort-first FrameParams for a volume scene");
     auto outputs = tiles_->render(p, work, link_.rank(), st);
+    st.images_made = (uint32_t)st.tile_ms.size();
     auto t0 = Clock::now();
     for (auto& o : outputs) {
       const std::string* endpoint = nullptr;
@@ -125,10 +126,11 @@ class Stage {
     Rect active;
   };
 
-  const Cached& render(const proto::FrameParams& p, const BrickBox& brick) {
+  const Cached& render(const proto::FrameParams& p, const BrickBox& brick, proto::StageStats& st) {
     RenderKey key{p.camera, p.quality, p.width, p.height, brick};
     for (auto& c : cache_)
-      if (c.key == key) return c;  // unchanged inputs: reuse, do not render again
+      if (c.key == key) return ++st.images_reused, c;  // unchanged inputs: reuse, do not render again
+    ++st.images_made;
     RenderOptions ro;
     ro.quality = p.quality;
     ro.threads = opt_.threads;

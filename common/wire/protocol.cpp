@@ -287,6 +287,8 @@ std::vector<std::byte> encode(const StageStats& m, uint32_t sender) {
     w.u64(m.chunks_drawn);
     w.u64(m.chunks_total);
     w.u64(m.triangles);
+    w.u32(m.images_made);
+    w.u32(m.images_reused);
   });
 }
 Result<StageStats> decodeStageStats(std::span<const std::byte> msg) {
@@ -308,6 +310,8 @@ Result<StageStats> decodeStageStats(std::span<const std::byte> msg) {
     m.chunks_drawn = r.u64("chunks_drawn");
     m.chunks_total = r.u64("chunks_total");
     m.triangles = r.u64("triangles");
+    m.images_made = r.u32("images_made");
+    m.images_reused = r.u32("images_reused");
   });
 }
 

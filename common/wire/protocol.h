@@ -41,7 +41,7 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 2;  // 2: FrameParams carries its mode, Hello its run
+inline constexpr uint16_t kVersion = 3;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -255,6 +255,7 @@ struct Framebuffer {                           // renderer -> compositor (router
 //   tile_ms                                      u32     4   count <= 2^20, then:
 //   tile_ms[i]                                   f64     8   finite
 //   chunks_drawn, chunks_total, triangles        u64 x3  24
+//   images_made, images_reused                   u32 x2  8
 struct StageStats {                            // renderer/compositor -> master, per frame
   Role role = Role::Renderer; uint32_t rank = 0; uint64_t frame = 0;
   // What the stage sends: its output before (raw) and after (encoded) the codec, the time
@@ -267,6 +268,9 @@ struct StageStats {                            // renderer/compositor -> master,
   // pairs drawn, the mesh's chunk count and the triangles drawn.
   std::vector<double> tile_ms;
   uint64_t chunks_drawn = 0, chunks_total = 0, triangles = 0;
+  // Renderers: images (bricks or tiles) rendered this frame, and images reused from an
+  // earlier frame because nothing that shapes them (camera, quality, size, brick) changed.
+  uint32_t images_made = 0, images_reused = 0;
   bool operator==(const StageStats&) const = default;
 };
 

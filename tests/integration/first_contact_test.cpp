@@ -10,6 +10,8 @@
 #include <sstream>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "tests/integration/farm_util.h"
 
 namespace tessera::test {
@@ -91,6 +93,27 @@ TEST(FirstContact, AFarmWhoseFramesShowNothingSaysSoOnce) {
   const size_t at = r.output.find(warning);
   EXPECT_NE(at, std::string::npos) << r.output;
   EXPECT_EQ(r.output.find(warning, at + 1), std::string::npos) << "said more than once\n" << r.output;
+}
+
+TEST(FirstContact, AStaticViewIsRenderedOnceAndTheOtherFramesSaySo) {
+  FarmDir dir("static-view");
+  const auto scene =
+      writeSceneFile(dir, "still.yaml", "volume: {generator: {name: hollow-shell, size: 24}}\nimage: [48, 32]\n");
+  const auto r = dir.runFarm(scene, 2, 1, 4);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir.path() / "out" / "metrics.jsonl");
+  std::vector<nlohmann::json> lines;
+  for (std::string l; std::getline(in, l);) lines.push_back(nlohmann::json::parse(l));
+  ASSERT_EQ(lines.size(), 4u) << r.output;
+  for (const auto& j : lines) {
+    const bool first = j["frame"] == 0;
+    EXPECT_EQ(j["rerendered"], first) << j.dump();
+    EXPECT_EQ(j.contains("render_ms_max"), first) << "a reused image has no render time\n" << j.dump();
+    EXPECT_EQ(j["render_images_made"], first ? 2 : 0) << j.dump();
+    EXPECT_EQ(j["render_images_reused"], first ? 0 : 2) << j.dump();
+    EXPECT_FALSE(j.contains("overlap_factor")) << "a sort-first field in a sort-last frame\n" << j.dump();
+  }
+  EXPECT_NE(r.output.find("(3 of 4 frames reused the image: the view did not change)"), std::string::npos) << r.output;
 }
 
 TEST(FirstContact, TesseraInfoReportsTheValuesAndTheirHistogramExactly) {

@@ -33,6 +33,23 @@ TEST(Metrics, SummaryTakesTheSlowestStageAndTheImbalance) {
   EXPECT_DOUBLE_EQ(j["latency_ms"].get<double>(), 50);
 }
 
+TEST(Metrics, AFrameOfReusedImagesHasNoRenderTime) {
+  proto::FrameDone d;
+  auto reused = stats(proto::Role::Renderer, 0, 0, 0.001);
+  reused.images_reused = 1;
+  auto j = Metrics::summarize({reused, reused}, {}, d, 5);
+  EXPECT_FALSE(j["rerendered"].get<bool>());
+  EXPECT_FALSE(j.contains("render_ms_max")) << j.dump();
+  EXPECT_FALSE(j.contains("render_imbalance_time")) << j.dump();
+  EXPECT_EQ(j["render_images_reused"], 2);
+  auto made = stats(proto::Role::Renderer, 1, 0, 40);
+  made.images_made = 1;  // one brick moved (a renderer failed): the frame was rendered
+  j = Metrics::summarize({reused, made}, {}, d, 5);
+  EXPECT_TRUE(j["rerendered"].get<bool>());
+  EXPECT_DOUBLE_EQ(j["render_ms_max"].get<double>(), 40);
+  EXPECT_EQ(j["render_images_made"], 1);
+}
+
 TEST(Metrics, LineWrittenOnceDoneAndAllStatsAreInWithTheFaultCounters) {
   auto path = std::filesystem::temp_directory_path() / ("tessera_metrics_test_" + std::to_string(::getpid()) + ".jsonl");
   {

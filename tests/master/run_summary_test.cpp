@@ -35,6 +35,20 @@ TEST(RunSummary, ProgressCountsDownAndTheSummarySaysWhatHappened) {
             "0 strips rejected, 2 stages reassigned");
 }
 
+TEST(RunSummary, FramesThatReusedTheImageAreCountedNotTimed) {
+  const auto t0 = RunSummary::Clock::now();
+  RunSummary run(3, t0);
+  run.add(frameLine(240, 1, 0), t0 + 1s);
+  for (int k = 0; k < 2; ++k) {
+    auto j = frameLine(0, 1, 0);
+    j.erase("render_ms_max");
+    run.add(j, t0 + 2s);
+  }
+  EXPECT_NE(run.line(t0 + 2s).find("render 240 ms (2 of 3 frames reused the image: the view did not change)"),
+            std::string::npos)
+      << run.line(t0 + 2s);
+}
+
 TEST(RunSummary, InteractiveRunsHaveNoEstimate) {
   const auto t0 = RunSummary::Clock::now();
   RunSummary run(0, t0);
