@@ -10,7 +10,7 @@ namespace tessera {
 namespace {
 
 struct Builder {
-  const Volume& v;
+  std::array<int, 3> dims;
   const std::vector<uint8_t>* mask;  // 1 where the voxel's alpha > 0; null: count all voxels
   BrickTree tree;
 
@@ -24,7 +24,7 @@ struct Builder {
     if (!mask) return w;
     for (int z = b.lo[2]; z < b.hi[2]; ++z)
       for (int y = b.lo[1]; y < b.hi[1]; ++y) {
-        const uint8_t* row = mask->data() + v.index(0, y, z);
+        const uint8_t* row = mask->data() + (size_t)dims[0] * (y + (size_t)dims[1] * z);
         for (int x = b.lo[0]; x < b.hi[0]; ++x)
           if (row[x]) w[(axis == 0 ? x : axis == 1 ? y : z) - b.lo[axis]]++;
       }
@@ -94,10 +94,23 @@ BrickTree splitBricks(const Volume& v, int n, const TransferFunction* tf) {
       mask[i] = last_m;
     }
   }
-  Builder b{v, tf ? &mask : nullptr, {}};
-  long long total = (long long)v.voxelCount();
-  b.build(BrickBox{{0, 0, 0}, v.dims}, (int)std::min<long long>(n, total));
+  return splitMask(v.dims, tf ? &mask : nullptr, n);
+}
+
+BrickTree splitMask(const std::array<int, 3>& dims, const std::vector<uint8_t>* mask, int n) {
+  if (n < 1) throw std::invalid_argument("splitBricks: n must be >= 1, got " + std::to_string(n));
+  Builder b{dims, mask, {}};
+  const long long total = (long long)dims[0] * dims[1] * dims[2];
+  b.build(BrickBox{{0, 0, 0}, dims}, (int)std::min<long long>(n, total));
   return std::move(b.tree);
+}
+
+BrickTree scaleBricks(BrickTree t, int edge, const std::array<int, 3>& dims) {
+  for (BrickBox& b : t.bricks)
+    for (int a = 0; a < 3; ++a) b.lo[a] = std::min(dims[a], b.lo[a] * edge), b.hi[a] = std::min(dims[a], b.hi[a] * edge);
+  for (BrickTree::Node& node : t.nodes)
+    if (node.axis >= 0) node.split = std::min(dims[node.axis], node.split * edge);
+  return t;
 }
 
 std::vector<int> BrickTree::visibilityOrder(const Volume& v, const Camera& cam) const {
@@ -115,7 +128,7 @@ std::vector<int> BrickTree::visibilityOrder(const Volume& v, const Camera& cam) 
     }
     // Voxel i covers [i, i+1)/dims of the box, so split index s is the plane at s/dims.
     const int a = n.axis;
-    const double plane = lo[a] + (hi[a] - lo[a]) * n.split / v.dims[a];
+    const double plane = lo[a] + (hi[a] - lo[a]) * n.split / v.wholeDims()[a];
     // Low side first if the eye is below the plane (perspective) or rays travel toward +axis (ortho).
     const bool low_first = cam.orthographic ? view[a] >= 0 : cam.eye[a] < plane;
     // Stack: push the far child first so the near one is visited next.

@@ -9,10 +9,7 @@
 
 namespace tessera {
 
-struct BrickBox {
-  std::array<int, 3> lo{0, 0, 0}, hi{0, 0, 0};  // voxel index box [lo, hi)
-  bool operator==(const BrickBox&) const = default;
-};
+using BrickBox = VoxelBox;  // voxel index box [lo, hi)
 
 struct BrickTree {
   std::vector<BrickBox> bricks;  // leaves, in split order
@@ -25,5 +22,12 @@ struct BrickTree {
 // n bricks (n >= 1, capped so every brick has at least one voxel per axis).
 // With a transfer function, splits balance voxels whose alpha > 0; otherwise voxel counts.
 BrickTree splitBricks(const Volume& v, int n, const TransferFunction* tf = nullptr);
+// The same split over any grid of `dims` cells: mask[cell] = 1 where it may be visible
+// (null: every cell counts).
+BrickTree splitMask(const std::array<int, 3>& dims, const std::vector<uint8_t>* mask, int n);
+// A split of a grid of edge^3-voxel blocks made a split of the voxels: every box and split
+// scaled by `edge` and clamped to the volume's `dims`. Each brick keeps at least one voxel
+// per axis as long as the grid has ceil(dims / edge) cells.
+BrickTree scaleBricks(BrickTree tree, int edge, const std::array<int, 3>& dims);
 
 }  // namespace tessera

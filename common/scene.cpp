@@ -144,7 +144,6 @@ std::variant<RawVolumeSpec, GeneratorSpec> Parser::volume(const YAML::Node& n) c
       fail("volume.generator.name", "unknown generator '" + s.name + "' (hollow-shell | marschner-lobb | noise-cloud)");
     s.size = g["size"] ? (int)integer(g["size"], "volume.generator.size", 2, 2048) : 256;
     s.seed = g["seed"] ? (uint32_t)integer(g["seed"], "volume.generator.seed", 0, 0xffffffffll) : 1;
-    if (std::string p = memoryProblem({s.size, s.size, s.size}, 0); !p.empty()) fail("volume.generator.size", p);
     if (n["spacing"]) s.spacing = spacing(n["spacing"], "volume.spacing");
     return s;
   }
@@ -160,8 +159,8 @@ std::variant<RawVolumeSpec, GeneratorSpec> Parser::volume(const YAML::Node& n) c
   else if (t == "uint16") s.type = VoxelType::UInt16;
   else if (t == "float32") s.type = VoxelType::Float32;
   else fail("volume.type", "expected uint8, uint16 or float32, got '" + t + "'");
-  // Before anything is allocated: a renderer would otherwise die of a bare std::bad_alloc.
-  if (std::string m = memoryProblem(s.dims, voxelTypeSize(s.type)); !m.empty()) fail("volume.dims", m);
+  // No memory check here: a farm's renderers each load only their bricks, so a volume
+  // bigger than this machine is a valid scene; a process that loads too much says so then.
   if (n["spacing"]) s.spacing = spacing(n["spacing"], "volume.spacing");
   if (n["range"]) {
     auto r = numbers(n["range"], "volume.range", 2);

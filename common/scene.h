@@ -75,5 +75,9 @@ Scene defaultScene();
 std::string farmAccuracyProblem(const Quality& q, int renderers);
 // Loads or generates the scene's volume.
 Volume loadVolume(const Scene& scene);
+// Only the voxels of `box` (a renderer's bricks and their ghost voxels): see loadRawVolume.
+Volume loadVolume(const Scene& scene, const VoxelBox& box);
+// The volume's dims from the scene alone (no voxel read).
+std::array<int, 3> volumeDims(const Scene& scene);
 
 }  // namespace tessera

@@ -36,11 +36,19 @@ Scene defaultScene() {
   return s;
 }
 
-Volume loadVolume(const Scene& scene) {
+Volume loadVolume(const Scene& scene) { return loadVolume(scene, VoxelBox{{0, 0, 0}, volumeDims(scene)}); }
+
+std::array<int, 3> volumeDims(const Scene& scene) {
+  if (const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume)) return raw->dims;
+  const int n = std::get<GeneratorSpec>(scene.volume).size;
+  return {n, n, n};
+}
+
+Volume loadVolume(const Scene& scene, const VoxelBox& box) {
   const std::string name = scene.path.empty() ? "<default scene>" : scene.path;
   try {
-    if (const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume)) return loadRawVolume(*raw);
-    return generateVolume(std::get<GeneratorSpec>(scene.volume));
+    if (const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume)) return loadRawVolume(*raw, box);
+    return generateVolume(std::get<GeneratorSpec>(scene.volume), box);
   } catch (const SceneError&) {
     throw;
   } catch (const std::exception& e) {

@@ -20,10 +20,11 @@
 namespace tessera {
 
 Vec3 Volume::halfExtent() const {
+  const std::array<int, 3> n = wholeDims();
   double e[3];
   double m = 0;
   for (int i = 0; i < 3; ++i) {
-    e[i] = dims[i] * spacing[i];
+    e[i] = n[i] * spacing[i];
     m = std::max(m, e[i]);
   }
   if (!(m > 0)) return {0, 0, 0};
@@ -83,32 +84,6 @@ std::string memoryProblem(const std::array<int, 3>& dims, size_t file_bytes_per_
 
 namespace {
 
-size_t typeSize(VoxelType t) { return voxelTypeSize(t); }
-
-[[noreturn]] void fail(const std::string& file, const std::string& what) {
-  throw std::runtime_error(file + ": " + what);
-}
-
-void checkGeometry(const std::string& file, const std::array<int, 3>& dims, const std::array<double, 3>& sp) {
-  for (int i = 0; i < 3; ++i) {
-    if (dims[i] <= 0) fail(file, "dims must be positive, got " + std::to_string(dims[i]));
-  }
-  if (std::string p = spacingProblem(sp); !p.empty()) fail(file, p);
-}
-
-template <class T>
-T readLE(const unsigned char* p) {
-  T v;
-  std::memcpy(&v, p, sizeof(T));
-  if constexpr (std::endian::native == std::endian::big) {
-    unsigned char b[sizeof(T)];
-    std::memcpy(b, &v, sizeof(T));
-    std::reverse(b, b + sizeof(T));
-    std::memcpy(&v, b, sizeof(T));
-  }
-  return v;
-}
-
 // Runs body(z0, z1) over slabs of z on up to four threads, at least 8 slices each.
 template <class F>
 void parallelZ(int nz, F body) {
@@ -116,65 +91,16 @@ void parallelZ(int nz, F body) {
                  [&](long long z0, long long z1) { body((int)z0, (int)z1); });
 }
 
-}  // namespace
-
-Volume loadRawVolume(const RawVolumeSpec& spec) {
-  const std::string& f = spec.file;
-  checkGeometry(f, spec.dims, spec.spacing);
-  if (spec.has_range && !(spec.range[0] < spec.range[1]))
-    fail(f, "range must satisfy min < max, got [" + std::to_string(spec.range[0]) + ", " +
-                std::to_string(spec.range[1]) + "]");
-  if (std::string p = notRegularFile(f); !p.empty()) fail(f, p);
-  const size_t count = (size_t)spec.dims[0] * spec.dims[1] * spec.dims[2];
-  const size_t ts = typeSize(spec.type);
-  const uintmax_t expected = (uintmax_t)count * ts;
-  std::error_code ec;
-  const uintmax_t actual = std::filesystem::file_size(f, ec);
-  if (ec) fail(f, "cannot read size: " + ec.message());
-  if (actual != expected)
-    fail(f, "file size is " + std::to_string(actual) + " bytes but dims " + std::to_string(spec.dims[0]) +
-                " x " + std::to_string(spec.dims[1]) + " x " + std::to_string(spec.dims[2]) + " x " +
-                std::to_string(ts) + " bytes/voxel need " + std::to_string(expected) + " bytes");
-  // Before allocating: a sparse or huge file would otherwise end in a bare std::bad_alloc.
-  if (std::string p = memoryProblem(spec.dims, ts); !p.empty()) fail(f, p);
-  std::vector<unsigned char> raw(expected);
-  std::ifstream in(f, std::ios::binary);
-  if (!in || !in.read(reinterpret_cast<char*>(raw.data()), (std::streamsize)expected))
-    fail(f, "read failed");
-
-  Volume v;
-  v.dims = spec.dims;
-  v.spacing = spec.spacing;
-  v.values.resize(count);
-  float mn = INFINITY, mx = -INFINITY;
-  if (spec.type == VoxelType::UInt8) {
-    for (size_t i = 0; i < count; ++i) v.values[i] = (float)(raw[i]);
-  } else if (spec.type == VoxelType::UInt16) {
-    for (size_t i = 0; i < count; ++i) v.values[i] = (float)readLE<uint16_t>(&raw[2 * i]);
-  } else {
-    for (size_t i = 0; i < count; ++i) {
-      float x = readLE<float>(&raw[4 * i]);
-      if (!std::isfinite(x)) {
-        size_t nx = spec.dims[0], ny = spec.dims[1];
-        fail(f, "non-finite value " + std::to_string(x) + " at voxel (" + std::to_string(i % nx) + ", " +
-                    std::to_string(i / nx % ny) + ", " + std::to_string(i / (nx * ny)) + "), linear index " +
-                    std::to_string(i));
-      }
-      v.values[i] = x;
-    }
-  }
-  for (float x : v.values) mn = std::min(mn, x), mx = std::max(mx, x);
-  // Like ParaView: with no declared range, colours and opacity span the data's own values.
-  const double lo = spec.has_range ? spec.range[0] : mn, hi = spec.has_range ? spec.range[1] : mx;
-  v.data_range = {mn, mx};
-  v.mapped_range = {lo, hi};
-  // Normalise in double; a constant volume (lo == hi) maps to 0 everywhere.
-  const double scale = hi > lo ? 1.0 / (hi - lo) : 0.0;
-  for (float& x : v.values) x = (float)std::clamp((x - lo) * scale, 0.0, 1.0);
-  return v;
+// Calls f(x, y, z, value) for every voxel of v (a window or the whole), with x, y, z
+// the voxel's index in the whole volume, over slabs of z in parallel.
+template <class F>
+void forEachVoxel(Volume& v, F f) {
+  parallelZ(v.dims[2], [&](int z0, int z1) {
+    for (int z = z0; z < z1; ++z)
+      for (int y = 0; y < v.dims[1]; ++y)
+        for (int x = 0; x < v.dims[0]; ++x) f(x + v.origin[0], y + v.origin[1], z + v.origin[2], v.values[v.index(x, y, z)]);
+  });
 }
-
-namespace {
 
 // Smooth bump: 1 inside |d| <= inner, cosine fall-off to exactly 0 at |d| >= outer.
 double bump(double d, double inner, double outer) {
@@ -185,33 +111,25 @@ double bump(double d, double inner, double outer) {
 }
 
 void hollowShell(Volume& v) {
-  const int n = v.dims[0];
+  const int n = v.wholeDims()[0];
   // Coordinates in [-1, 1] across the box; shell radius 0.75, total thickness 0.1 (5% of the edge).
-  parallelZ(n, [&](int z0, int z1) {
-    for (int z = z0; z < z1; ++z)
-      for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-          double u = 2.0 * (x + 0.5) / n - 1, w = 2.0 * (y + 0.5) / n - 1, t = 2.0 * (z + 0.5) / n - 1;
-          double r = std::sqrt(u * u + w * w + t * t);
-          // Shell peaks at 0.5 and the core at 1.0, so a transfer function can tell them apart.
-          double s = 0.5 * bump(r - 0.75, 0.02, 0.05) + bump(r, 0.10, 0.16);
-          v.values[v.index(x, y, z)] = (float)std::min(1.0, s);
-        }
+  forEachVoxel(v, [&](int x, int y, int z, float& value) {
+    double u = 2.0 * (x + 0.5) / n - 1, w = 2.0 * (y + 0.5) / n - 1, t = 2.0 * (z + 0.5) / n - 1;
+    double r = std::sqrt(u * u + w * w + t * t);
+    // Shell peaks at 0.5 and the core at 1.0, so a transfer function can tell them apart.
+    double s = 0.5 * bump(r - 0.75, 0.02, 0.05) + bump(r, 0.10, 0.16);
+    value = (float)std::min(1.0, s);
   });
 }
 
 void marschnerLobb(Volume& v) {
-  const int n = v.dims[0];
+  const int n = v.wholeDims()[0];
   constexpr double kFm = 6.0, kAlpha = 0.25, kPi = std::numbers::pi;
-  parallelZ(n, [&](int z0, int z1) {
-    for (int z = z0; z < z1; ++z)
-      for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-          double u = 2.0 * (x + 0.5) / n - 1, w = 2.0 * (y + 0.5) / n - 1, t = 2.0 * (z + 0.5) / n - 1;
-          double rho = std::cos(2 * kPi * kFm * std::cos(kPi * std::sqrt(u * u + w * w) / 2));
-          double s = (1 - std::sin(kPi * t / 2) + kAlpha * (1 + rho)) / (2 * (1 + kAlpha));
-          v.values[v.index(x, y, z)] = (float)std::clamp(s, 0.0, 1.0);
-        }
+  forEachVoxel(v, [&](int x, int y, int z, float& value) {
+    double u = 2.0 * (x + 0.5) / n - 1, w = 2.0 * (y + 0.5) / n - 1, t = 2.0 * (z + 0.5) / n - 1;
+    double rho = std::cos(2 * kPi * kFm * std::cos(kPi * std::sqrt(u * u + w * w) / 2));
+    double s = (1 - std::sin(kPi * t / 2) + kAlpha * (1 + rho)) / (2 * (1 + kAlpha));
+    value = (float)std::clamp(s, 0.0, 1.0);
   });
 }
 
@@ -233,52 +151,55 @@ struct Lattice {
 };
 
 void noiseCloud(Volume& v, uint32_t seed) {
-  const int n = v.dims[0];
+  const int n = v.wholeDims()[0];
   constexpr int kOctaves = 4;
   std::vector<Lattice> oct;
   for (int o = 0; o < kOctaves; ++o) oct.emplace_back(4 << o, splitmix64(seed) + (uint64_t)o * 7919);
-  parallelZ(n, [&](int z0, int z1) {
-    for (int z = z0; z < z1; ++z)
-      for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-          double p[3] = {(x + 0.5) / n, (y + 0.5) / n, (z + 0.5) / n};
-          double sum = 0, amp = 0.5;
-          for (const Lattice& L : oct) {
-            int i[3];
-            double f[3];
-            for (int a = 0; a < 3; ++a) {
-              double q = p[a] * L.c;
-              i[a] = std::min((int)q, L.c - 1);
-              double t = q - i[a];
-              f[a] = t * t * (3 - 2 * t);
-            }
-            auto lerp = [](double a, double b, double t) { return a + t * (b - a); };
-            double c00 = lerp(L.at(i[0], i[1], i[2]), L.at(i[0] + 1, i[1], i[2]), f[0]);
-            double c10 = lerp(L.at(i[0], i[1] + 1, i[2]), L.at(i[0] + 1, i[1] + 1, i[2]), f[0]);
-            double c01 = lerp(L.at(i[0], i[1], i[2] + 1), L.at(i[0] + 1, i[1], i[2] + 1), f[0]);
-            double c11 = lerp(L.at(i[0], i[1] + 1, i[2] + 1), L.at(i[0] + 1, i[1] + 1, i[2] + 1), f[0]);
-            sum += amp * lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2]);
-            amp *= 0.5;
-          }
-          // Fade towards the box faces so the cloud floats in empty space; threshold gives exact zeros.
-          double u = 2 * p[0] - 1, w = 2 * p[1] - 1, t = 2 * p[2] - 1;
-          double env = bump(std::sqrt(u * u + w * w + t * t), 0.45, 1.0);
-          double s = (sum / 0.9375) * env;  // fBm of 4 octaves spans [0, 0.9375]
-          v.values[v.index(x, y, z)] = (float)std::clamp((s - 0.33) / 0.4, 0.0, 1.0);
-        }
+  forEachVoxel(v, [&](int x, int y, int z, float& value) {
+    double p[3] = {(x + 0.5) / n, (y + 0.5) / n, (z + 0.5) / n};
+    double sum = 0, amp = 0.5;
+    for (const Lattice& L : oct) {
+      int i[3];
+      double f[3];
+      for (int a = 0; a < 3; ++a) {
+        double q = p[a] * L.c;
+        i[a] = std::min((int)q, L.c - 1);
+        double t = q - i[a];
+        f[a] = t * t * (3 - 2 * t);
+      }
+      auto lerp = [](double a, double b, double t) { return a + t * (b - a); };
+      double c00 = lerp(L.at(i[0], i[1], i[2]), L.at(i[0] + 1, i[1], i[2]), f[0]);
+      double c10 = lerp(L.at(i[0], i[1] + 1, i[2]), L.at(i[0] + 1, i[1] + 1, i[2]), f[0]);
+      double c01 = lerp(L.at(i[0], i[1], i[2] + 1), L.at(i[0] + 1, i[1], i[2] + 1), f[0]);
+      double c11 = lerp(L.at(i[0], i[1] + 1, i[2] + 1), L.at(i[0] + 1, i[1] + 1, i[2] + 1), f[0]);
+      sum += amp * lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2]);
+      amp *= 0.5;
+    }
+    // Fade towards the box faces so the cloud floats in empty space; threshold gives exact zeros.
+    double u = 2 * p[0] - 1, w = 2 * p[1] - 1, t = 2 * p[2] - 1;
+    double env = bump(std::sqrt(u * u + w * w + t * t), 0.45, 1.0);
+    double s = (sum / 0.9375) * env;  // fBm of 4 octaves spans [0, 0.9375]
+    value = (float)std::clamp((s - 0.33) / 0.4, 0.0, 1.0);
   });
 }
 
 }  // namespace
 
 Volume generateVolume(const GeneratorSpec& spec) {
+  return generateVolume(spec, VoxelBox{{0, 0, 0}, {spec.size, spec.size, spec.size}});
+}
+
+Volume generateVolume(const GeneratorSpec& spec, const VoxelBox& box) {
   if (spec.size < 2) throw std::invalid_argument("generator '" + spec.name + "': size must be >= 2, got " + std::to_string(spec.size));
   if (spec.size > 2048) throw std::invalid_argument("generator '" + spec.name + "': size must be <= 2048, got " + std::to_string(spec.size));
   if (std::string p = spacingProblem(spec.spacing); !p.empty()) throw std::invalid_argument("generator: " + p);
-  const std::array<int, 3> dims{spec.size, spec.size, spec.size};
-  if (std::string p = memoryProblem(dims, 0); !p.empty()) throw std::invalid_argument("generator: " + p);
+  const std::array<int, 3> whole{spec.size, spec.size, spec.size};
+  if (std::string p = windowProblem(whole, box); !p.empty()) throw std::invalid_argument("generator: " + p);
   Volume v;
-  v.dims = {spec.size, spec.size, spec.size};
+  for (int a = 0; a < 3; ++a) v.dims[a] = box.hi[a] - box.lo[a];
+  if (std::string p = memoryProblem(v.dims, 0); !p.empty()) throw std::invalid_argument("generator: " + p);
+  v.origin = box.lo;
+  v.whole_dims = whole;
   v.spacing = spec.spacing;
   v.values.assign(v.voxelCount(), 0.0f);
   if (spec.name == "hollow-shell") hollowShell(v);
@@ -286,9 +207,19 @@ Volume generateVolume(const GeneratorSpec& spec) {
   else if (spec.name == "noise-cloud") noiseCloud(v, spec.seed);
   else throw std::invalid_argument("unknown generator '" + spec.name + "' (hollow-shell | marschner-lobb | noise-cloud)");
   const auto [mn, mx] = std::minmax_element(v.values.begin(), v.values.end());
-  v.data_range = {*mn, *mx};
+  v.data_range = {*mn, *mx};  // of the window: a generator's values are normalised already
   v.mapped_range = {0, 1};
   return v;
+}
+
+std::string windowProblem(const std::array<int, 3>& whole, const VoxelBox& box) {
+  for (int a = 0; a < 3; ++a)
+    if (box.lo[a] < 0 || box.hi[a] > whole[a] || box.lo[a] >= box.hi[a])
+      return "window [" + std::to_string(box.lo[0]) + ", " + std::to_string(box.lo[1]) + ", " +
+             std::to_string(box.lo[2]) + "] .. [" + std::to_string(box.hi[0]) + ", " + std::to_string(box.hi[1]) +
+             ", " + std::to_string(box.hi[2]) + ") is empty or outside the volume's " + std::to_string(whole[0]) +
+             " x " + std::to_string(whole[1]) + " x " + std::to_string(whole[2]) + " voxels";
+  return "";
 }
 
 std::string rangeProblem(const Volume& v) {

@@ -1,6 +1,9 @@
 // Scalar volumes: values normalised to [0,1] over the declared range, v[x + nx*(y + ny*z)].
 // The volume fills the origin-centred box with extents proportional to dims x spacing,
 // scaled so the largest extent is 1; voxel i sits at the centre of its cell.
+// A window holds only a box of a bigger volume (a renderer's bricks and their ghost
+// voxels): its values are the box's, `origin` is where the box starts in the whole
+// volume and `whole_dims` the whole volume's dims, which alone set the world box.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -12,7 +15,9 @@
 namespace tessera {
 
 struct Volume {
-  std::array<int, 3> dims{0, 0, 0};
+  std::array<int, 3> dims{0, 0, 0};            // of the values held
+  std::array<int, 3> origin{0, 0, 0};          // voxel index of values[0] in the whole volume
+  std::array<int, 3> whole_dims{0, 0, 0};      // of the whole volume; {0,0,0}: the same as dims
   std::array<double, 3> spacing{1, 1, 1};
   std::vector<float> values;  // normalised, size dims[0]*dims[1]*dims[2]
   // In the file's units: the smallest and largest value of the data, and the range that
@@ -22,7 +27,9 @@ struct Volume {
   size_t index(int x, int y, int z) const { return x + (size_t)dims[0] * (y + (size_t)dims[1] * z); }
   float at(int x, int y, int z) const { return values[index(x, y, z)]; }
   size_t voxelCount() const { return (size_t)dims[0] * dims[1] * dims[2]; }
-  // Half extents of the box in world units (largest is 0.5).
+  std::array<int, 3> wholeDims() const { return whole_dims[0] > 0 ? whole_dims : dims; }
+  bool isWindow() const { return wholeDims() != dims; }
+  // Half extents of the whole volume's box in world units (largest is 0.5).
   Vec3 halfExtent() const;
   Vec3 boxMin() const { return halfExtent() * -1.0; }
   Vec3 boxMax() const { return halfExtent(); }
@@ -53,18 +60,35 @@ inline constexpr double kMinSpacing = 1e-30, kMaxSpacing = 1e30, kMaxSpacingRati
 std::string spacingProblem(const std::array<double, 3>& spacing);
 // "" for a regular file, else e.g. "is a directory", "is a FIFO (named pipe), not a regular file", "file not found".
 std::string notRegularFile(const std::string& path);
-// Bytes needed to load a volume: the normalised floats plus the file read whole (0 for generators).
+// Bytes needed to hold a volume of dims: the normalised floats plus file_bytes_per_voxel (the
+// raw reader reads in pieces and passes 0).
 uint64_t volumeLoadBytes(const std::array<int, 3>& dims, size_t file_bytes_per_voxel);
 uint64_t physicalMemoryBytes();
 // "" if volumeLoadBytes fits in this machine's physical memory, else a sentence with both sizes.
 std::string memoryProblem(const std::array<int, 3>& dims, size_t file_bytes_per_voxel);
 size_t voxelTypeSize(VoxelType t);
 
+// A box of voxels [lo, hi) of a volume.
+struct VoxelBox {
+  std::array<int, 3> lo{0, 0, 0}, hi{0, 0, 0};
+  bool operator==(const VoxelBox&) const = default;
+};
+
 // Throws std::runtime_error naming the file: missing file, size != dims x type size,
 // non-finite value (with the first offending index).
 Volume loadRawVolume(const RawVolumeSpec& spec);
-// Throws std::invalid_argument for an unknown name or size < 2.
+// Only the voxels of `box` (a window), read with positioned reads; memory grows with the
+// box, not the file. With no `range`, the data's min..max is found by streaming the whole
+// file once in slabs (the normalisation must be the whole volume's); non-finite values
+// anywhere in the file are refused as loadRawVolume refuses them.
+Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box);
+// Throws std::invalid_argument for an unknown name or size < 2. A box gives a window:
+// each voxel is computed from its position in the whole volume, so windows equal the
+// matching part of the whole.
 Volume generateVolume(const GeneratorSpec& spec);
+Volume generateVolume(const GeneratorSpec& spec, const VoxelBox& box);
+// "" if box is a non-empty box inside a volume of `whole` dims, else what is wrong.
+std::string windowProblem(const std::array<int, 3>& whole, const VoxelBox& box);
 // "" if the mapped range meets the data's values, else a sentence saying that every voxel
 // maps to one end of the transfer function and what to do.
 std::string rangeProblem(const Volume& v);

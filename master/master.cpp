@@ -53,8 +53,7 @@ class Master {
     if (sortFirst())
       plan_ = std::make_unique<SortFirstPlan>(width(), height(), opt_.balance, opt_.tiles_per_renderer);
     else
-      plan_ = std::make_unique<SortLastPlan>(std::make_shared<const Volume>(loadVolume(opt_.scene)), opt_.scene.tf,
-                                             width(), height(), opt_.balance);
+      plan_ = std::make_unique<SortLastPlan>(summarizeVolume(opt_.scene), opt_.scene.tf, width(), height(), opt_.balance);
   }
 
   int run(const std::atomic<bool>* stop) {

@@ -102,7 +102,9 @@ nlohmann::json Metrics::summarize(const std::vector<proto::StageStats>& renderer
   // A frame whose every image was reused (the camera did not move) was not rendered: it
   // says so instead of a render time of a few microseconds.
   uint64_t made = 0, reused = 0;
-  for (const auto& s : renderers) made += s.images_made, reused += s.images_reused;
+  double load = 0;
+  for (const auto& s : renderers) made += s.images_made, reused += s.images_reused, load = std::max(load, s.load_ms);
+  if (load > 0) j["render_load_ms_max"] = load;  // only frames where a renderer loaded voxels
   j["render_images_made"] = made;
   j["render_images_reused"] = reused;
   j["rerendered"] = made > 0 || reused == 0;

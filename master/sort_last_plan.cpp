@@ -8,22 +8,21 @@
 
 namespace tessera::master {
 
-SortLastPlan::SortLastPlan(std::shared_ptr<const Volume> volume, const TransferFunction& tf, int width, int height,
-                           bool balance)
+SortLastPlan::SortLastPlan(VolumeSummary volume, const TransferFunction& tf, int width, int height, bool balance)
     : volume_(std::move(volume)), tf_(tf), width_(width), height_(height), balance_(balance) {
   // Said once, by the master: a range that misses the data makes every frame empty or uniform.
-  if (std::string why = rangeProblem(*volume_); !why.empty()) spdlog::warn("volume: {}", why);
+  if (std::string why = rangeProblem(volume_.shape); !why.empty()) spdlog::warn("volume: {}", why);
 }
 
 void SortLastPlan::reassign(const Workers& w) {
-  tree_ = splitBricks(*volume_, std::max<int>(1, (int)w.renderers.size()), &tf_);
+  tree_ = splitBricks(volume_, std::max<int>(1, (int)w.renderers.size()), tf_);
 }
 
 void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
   auto& work = p.work.emplace<proto::SortLastWork>();
   for (size_t i = 0; i < tree_.bricks.size() && i < w.renderers.size(); ++i)
     work.bricks.push_back({w.renderers[i], tree_.bricks[i]});
-  work.order = tree_.visibilityOrder(*volume_, p.camera);
+  work.order = tree_.visibilityOrder(volume_.shape, p.camera);
   auto bands = balancedBands(width_, height_, (int)w.compositors.size(), balance_ ? last_active_ : std::vector<Rect>{});
   for (size_t i = 0; i < bands.size(); ++i)
     p.regions.push_back({w.compositors[i].rank, bands[i], w.compositors[i].endpoint});

@@ -1,25 +1,25 @@
-// Sort-last work: the volume split into one brick per renderer (by the transfer function's
-// visible content), a back-to-front order per camera, and one screen band per compositor,
+// Sort-last work: the volume split into one brick per renderer (by the blocks the transfer
+// function may show, from a streamed summary: no voxel is held here), a back-to-front order per camera, and one screen band per compositor,
 // balanced by the renderers' active pixels of the latest reported frame.
 #pragma once
 #include <memory>
 
 #include "common/bricks.h"
 #include "common/transfer_function.h"
-#include "common/volume.h"
+#include "common/volume_summary.h"
 #include "master/plan.h"
 
 namespace tessera::master {
 
 class SortLastPlan : public Plan {
  public:
-  SortLastPlan(std::shared_ptr<const Volume> volume, const TransferFunction& tf, int width, int height, bool balance);
+  SortLastPlan(VolumeSummary volume, const TransferFunction& tf, int width, int height, bool balance);
   void reassign(const Workers& w) override;
   void fill(proto::FrameParams& p, const Workers& w) override;
   void stats(const proto::StageStats& s, const Workers& w) override;
 
  private:
-  std::shared_ptr<const Volume> volume_;
+  VolumeSummary volume_;  // the master never holds the voxels
   const TransferFunction& tf_;
   int width_, height_;
   bool balance_;

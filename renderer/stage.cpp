@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "common/cpu.h"
+#include "common/volume_summary.h"
 #include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/wire/pixels.h"
@@ -32,12 +33,13 @@ struct RenderKey {
 class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
-      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Renderer) {
+      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Renderer), scene_(opt.scene) {
     if (opt.scene.mesh) {
       tiles_ = std::make_unique<TileRenderer>(opt.scene);
     } else {
-      volume_ = std::make_shared<Volume>(loadVolume(opt.scene));
-      caster_ = makeVolumeBackend(opt.backend, volume_, opt.scene.tf);
+      // Before joining, so a bad file is said at once; every window loaded later is
+      // normalised with the whole file's range without scanning it again.
+      fixVolumeRange(scene_);
     }
   }
 
@@ -84,7 +86,8 @@ class Stage {
   }
 
   void renderBricks(const proto::FrameParams& p, const proto::SortLastWork& work, proto::StageStats& st) {
-    if (!caster_) return drops_.drop(~0u, "sort-last FrameParams for a geometry scene");
+    if (tiles_) return drops_.drop(~0u, "sort-last FrameParams for a geometry scene");
+    holdBricks(p.frame, work, st);
     for (uint32_t b = 0; b < work.bricks.size(); ++b) {
       if (work.bricks[b].renderer != link_.rank()) continue;
       auto t0 = Clock::now();
@@ -120,6 +123,38 @@ class Stage {
     link_.report(proto::encode(st, link_.rank()));
   }
 
+  // Loads the voxels of this renderer's bricks and their ghost layer (trilinear sampling
+  // near a brick face reads one voxel beyond it) unless the window held has them all.
+  // Memory follows the bricks, not the volume; a move of bricks costs one load, in the stats.
+  void holdBricks(uint64_t frame, const proto::SortLastWork& work, proto::StageStats& st) {
+    const auto whole = volumeDims(scene_);
+    VoxelBox need{whole, {0, 0, 0}};
+    for (const auto& b : work.bricks) {
+      if (b.renderer != link_.rank()) continue;
+      for (int a = 0; a < 3; ++a) {
+        need.lo[a] = std::min(need.lo[a], std::max(0, b.brick.lo[a] - kGhost));
+        need.hi[a] = std::max(need.hi[a], std::min(whole[a], b.brick.hi[a] + kGhost));
+      }
+    }
+    if (need.lo[0] >= need.hi[0]) return;  // no brick of ours this frame
+    if (volume_) {
+      bool inside = true;
+      for (int a = 0; a < 3; ++a)
+        inside = inside && need.lo[a] >= volume_->origin[a] && need.hi[a] <= volume_->origin[a] + volume_->dims[a];
+      if (inside) return;
+    }
+    const auto t0 = Clock::now();
+    caster_.reset();
+    cache_.clear();
+    volume_.reset();  // before loading the next: peak memory is one window
+    volume_ = std::make_shared<Volume>(loadVolume(scene_, need));
+    caster_ = makeVolumeBackend(opt_.backend, volume_, scene_.tf);
+    st.load_ms = msSince(t0);
+    spdlog::info("frame={} loaded voxels [{}, {}, {}] .. [{}, {}, {}) ({:.1f} MiB) in {:.0f} ms", frame,
+                 need.lo[0], need.lo[1], need.lo[2], need.hi[0], need.hi[1], need.hi[2],
+                 (double)volume_->voxelCount() * sizeof(float) / (1 << 20), st.load_ms);
+  }
+
   struct Cached {
     RenderKey key;
     ImageF image;
@@ -136,7 +171,9 @@ class Stage {
     ro.threads = opt_.threads;
     RenderStats rs;
     Cached c{key, {}, {}};
-    c.image = caster_->render(p.camera, p.width, p.height, brick, ro, &rs, &c.active);
+    Brick local = brick;  // in the held window's voxel indices
+    for (int a = 0; a < 3; ++a) local.lo[a] -= volume_->origin[a], local.hi[a] -= volume_->origin[a];
+    c.image = caster_->render(p.camera, p.width, p.height, local, ro, &rs, &c.active);
     spdlog::debug("frame={} brick={},{},{} samples={} skipped={} ms={:.1f}", p.frame, brick.lo[0], brick.lo[1],
                   brick.lo[2], rs.samples, rs.samples_skipped, rs.ms);
     if (cache_.size() >= 2) cache_.pop_front();  // a renderer may own two bricks after a failure
@@ -177,7 +214,9 @@ class Stage {
   const StageOptions& opt_;
   zmq::context_t& ctx_;
   StageLink link_;
-  std::shared_ptr<Volume> volume_;
+  static constexpr int kGhost = 1;  // voxels beyond a brick that its samples read
+  Scene scene_;                      // the scene, with the data's range fixed once
+  std::shared_ptr<Volume> volume_;   // the window of this renderer's bricks
   std::unique_ptr<VolumeBackend> caster_;  // volume scenes (sort-last)
   std::unique_ptr<TileRenderer> tiles_;   // geometry scenes (sort-first)
   std::deque<Cached> cache_;

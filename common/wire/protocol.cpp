@@ -289,6 +289,7 @@ std::vector<std::byte> encode(const StageStats& m, uint32_t sender) {
     w.u64(m.triangles);
     w.u32(m.images_made);
     w.u32(m.images_reused);
+    w.f64(m.load_ms);
   });
 }
 Result<StageStats> decodeStageStats(std::span<const std::byte> msg) {
@@ -312,6 +313,7 @@ Result<StageStats> decodeStageStats(std::span<const std::byte> msg) {
     m.triangles = r.u64("triangles");
     m.images_made = r.u32("images_made");
     m.images_reused = r.u32("images_reused");
+    m.load_ms = detail::readFinite(r, "load_ms");
   });
 }
 

@@ -41,7 +41,7 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 3;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse
+inline constexpr uint16_t kVersion = 3;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -256,6 +256,7 @@ struct Framebuffer {                           // renderer -> compositor (router
 //   tile_ms[i]                                   f64     8   finite
 //   chunks_drawn, chunks_total, triangles        u64 x3  24
 //   images_made, images_reused                   u32 x2  8
+//   load_ms                                      f64     8   finite
 struct StageStats {                            // renderer/compositor -> master, per frame
   Role role = Role::Renderer; uint32_t rank = 0; uint64_t frame = 0;
   // What the stage sends: its output before (raw) and after (encoded) the codec, the time
@@ -271,6 +272,7 @@ struct StageStats {                            // renderer/compositor -> master,
   // Renderers: images (bricks or tiles) rendered this frame, and images reused from an
   // earlier frame because nothing that shapes them (camera, quality, size, brick) changed.
   uint32_t images_made = 0, images_reused = 0;
+  double load_ms = 0;  // renderers: reading (or generating) the voxels of newly assigned bricks
   bool operator==(const StageStats&) const = default;
 };
 

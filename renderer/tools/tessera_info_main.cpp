@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "common/bricks.h"
 #include "common/image.h"
 #include "common/io/image_io.h"
 #include "common/scene.h"
@@ -34,6 +35,30 @@ Histogram histogram(const Volume& v, int bins) {
     ++h.counts[std::clamp(b, 0, bins - 1)];
   }
   return h;
+}
+
+std::string bytesText(double bytes) {
+  const int unit = bytes < (1 << 20) ? 10 : bytes < (1 << 30) ? 20 : 30;
+  char b[48];
+  std::snprintf(b, sizeof b, "%.1f %s", bytes / (double)(1ull << unit), unit == 10 ? "KiB" : unit == 20 ? "MiB" : "GiB");
+  return b;
+}
+
+// A renderer holds its bricks and one ghost voxel around them: float values, 16-bit
+// quantized values and the min-max hierarchy, about 6 bytes a voxel. Bricks of an even
+// split (the farm balances by visible content, so its largest brick may be bigger).
+void printRendererMemory(const std::array<int, 3>& dims) {
+  std::string line = "memory per renderer (bricks + ghost voxels, about 6 bytes a voxel):";
+  for (int n : {1, 2, 4, 8}) {
+    size_t most = 0;
+    for (const BrickBox& b : splitMask(dims, nullptr, n).bricks) {
+      size_t voxels = 1;
+      for (int a = 0; a < 3; ++a) voxels *= (size_t)(std::min(dims[a], b.hi[a] + 1) - std::max(0, b.lo[a] - 1));
+      most = std::max(most, voxels);
+    }
+    line += " " + bytesText(6.0 * (double)most) + " for " + std::to_string(n) + (n < 8 ? "," : "");
+  }
+  std::printf("%s renderers\n", line.c_str());
 }
 
 void printHistogram(const Histogram& h) {
@@ -96,12 +121,7 @@ int run(int argc, char** argv) {
     plotHistogram(h, plot);
     std::printf("wrote %s\n", plot.c_str());
   }
-  // Every renderer holds the whole volume today: float values plus 16-bit quantized values
-  // and the min-max hierarchy (about 6 bytes a voxel), whatever its bricks.
-  const double bytes = (double)v.voxelCount() * 6;
-  const int unit = bytes < (1 << 20) ? 10 : bytes < (1 << 30) ? 20 : 30;
-  std::printf("memory per renderer: about %.1f %s for 1, 2, 4 or 8 bricks (each renderer loads the whole volume)\n",
-              bytes / (double)(1ull << unit), unit == 10 ? "KiB" : unit == 20 ? "MiB" : "GiB");
+  printRendererMemory(v.dims);
   return 0;
 }
 

@@ -7,11 +7,11 @@
 
 namespace tessera::renderer {
 
-VolumeGeometry::VolumeGeometry(const Volume& v) : n(v.dims) {
+VolumeGeometry::VolumeGeometry(const Volume& v) : n(v.dims), origin(v.origin), whole(v.wholeDims()) {
   const Vec3 h = v.halfExtent();
   for (int a = 0; a < 3; ++a) {
     half[a] = h[a];
-    cell[a] = 2.0 * h[a] / n[a];
+    cell[a] = 2.0 * h[a] / whole[a];
   }
 }
 
@@ -69,7 +69,7 @@ namespace {
 // Whole-volume entry (t0) and the brick's k range; false if the brick has no samples.
 [[gnu::always_inline]] inline bool brickRange(const VolumeGeometry& g, const PreparedRay& r, const BrickBox& brick, double step, RaySpan& span,
                 double& w_out) {
-  const BrickBox whole{{0, 0, 0}, g.n};
+  const BrickBox whole = g.wholeBox();
   double w_in, b_in, b_out;
   if (!interval(g, r, whole, w_in, w_out)) return false;
   if (!(w_out > 0)) return false;
@@ -92,7 +92,9 @@ namespace {
 void samplePositions(const VolumeGeometry& g, const Ray& r, double step, RaySpan& span) {
   const double tb = span.t0 + 0.5 * step;
   for (int a = 0; a < 3; ++a) {
-    span.u0[a] = (r.origin[a] + tb * r.dir[a] + g.half[a]) / g.cell[a] - 0.5;
+    // In the whole volume's voxel coordinates, then moved to the held voxels' (exact: an
+    // integer shift of a double well below 2^52).
+    span.u0[a] = (r.origin[a] + tb * r.dir[a] + g.half[a]) / g.cell[a] - 0.5 - g.origin[a];
     span.du[a] = r.dir[a] * step / g.cell[a];
   }
 }

@@ -12,16 +12,24 @@
 namespace tessera::renderer {
 
 // World <-> voxel mapping of one volume (docs/DESIGN.md: origin-centred box, largest extent 1,
-// voxel i at the centre of its cell).
+// voxel i at the centre of its cell). Voxel indices are the held values' (a window's own,
+// from 0); `origin` places them in the whole volume, which alone sets the world box.
 struct VolumeGeometry {
-  std::array<int, 3> n{1, 1, 1};
-  std::array<double, 3> half{0.5, 0.5, 0.5};  // half extents (world)
+  std::array<int, 3> n{1, 1, 1};              // voxels held
+  std::array<int, 3> origin{0, 0, 0};         // of the held voxels in the whole volume
+  std::array<int, 3> whole{1, 1, 1};          // the whole volume's dims
+  std::array<double, 3> half{0.5, 0.5, 0.5};  // half extents of the whole box (world)
   std::array<double, 3> cell{1, 1, 1};        // cell edge (world)
 
   explicit VolumeGeometry(const Volume& v);
-  // World coordinate of the cell boundary q on an axis (q = 0..n). Every box (whole volume
-  // or brick) uses this one expression, so shared faces give bit-identical ray parameters.
-  double plane(int axis, int q) const { return -half[axis] + q * cell[axis]; }
+  // World coordinate of the cell boundary q on an axis (q = -origin..whole-origin). Every
+  // box (whole volume or brick, in any window) uses this one expression on the whole
+  // volume's index, so shared faces give bit-identical ray parameters.
+  double plane(int axis, int q) const { return -half[axis] + (q + origin[axis]) * cell[axis]; }
+  // The whole volume's box in held-voxel indices (the start of every ray's sample grid).
+  BrickBox wholeBox() const {
+    return {{-origin[0], -origin[1], -origin[2]}, {whole[0] - origin[0], whole[1] - origin[1], whole[2] - origin[2]}};
+  }
 };
 
 // The samples of one ray inside one brick. Sample k sits at t_k = t0 + (k + 0.5) * step,

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 using namespace tessera;
 namespace fs = std::filesystem;
@@ -179,8 +180,68 @@ TEST(Volume, HugeSparseFileNamesTheBytesInsteadOfBadAlloc) {
   std::filesystem::resize_file(f, (uintmax_t)1 << 38);  // sparse: no disk used
   RawVolumeSpec s{f, dims, VoxelType::UInt8, {1, 1, 1}, false, {0, 255}};
   const std::string m = errorOf(s);
-  EXPECT_NE(m.find("voxels need 1374389534720 bytes"), std::string::npos) << m;
+  EXPECT_NE(m.find("voxels need 1099511627776 bytes"), std::string::npos) << m;  // 4 bytes a voxel
   EXPECT_EQ(m.find("bad_alloc"), std::string::npos) << m;
+}
+
+// Every voxel of a window equals the same voxel of the whole volume.
+static void expectWindowOfWhole(const Volume& window, const Volume& whole, const VoxelBox& box) {
+  ASSERT_EQ(window.origin, box.lo);
+  ASSERT_EQ(window.wholeDims(), whole.dims);
+  for (int a = 0; a < 3; ++a) ASSERT_EQ(window.dims[a], box.hi[a] - box.lo[a]);
+  EXPECT_EQ(window.halfExtent(), whole.halfExtent()) << "a window sits in the whole volume's box";
+  for (int z = 0; z < window.dims[2]; ++z)
+    for (int y = 0; y < window.dims[1]; ++y)
+      for (int x = 0; x < window.dims[0]; ++x)
+        ASSERT_EQ(window.at(x, y, z), whole.at(x + box.lo[0], y + box.lo[1], z + box.lo[2])) << x << "," << y << "," << z;
+}
+
+TEST(Volume, ARawWindowHoldsOnlyItsBoxAndEqualsThatPartOfTheWhole) {
+  TempDir t("volume");
+  const std::array<int, 3> n{13, 11, 9};
+  std::vector<uint16_t> data((size_t)n[0] * n[1] * n[2]);
+  for (size_t i = 0; i < data.size(); ++i) data[i] = (uint16_t)(100 + (i * 7919) % 3001);
+  RawVolumeSpec s{t.write("w.raw", data.data(), data.size() * 2), n, VoxelType::UInt16, {1, 2, 1}, false, {0, 0}};
+  const Volume whole = loadRawVolume(s);
+  // Interior, whole rows, whole slices, one voxel, the whole volume.
+  for (const VoxelBox& box : {VoxelBox{{2, 3, 1}, {7, 9, 4}}, VoxelBox{{0, 2, 3}, {13, 5, 9}}, VoxelBox{{0, 0, 4}, {13, 11, 6}},
+                              VoxelBox{{12, 10, 8}, {13, 11, 9}}, VoxelBox{{0, 0, 0}, n}}) {
+    const Volume w = loadRawVolume(s, box);
+    expectWindowOfWhole(w, whole, box);
+    // No range given: every window normalises with the whole file's min..max.
+    EXPECT_EQ(w.mapped_range, whole.mapped_range);
+    EXPECT_EQ(w.data_range, whole.data_range);
+  }
+  s.has_range = true;
+  s.range = {500, 2500};
+  const Volume ranged = loadRawVolume(s);
+  expectWindowOfWhole(loadRawVolume(s, VoxelBox{{1, 1, 1}, {12, 4, 8}}), ranged, VoxelBox{{1, 1, 1}, {12, 4, 8}});
+  EXPECT_THROW(loadRawVolume(s, VoxelBox{{0, 0, 0}, {14, 11, 9}}), std::runtime_error);
+  EXPECT_THROW(loadRawVolume(s, VoxelBox{{3, 0, 0}, {3, 11, 9}}), std::runtime_error);
+}
+
+TEST(Volume, AWindowWithoutARangeStillRefusesANonFiniteValueAnywhere) {
+  TempDir t("volume");
+  std::vector<float> f(4 * 4 * 4, 1.0f);
+  f[3 + 4 * (3 + 4 * 3)] = NAN;  // the last voxel, outside the window below
+  RawVolumeSpec s{t.write("n.raw", f.data(), f.size() * 4), {4, 4, 4}, VoxelType::Float32, {1, 1, 1}, false, {0, 0}};
+  try {
+    loadRawVolume(s, VoxelBox{{0, 0, 0}, {2, 2, 2}});
+    FAIL() << "the NaN went unseen";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("non-finite value nan at voxel (3, 3, 3)"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Volume, AGeneratedWindowEqualsThatPartOfTheWholeVolume) {
+  for (const char* name : {"hollow-shell", "marschner-lobb", "noise-cloud"}) {
+    const GeneratorSpec spec{name, 24, 3, {1, 1, 1}};
+    const Volume whole = generateVolume(spec);
+    const VoxelBox box{{5, 0, 11}, {17, 24, 20}};
+    expectWindowOfWhole(generateVolume(spec, box), whole, box);
+  }
+  EXPECT_THROW(generateVolume(GeneratorSpec{"hollow-shell", 24, 1, {1, 1, 1}}, VoxelBox{{0, 0, 0}, {25, 1, 1}}),
+               std::invalid_argument);
 }
 
 TEST(Volume, SpacingLimits) {

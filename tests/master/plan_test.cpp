@@ -11,8 +11,8 @@ Workers twoByTwo() { return {{0, 2}, {{0, "ep0"}, {3, "ep3"}}}; }
 
 TEST(SortLastPlan, OneBrickPerRendererAndOneBandPerCompositor) {
   Scene scene = defaultScene();
-  auto volume = std::make_shared<const Volume>(generateVolume({"hollow-shell", 16, 1}));
-  SortLastPlan plan(volume, scene.tf, 64, 48, true);
+  scene.volume = GeneratorSpec{"hollow-shell", 16, 1};
+  SortLastPlan plan(summarizeVolume(scene), scene.tf, 64, 48, true);
   Workers w = twoByTwo();
   plan.reassign(w);
   proto::FrameParams p;
@@ -31,9 +31,9 @@ TEST(SortLastPlan, OneBrickPerRendererAndOneBandPerCompositor) {
 }
 
 TEST(SortLastPlan, BandsFollowTheLatestFramesActivePixels) {
-  auto volume = std::make_shared<const Volume>(generateVolume({"hollow-shell", 16, 1}));
   Scene scene = defaultScene();
-  SortLastPlan plan(volume, scene.tf, 64, 48, true);
+  scene.volume = GeneratorSpec{"hollow-shell", 16, 1};
+  SortLastPlan plan(summarizeVolume(scene), scene.tf, 64, 48, true);
   Workers w = twoByTwo();
   plan.reassign(w);
   proto::StageStats s;

@@ -40,7 +40,7 @@ TEST_P(TinyOpacity, ManySamplesMatchTheClosedForm) {
   RenderOptions opt;
   opt.quality = custom(step, reference);
   RenderStats st;
-  const ImageF img = rc.render(kDownZ, 1, 1, wholeVolume(Volume{{8, 8, 8}, {1, 1, 1}, {}}), opt, &st);
+  const ImageF img = rc.render(kDownZ, 1, 1, Brick{{0, 0, 0}, {8, 8, 8}}, opt, &st);
   const double n = (double)st.samples;
   ASSERT_NEAR(n, 1e5, 1.0);
   const double expected = -std::expm1(n * std::log1p(-a));  // 1 - (1 - a)^n ~ 0.0952
@@ -62,7 +62,7 @@ TEST(Opaque, OneSampleSaturates) {
   const Raycaster rc(test::constant({8, 8, 8}, 0.5f), flat(1.0, 0.2, 0.4, 0.6));
   for (const char* q : {"default", "reference"}) {
     RenderStats st;
-    const ImageF img = rc.render(kDownZ, 1, 1, wholeVolume(Volume{{8, 8, 8}, {1, 1, 1}, {}}), options(q), &st);
+    const ImageF img = rc.render(kDownZ, 1, 1, Brick{{0, 0, 0}, {8, 8, 8}}, options(q), &st);
     // alpha 1 corrects to a = 1 for any step: the first sample is everything.
     EXPECT_EQ(img.px[3], 1.0f) << q;
     EXPECT_FLOAT_EQ(img.px[0], 0.2f) << q;

@@ -1,0 +1,68 @@
+// Streaming summary of a volume (see volume_summary.h).
+#include "common/volume_summary.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/bricks.h"
+
+namespace tessera {
+
+std::array<double, 2> fixVolumeRange(Scene& scene) {
+  const Volume probe = loadVolume(scene, VoxelBox{{0, 0, 0}, {1, 1, 1}});
+  if (auto* raw = std::get_if<RawVolumeSpec>(&scene.volume); raw && !raw->has_range) {
+    raw->has_range = true;
+    raw->range = probe.mapped_range;
+    // Constant data: any range containing the value maps every voxel to 0, as before.
+    if (!(raw->range[0] < raw->range[1])) raw->range[1] = raw->range[0] + 1;
+  }
+  return probe.data_range;
+}
+
+VolumeSummary summarizeVolume(const Scene& original) {
+  Scene scene = original;
+  fixVolumeRange(scene);
+  VolumeSummary s;
+  const std::array<int, 3> n = volumeDims(scene);
+  while (s.edge > 1 && std::min({n[0], n[1], n[2]}) < 8 * s.edge) s.edge /= 2;
+  for (int a = 0; a < 3; ++a) s.blocks[a] = (n[a] + s.edge - 1) / s.edge;
+  const size_t count = (size_t)s.blocks[0] * s.blocks[1] * s.blocks[2];
+  s.lo.assign(count, INFINITY);
+  s.hi.assign(count, -INFINITY);
+  std::array<double, 2> data{INFINITY, -INFINITY};
+  for (int z0 = 0; z0 < n[2]; z0 += s.edge) {
+    const Volume slab = loadVolume(scene, VoxelBox{{0, 0, z0}, {n[0], n[1], std::min(n[2], z0 + s.edge)}});
+    if (s.shape.dims[0] == 0) s.shape = slab;  // the first slab gives spacing and ranges
+    data[0] = std::min(data[0], slab.data_range[0]);
+    data[1] = std::max(data[1], slab.data_range[1]);
+    const size_t row = (size_t)s.blocks[0] * s.blocks[1] * (z0 / s.edge);
+    for (int z = 0; z < slab.dims[2]; ++z)
+      for (int y = 0; y < n[1]; ++y)
+        for (int x = 0; x < n[0]; ++x) {
+          const size_t b = row + x / s.edge + (size_t)s.blocks[0] * (y / s.edge);
+          const float v = slab.at(x, y, z);
+          s.lo[b] = std::min(s.lo[b], v);
+          s.hi[b] = std::max(s.hi[b], v);
+        }
+  }
+  s.shape.values.clear();
+  s.shape.values.shrink_to_fit();
+  s.shape.dims = n;
+  s.shape.origin = {0, 0, 0};
+  s.shape.whole_dims = n;
+  s.shape.data_range = data;  // the slabs' own values: the whole volume's
+  return s;
+}
+
+std::vector<uint8_t> visibleBlocks(const VolumeSummary& s, const TransferFunction& tf) {
+  std::vector<uint8_t> mask(s.lo.size());
+  for (size_t i = 0; i < mask.size(); ++i) mask[i] = tf.maxAlpha(s.lo[i], s.hi[i]) > 0;
+  return mask;
+}
+
+BrickTree splitBricks(const VolumeSummary& s, int n, const TransferFunction& tf) {
+  const std::vector<uint8_t> mask = visibleBlocks(s, tf);
+  return scaleBricks(splitMask(s.blocks, &mask, n), s.edge, s.shape.dims);
+}
+
+}  // namespace tessera
