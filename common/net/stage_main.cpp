@@ -1,5 +1,7 @@
 #include "common/net/stage_main.h"
 
+#include <sys/resource.h>
+
 #include <spdlog/spdlog.h>
 
 #include "common/net/curve.h"
@@ -36,6 +38,9 @@ int stageMain(CLI::App& app, int argc, char** argv, const StageArgs& args, const
     spdlog::error("{}", e.what());
   }
   removeBoundIpcFiles();
+  // What a process needed is what a cluster must give it: said by every stage at exit.
+  rusage ru{};
+  if (getrusage(RUSAGE_SELF, &ru) == 0) spdlog::info("peak memory {:.1f} MiB", (double)ru.ru_maxrss / 1024);
   return rc;
 }
 
