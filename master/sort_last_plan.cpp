@@ -14,14 +14,54 @@ SortLastPlan::SortLastPlan(VolumeSummary volume, const TransferFunction& tf, int
   if (std::string why = rangeProblem(volume_.shape); !why.empty()) spdlog::warn("volume: {}", why);
 }
 
+// Bricks are sticky: a renderer keeps its bricks (and the voxels it loaded for them) for
+// the whole run. A renderer that joins gets a new split for everyone (balance needs it);
+// a lost renderer's bricks go to the owner of their nearest bricks in the k-d tree, so its
+// new window is the parent box, and nobody else loads anything.
 void SortLastPlan::reassign(const Workers& w) {
-  tree_ = splitBricks(volume_, std::max<int>(1, (int)w.renderers.size()), tf_);
+  const auto alive = [&](uint32_t r) { return std::find(w.renderers.begin(), w.renderers.end(), r) != w.renderers.end(); };
+  bool joined = tree_.bricks.empty();
+  for (uint32_t r : w.renderers) joined = joined || std::find(owner_.begin(), owner_.end(), r) == owner_.end();
+  if (joined) {
+    tree_ = splitBricks(volume_, std::max<int>(1, (int)w.renderers.size()), tf_);
+    owner_.clear();
+    for (size_t i = 0; i < tree_.bricks.size() && i < w.renderers.size(); ++i) owner_.push_back(w.renderers[i]);
+    return;
+  }
+  if (w.renderers.empty()) return;
+  for (size_t b = 0; b < owner_.size(); ++b) {
+    if (alive(owner_[b])) continue;
+    const uint32_t heir = nearestAliveOwner((int)b, alive).value_or(w.renderers.front());
+    spdlog::info("brick {} of lost renderer {} goes to renderer {}", b, owner_[b], heir);
+    owner_[b] = heir;
+  }
+}
+
+// The alive owner of a leaf in the subtree of the brick's closest ancestor that has one.
+std::optional<uint32_t> SortLastPlan::nearestAliveOwner(int brick, const std::function<bool(uint32_t)>& alive) const {
+  std::vector<int> parent(tree_.nodes.size(), -1);
+  int node = -1;
+  for (int i = 0; i < (int)tree_.nodes.size(); ++i) {
+    const auto& n = tree_.nodes[i];
+    if (n.leaf == brick) node = i;
+    if (n.left >= 0) parent[n.left] = i;
+    if (n.right >= 0) parent[n.right] = i;
+  }
+  for (int up = node >= 0 ? parent[node] : -1; up >= 0; up = parent[up]) {
+    std::vector<int> stack{up};
+    while (!stack.empty()) {
+      const auto& n = tree_.nodes[stack.back()];
+      stack.pop_back();
+      if (n.leaf >= 0 && alive(owner_[n.leaf])) return owner_[n.leaf];
+      if (n.left >= 0) stack.push_back(n.left), stack.push_back(n.right);
+    }
+  }
+  return std::nullopt;
 }
 
 void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
   auto& work = p.work.emplace<proto::SortLastWork>();
-  for (size_t i = 0; i < tree_.bricks.size() && i < w.renderers.size(); ++i)
-    work.bricks.push_back({w.renderers[i], tree_.bricks[i]});
+  for (size_t i = 0; i < tree_.bricks.size() && i < owner_.size(); ++i) work.bricks.push_back({owner_[i], tree_.bricks[i]});
   work.order = tree_.visibilityOrder(volume_.shape, p.camera);
   auto bands = balancedBands(width_, height_, (int)w.compositors.size(), balance_ ? last_active_ : std::vector<Rect>{});
   for (size_t i = 0; i < bands.size(); ++i)

@@ -1,8 +1,11 @@
-// Sort-last work: the volume split into one brick per renderer (by the blocks the transfer
+// Sort-last work: the volume split into one brick per renderer (sticky: see reassign) (by the blocks the transfer
 // function may show, from a streamed summary: no voxel is held here), a back-to-front order per camera, and one screen band per compositor,
 // balanced by the renderers' active pixels of the latest reported frame.
 #pragma once
+#include <functional>
 #include <memory>
+#include <optional>
+#include <vector>
 
 #include "common/bricks.h"
 #include "common/transfer_function.h"
@@ -19,11 +22,14 @@ class SortLastPlan : public Plan {
   void stats(const proto::StageStats& s, const Workers& w) override;
 
  private:
+  std::optional<uint32_t> nearestAliveOwner(int brick, const std::function<bool(uint32_t)>& alive) const;
+
   VolumeSummary volume_;  // the master never holds the voxels
   const TransferFunction& tf_;
   int width_, height_;
   bool balance_;
   BrickTree tree_;
+  std::vector<uint32_t> owner_;  // renderer rank of each brick
   std::vector<Rect> last_active_;  // renderers' active rects of the latest reported frame
   uint64_t latest_active_frame_ = 0;  // that frame + 1 (0: none yet)
 };

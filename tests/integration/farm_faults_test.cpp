@@ -242,6 +242,8 @@ TEST(FarmFaults, KilledRendererIsRestartedAndEveryFrameIsDoneOnce) {
       << run.output;
   // Today's master marks the killed one lost and gives the restarted one a new rank.
   EXPECT_NE(run.output.find("renderer 2 joined"), std::string::npos) << run.output;
+  // Its bricks went to a survivor, which loaded their voxels; no other brick moved then.
+  EXPECT_NE(run.output.find("of lost renderer"), std::string::npos) << run.output;
   const auto m = readMetrics(dir);
   ASSERT_FALSE(m.lines.empty());
   expectEveryFrameOnceAndCorrect(dir, scene, m);

@@ -30,6 +30,42 @@ TEST(SortLastPlan, OneBrickPerRendererAndOneBandPerCompositor) {
   EXPECT_EQ(p.regions[0].region.h + p.regions[1].region.h, 48);
 }
 
+// Bricks are sticky: a loss moves only the lost renderer's bricks, to the owner of a
+// neighbouring brick in the k-d tree; a join splits again for everyone.
+TEST(SortLastPlan, ALostRendererBricksGoToANeighbourAndNoOtherBrickMoves) {
+  Scene scene = defaultScene();
+  scene.volume = GeneratorSpec{"hollow-shell", 64, 1};
+  SortLastPlan plan(summarizeVolume(scene), scene.tf, 64, 48, true);
+  auto bricksOf = [&](const Workers& w) {
+    proto::FrameParams p;
+    p.camera = scene.camera;
+    plan.fill(p, w);
+    return p.sortLast()->bricks;
+  };
+  Workers w{{0, 1, 2, 4}, {{9, "ep9"}}};
+  plan.reassign(w);
+  const auto before = bricksOf(w);
+  ASSERT_EQ(before.size(), 4u);
+  w.renderers = {0, 2, 4};  // renderer 1 lost
+  plan.reassign(w);
+  const auto after = bricksOf(w);
+  ASSERT_EQ(after.size(), 4u);
+  for (size_t b = 0; b < 4; ++b) {
+    EXPECT_EQ(after[b].brick, before[b].brick) << "brick " << b << " changed shape";
+    if (before[b].renderer != 1) {
+      EXPECT_EQ(after[b].renderer, before[b].renderer) << "brick " << b << " moved";
+    }
+  }
+  // Renderer 1 had brick 1; the k-d tree pairs bricks 0 and 1 (the first split halves the
+  // volume, each half is split again), so renderer 0 takes it and holds their parent box.
+  EXPECT_EQ(after[1].renderer, 0u);
+  w.renderers = {0, 2, 4, 7};  // a renderer joins: a new split for everyone
+  plan.reassign(w);
+  const auto joined = bricksOf(w);
+  ASSERT_EQ(joined.size(), 4u);
+  EXPECT_EQ(joined[3].renderer, 7u);
+}
+
 TEST(SortLastPlan, BandsFollowTheLatestFramesActivePixels) {
   Scene scene = defaultScene();
   scene.volume = GeneratorSpec{"hollow-shell", 16, 1};
