@@ -1,6 +1,7 @@
-// Raw volume files (little-endian uint8/uint16/float32, x fastest, no header): the whole
-// volume or a window of it, read with positioned reads so a renderer's memory follows its
-// bricks, not the file.
+// Volume samples in a file (x fastest; any of the voxel types, either byte order, after an
+// offset, plain or gzip-compressed): the whole volume or a window of it, read with
+// positioned reads (or a forward stream through compressed data) so a renderer's memory
+// follows its bricks, not the file. Raw files, NIfTI and NRRD all end here.
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -13,6 +14,8 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include <zlib.h>
 
 #include "common/volume.h"
 
@@ -30,17 +33,24 @@ void checkGeometry(const std::string& file, const std::array<int, 3>& dims, cons
   if (std::string p = spacingProblem(sp); !p.empty()) fail(file, p);
 }
 
+// The stored value of type T at p, in the file's byte order.
 template <class T>
-T readLE(const unsigned char* p) {
+double stored(const unsigned char* p, bool big_endian) {
+  unsigned char b[sizeof(T)];
+  std::memcpy(b, p, sizeof(T));
+  if (big_endian != (std::endian::native == std::endian::big)) std::reverse(b, b + sizeof(T));
   T v;
-  std::memcpy(&v, p, sizeof(T));
-  if constexpr (std::endian::native == std::endian::big) {
-    unsigned char b[sizeof(T)];
-    std::memcpy(b, &v, sizeof(T));
-    std::reverse(b, b + sizeof(T));
-    std::memcpy(&v, b, sizeof(T));
+  std::memcpy(&v, b, sizeof(T));
+  return (double)v;
+}
+
+template <class T>
+void convert(const unsigned char* p, size_t count, const RawVolumeSpec& s, float* out) {
+  const bool scaled = s.slope != 1 || s.inter != 0;
+  for (size_t i = 0; i < count; ++i) {
+    const double v = stored<T>(p + i * sizeof(T), s.big_endian);
+    out[i] = (float)(scaled ? s.slope * v + s.inter : v);
   }
-  return v;
 }
 
 // An open raw file of known dims and type.
@@ -52,19 +62,34 @@ class RawFile {
     if (spec.has_range && !(spec.range[0] < spec.range[1]))
       fail(f, "range must satisfy min < max, got [" + std::to_string(spec.range[0]) + ", " +
                   std::to_string(spec.range[1]) + "]");
-    if (std::string p = notRegularFile(f); !p.empty()) fail(f, p);
-    const uintmax_t expected = (uintmax_t)spec.dims[0] * spec.dims[1] * spec.dims[2] * ts_;
+    if (std::string p = notRegularFile(spec.samples()); !p.empty()) fail(spec.samples(), p);
+    // A compressed file's size says nothing; a short stream is found when it is read.
+    const uintmax_t expected = (uintmax_t)spec.dims[0] * spec.dims[1] * spec.dims[2] * ts_ + spec.offset;
     std::error_code ec;
-    const uintmax_t actual = std::filesystem::file_size(f, ec);
-    if (ec) fail(f, "cannot read size: " + ec.message());
-    if (actual != expected)
-      fail(f, "file size is " + std::to_string(actual) + " bytes but dims " + std::to_string(spec.dims[0]) + " x " +
-                  std::to_string(spec.dims[1]) + " x " + std::to_string(spec.dims[2]) + " x " + std::to_string(ts_) +
-                  " bytes/voxel need " + std::to_string(expected) + " bytes");
-    fd_ = ::open(f.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) fail(f, std::string("cannot open: ") + std::strerror(errno));
+    const uintmax_t actual = std::filesystem::file_size(spec.samples(), ec);
+    if (ec) fail(spec.samples(), "cannot read size: " + ec.message());
+    if (!spec.gzip && actual != expected && (spec.format == VolumeFormat::Raw || actual < expected))
+      fail(spec.samples(), "file size is " + std::to_string(actual) + " bytes but dims " + std::to_string(spec.dims[0]) +
+                               " x " + std::to_string(spec.dims[1]) + " x " + std::to_string(spec.dims[2]) + " x " +
+                               std::to_string(ts_) + " bytes/voxel" +
+                               (spec.offset ? " after a header of " + std::to_string(spec.offset) + " bytes" : "") +
+                               " need " + std::to_string(expected) + " bytes");
+    if (spec.gzip) {
+      const int fd = ::open(spec.samples().c_str(), O_RDONLY | O_CLOEXEC);
+      if (fd < 0 || ::lseek(fd, (off_t)spec.gzip_start, SEEK_SET) < 0 || !(gz_ = gzdopen(fd, "rb"))) {
+        if (fd >= 0) ::close(fd);
+        fail(spec.samples(), std::string("cannot open: ") + std::strerror(errno));
+      }
+      gzbuffer(gz_, 1 << 18);
+    } else {
+      fd_ = ::open(spec.samples().c_str(), O_RDONLY | O_CLOEXEC);
+      if (fd_ < 0) fail(spec.samples(), std::string("cannot open: ") + std::strerror(errno));
+    }
   }
-  ~RawFile() { ::close(fd_); }
+  ~RawFile() {
+    if (gz_) gzclose(gz_);
+    if (fd_ >= 0) ::close(fd_);
+  }
   RawFile(const RawFile&) = delete;
   RawFile& operator=(const RawFile&) = delete;
 
@@ -92,30 +117,51 @@ class RawFile {
  private:
   void readPiece(size_t first, size_t count, float* out) {
     buf_.resize(count * ts_);
+    const uint64_t at = spec_.offset + first * ts_;
+    if (gz_) readGzip(at);
+    else readPlain(at);
+    const unsigned char* p = buf_.data();
+    switch (spec_.type) {
+      case VoxelType::UInt8: convert<uint8_t>(p, count, spec_, out); break;
+      case VoxelType::Int8: convert<int8_t>(p, count, spec_, out); break;
+      case VoxelType::UInt16: convert<uint16_t>(p, count, spec_, out); break;
+      case VoxelType::Int16: convert<int16_t>(p, count, spec_, out); break;
+      case VoxelType::UInt32: convert<uint32_t>(p, count, spec_, out); break;
+      case VoxelType::Int32: convert<int32_t>(p, count, spec_, out); break;
+      case VoxelType::Float32: convert<float>(p, count, spec_, out); break;
+      case VoxelType::Float64: convert<double>(p, count, spec_, out); break;
+    }
+    for (size_t i = 0; i < count; ++i)
+      if (!std::isfinite(out[i])) nonFinite(first + i, out[i]);
+  }
+
+  void readPlain(uint64_t at) {
     size_t done = 0;
-    const off_t at = (off_t)(first * ts_);
     while (done < buf_.size()) {
-      const ssize_t r = ::pread(fd_, buf_.data() + done, buf_.size() - done, at + (off_t)done);
+      const ssize_t r = ::pread(fd_, buf_.data() + done, buf_.size() - done, (off_t)(at + done));
       if (r < 0 && errno == EINTR) continue;
-      if (r <= 0) fail(spec_.file, r < 0 ? std::string("read failed: ") + std::strerror(errno) : "read failed: file shrank");
+      if (r <= 0) fail(spec_.samples(), r < 0 ? std::string("read failed: ") + std::strerror(errno) : "read failed: file shrank");
       done += (size_t)r;
     }
-    const unsigned char* p = buf_.data();
-    if (spec_.type == VoxelType::UInt8) {
-      for (size_t i = 0; i < count; ++i) out[i] = (float)p[i];
-    } else if (spec_.type == VoxelType::UInt16) {
-      for (size_t i = 0; i < count; ++i) out[i] = (float)readLE<uint16_t>(p + 2 * i);
-    } else {
-      for (size_t i = 0; i < count; ++i) {
-        out[i] = readLE<float>(p + 4 * i);
-        if (!std::isfinite(out[i])) nonFinite(first + i, out[i]);
-      }
+  }
+
+  // Windows are read in file order, so the stream only moves forward (zlib decompresses
+  // what it skips); memory stays one piece.
+  void readGzip(uint64_t at) {
+    if ((uint64_t)gztell(gz_) != at && gzseek(gz_, (z_off_t)at, SEEK_SET) < 0)
+      fail(spec_.samples(), "compressed data ends before byte " + std::to_string(at));
+    const int r = gzread(gz_, buf_.data(), (unsigned)buf_.size());
+    if (r != (int)buf_.size()) {
+      int err = 0;
+      const char* msg = gzerror(gz_, &err);
+      fail(spec_.samples(), err ? std::string("corrupt compressed data: ") + msg
+                                : "compressed data holds fewer samples than dims x type size need");
     }
   }
 
   [[noreturn]] void nonFinite(size_t i, float x) const {
     const size_t nx = spec_.dims[0], ny = spec_.dims[1];
-    fail(spec_.file, "non-finite value " + std::to_string(x) + " at voxel (" + std::to_string(i % nx) + ", " +
+    fail(spec_.samples(), "non-finite value " + std::to_string(x) + " at voxel (" + std::to_string(i % nx) + ", " +
                          std::to_string(i / nx % ny) + ", " + std::to_string(i / (nx * ny)) + "), linear index " +
                          std::to_string(i));
   }
@@ -123,6 +169,7 @@ class RawFile {
   const RawVolumeSpec& spec_;
   size_t ts_;
   int fd_ = -1;
+  gzFile gz_ = nullptr;
   std::vector<unsigned char> buf_;
 };
 

@@ -1,6 +1,8 @@
 // Scene file parser (scenes/README.md): strict YAML with errors naming file and key path.
 #include "common/scene.h"
 
+#include "common/io/volume_files.h"
+
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -121,6 +123,17 @@ class Parser {
   }
 
   std::variant<RawVolumeSpec, GeneratorSpec> volume(const YAML::Node& n) const;
+  RawVolumeSpec volumeFile(const YAML::Node& n, const std::string& file) const;
+  // The keys a scene may set for any volume file.
+  void spacingAndRange(const YAML::Node& n, RawVolumeSpec& s) const {
+    if (n["spacing"]) s.spacing = spacing(n["spacing"], "volume.spacing");
+    if (n["range"]) {
+      auto r = numbers(n["range"], "volume.range", 2);
+      if (!(r[0] < r[1])) fail("volume.range", "expected [min, max] with min < max");
+      s.has_range = true;
+      s.range = {r[0], r[1]};
+    }
+  }
   TransferFunction transferFunction(const YAML::Node& n) const;
   Camera camera(const YAML::Node& n) const;
   Quality quality(const YAML::Node& n) const;
@@ -151,33 +164,40 @@ std::variant<RawVolumeSpec, GeneratorSpec> Parser::volume(const YAML::Node& n) c
   std::string f = string(require(n, "volume", "file"), "volume.file");
   std::filesystem::path p(f);
   s.file = (p.is_relative() ? std::filesystem::path(base_) / p : p).lexically_normal().string();
+  if (volumeFormatOf(s.file) != VolumeFormat::Raw) return volumeFile(n, s.file);
   YAML::Node d = require(n, "volume", "dims");
   if (!d.IsSequence() || d.size() != 3) fail("volume.dims", "expected a list of 3 integers, got " + describe(d));
   for (int i = 0; i < 3; ++i) s.dims[i] = (int)integer(d[i], "volume.dims[" + std::to_string(i) + "]", 1, 65536);
   std::string t = string(require(n, "volume", "type"), "volume.type");
-  if (t == "uint8") s.type = VoxelType::UInt8;
-  else if (t == "uint16") s.type = VoxelType::UInt16;
-  else if (t == "float32") s.type = VoxelType::Float32;
-  else fail("volume.type", "expected uint8, uint16 or float32, got '" + t + "'");
+  if (auto type = voxelTypeFromName(t)) s.type = *type;
+  else fail("volume.type", "expected uint8, int8, uint16, int16, uint32, int32, float32 or float64, got '" + t + "'");
   // No memory check here: a farm's renderers each load only their bricks, so a volume
   // bigger than this machine is a valid scene; a process that loads too much says so then.
-  if (n["spacing"]) s.spacing = spacing(n["spacing"], "volume.spacing");
-  if (n["range"]) {
-    auto r = numbers(n["range"], "volume.range", 2);
-    if (!(r[0] < r[1])) fail("volume.range", "expected [min, max] with min < max");
-    s.has_range = true;
-    s.range = {r[0], r[1]};
-  } else {
-    s.range = {0, t == "uint16" ? 65535.0 : 255.0};
-  }
+  spacingAndRange(n, s);
   // Cheap checks now (a stat), so a bad file fails at startup rather than in a renderer.
   if (std::string m = fileProblem(s.file); !m.empty()) fail("volume.file", m);
   std::error_code ec;
   uintmax_t have = std::filesystem::file_size(s.file, ec);
-  uintmax_t need = (uintmax_t)s.dims[0] * s.dims[1] * s.dims[2] * (t == "uint8" ? 1 : t == "uint16" ? 2 : 4);
+  uintmax_t need = (uintmax_t)s.dims[0] * s.dims[1] * s.dims[2] * voxelTypeSize(s.type);
   if (ec || have != need)
     fail("volume.file", s.file + " has " + std::to_string(have) + " bytes but dims x type size need " +
                             std::to_string(need) + " bytes");
+  return s;
+}
+
+// A NIfTI or NRRD file: its header gives dims, type and spacing; the scene may set spacing
+// and range.
+RawVolumeSpec Parser::volumeFile(const YAML::Node& n, const std::string& file) const {
+  for (const char* key : {"dims", "type"})
+    if (n[key]) fail(std::string("volume.") + key, std::string("comes from the header of ") + file + "; leave it out");
+  if (std::string m = fileProblem(file); !m.empty()) fail("volume.file", m);
+  RawVolumeSpec s;
+  try {
+    s = readVolumeHeader(file);
+  } catch (const std::exception& e) {
+    fail("volume.file", e.what());
+  }
+  spacingAndRange(n, s);
   return s;
 }
 

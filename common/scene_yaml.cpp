@@ -30,16 +30,18 @@ void list(YAML::Emitter& e, const std::array<T, N>& a) {
 }
 
 const char* typeWord(VoxelType t) {
-  return t == VoxelType::UInt8 ? "uint8" : t == VoxelType::UInt16 ? "uint16" : "float32";
+  return voxelTypeName(t);
 }
 
 void volume(YAML::Emitter& e, const Scene& s) {
   e << YAML::Key << "volume" << YAML::Value << YAML::BeginMap;
   if (const auto* raw = std::get_if<RawVolumeSpec>(&s.volume)) {
     e << YAML::Key << "file" << YAML::Value << raw->file;
-    e << YAML::Key << "dims" << YAML::Value;
-    list(e, raw->dims);
-    e << YAML::Key << "type" << YAML::Value << typeWord(raw->type);
+    if (raw->format == VolumeFormat::Raw) {  // a NIfTI or NRRD header gives them
+      e << YAML::Key << "dims" << YAML::Value;
+      list(e, raw->dims);
+      e << YAML::Key << "type" << YAML::Value << typeWord(raw->type);
+    }
     e << YAML::Key << "spacing" << YAML::Value;
     list(e, raw->spacing);
     if (raw->has_range) {  // left out, the data's own min..max is mapped

@@ -31,7 +31,35 @@ Vec3 Volume::halfExtent() const {
   return {0.5 * e[0] / m, 0.5 * e[1] / m, 0.5 * e[2] / m};
 }
 
-size_t voxelTypeSize(VoxelType t) { return t == VoxelType::UInt8 ? 1 : (t == VoxelType::UInt16 ? 2 : 4); }
+namespace {
+struct TypeInfo {
+  VoxelType type;
+  const char* name;
+  size_t size;
+};
+constexpr TypeInfo kTypes[] = {{VoxelType::UInt8, "uint8", 1},   {VoxelType::UInt16, "uint16", 2},
+                               {VoxelType::Float32, "float32", 4}, {VoxelType::Int8, "int8", 1},
+                               {VoxelType::Int16, "int16", 2},   {VoxelType::Int32, "int32", 4},
+                               {VoxelType::UInt32, "uint32", 4}, {VoxelType::Float64, "float64", 8}};
+}  // namespace
+
+size_t voxelTypeSize(VoxelType t) {
+  for (const auto& i : kTypes)
+    if (i.type == t) return i.size;
+  return 1;
+}
+
+const char* voxelTypeName(VoxelType t) {
+  for (const auto& i : kTypes)
+    if (i.type == t) return i.name;
+  return "?";
+}
+
+std::optional<VoxelType> voxelTypeFromName(const std::string& name) {
+  for (const auto& i : kTypes)
+    if (name == i.name) return i.type;
+  return std::nullopt;
+}
 
 std::string spacingProblem(const std::array<double, 3>& sp) {
   double lo = INFINITY, hi = 0;

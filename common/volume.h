@@ -7,6 +7,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,7 +36,15 @@ struct Volume {
   Vec3 boxMax() const { return halfExtent(); }
 };
 
-enum class VoxelType { UInt8, UInt16, Float32 };
+enum class VoxelType { UInt8, UInt16, Float32, Int8, Int16, Int32, UInt32, Float64 };
+// "uint8", "int16", ...; and back (nullopt for an unknown word).
+const char* voxelTypeName(VoxelType t);
+std::optional<VoxelType> voxelTypeFromName(const std::string& name);
+
+// Where a volume's samples are. A raw file has no header: the scene gives dims and type.
+// NIfTI and NRRD files give them (and spacing, byte order, offset, compression) in their
+// header, read by the scene parser (common/io/volume_files.h); the reader is the same.
+enum class VolumeFormat { Raw, Nifti, Nrrd };
 
 struct RawVolumeSpec {
   std::string file;  // absolute or relative to the scene's folder (resolved by the parser)
@@ -44,6 +53,13 @@ struct RawVolumeSpec {
   std::array<double, 3> spacing{1, 1, 1};
   bool has_range = false;               // else the data's own min..max is mapped to 0..1
   std::array<double, 2> range{0, 255};
+  VolumeFormat format = VolumeFormat::Raw;
+  std::string data_file;                // the samples' file when not `file` (NRRD "data file")
+  uint64_t offset = 0;                  // bytes before the first sample (of the gzip stream's content)
+  bool big_endian = false, gzip = false;
+  uint64_t gzip_start = 0;              // file byte where the gzip stream starts (after an attached header)
+  double slope = 1, inter = 0;          // value = slope * stored + inter (NIfTI scl_slope, scl_inter)
+  const std::string& samples() const { return data_file.empty() ? file : data_file; }
 };
 
 struct GeneratorSpec {

@@ -108,7 +108,7 @@ int run(int argc, char** argv) {
   const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume);
   if (raw && raw->has_range) v.mapped_range = raw->range;
   std::printf("volume: %d x %d x %d voxels, %s, spacing %g %g %g\n", v.dims[0], v.dims[1], v.dims[2],
-              raw ? (raw->type == VoxelType::UInt8 ? "uint8" : raw->type == VoxelType::UInt16 ? "uint16" : "float32")
+              raw ? voxelTypeName(raw->type)
                   : "generated (float)",
               v.spacing[0], v.spacing[1], v.spacing[2]);
   std::printf("values: %.9g .. %.9g; mapped to the transfer function: %.9g .. %.9g%s\n", v.data_range[0],

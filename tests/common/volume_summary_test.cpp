@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "tests/common/raw_spec.h"
 #include "tests/common/temp_dir.h"
 
 namespace tessera {
@@ -45,7 +46,7 @@ TEST(VolumeSummary, ARawFileWithoutARangeIsSummarisedOverItsOwnValues) {
   std::vector<uint16_t> data((size_t)n[0] * n[1] * n[2]);
   for (size_t i = 0; i < data.size(); ++i) data[i] = (uint16_t)(300 + (i * 2654435761u) % 700);
   Scene scene = defaultScene();
-  scene.volume = RawVolumeSpec{t.write("s.raw", data.data(), data.size() * 2), n, VoxelType::UInt16, {1, 1, 1}, false, {0, 0}};
+  scene.volume = test::rawSpec(t.write("s.raw", data.data(), data.size() * 2), n, VoxelType::UInt16, {1, 1, 1}, false, {0, 0});
   const VolumeSummary s = summarizeVolume(scene);
   const Volume whole = loadVolume(scene);
   EXPECT_EQ(s.edge, 1);  // 12 < 16: blocks of one voxel keep 12 cuts on the shortest axis

@@ -1,6 +1,7 @@
 // Raw volume loading (all three types, error messages) and the procedural generators.
 #include "common/volume.h"
 
+#include "tests/common/raw_spec.h"
 #include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
@@ -43,7 +44,7 @@ TEST(Volume, LoadUInt8LayoutAndNormalisation) {
   TempDir t("volume");
   uint8_t data[2 * 3 * 4];
   for (int i = 0; i < 24; ++i) data[i] = (uint8_t)(i * 10);
-  RawVolumeSpec s{t.write("a.raw", data, sizeof data), {2, 3, 4}, VoxelType::UInt8, {1, 1, 1}, false, {0, 255}};
+  RawVolumeSpec s = test::rawSpec(t.write("a.raw", data, sizeof data), {2, 3, 4}, VoxelType::UInt8, {1, 1, 1}, false, {0, 255});
   Volume v = loadRawVolume(s);
   EXPECT_EQ(v.dims, (std::array<int, 3>{2, 3, 4}));
   // No range: the data's own 0..230 maps to 0..1, like ParaView's first colour map.
@@ -62,7 +63,7 @@ TEST(Volume, LoadUInt8LayoutAndNormalisation) {
 TEST(Volume, LoadUInt16LittleEndian) {
   TempDir t("volume");
   const uint8_t bytes[4] = {0xff, 0xff, 0x00, 0x01};  // 65535 and 256
-  RawVolumeSpec s{t.write("b.raw", bytes, 4), {2, 1, 1}, VoxelType::UInt16, {1, 1, 1}, false, {0, 0}};
+  RawVolumeSpec s = test::rawSpec(t.write("b.raw", bytes, 4), {2, 1, 1}, VoxelType::UInt16, {1, 1, 1}, false, {0, 0});
   Volume v = loadRawVolume(s);
   EXPECT_FLOAT_EQ(v.values[0], 1.0f);  // 65535 is the largest value
   EXPECT_FLOAT_EQ(v.values[1], 0.0f);  // 256 the smallest
@@ -75,7 +76,7 @@ TEST(Volume, LoadUInt16LittleEndian) {
 TEST(Volume, ARangeThatMissesTheDataIsNamedWithTheDataValues) {
   TempDir t("volume");
   uint16_t values[4] = {0, 250, 500, 1000};
-  RawVolumeSpec s{t.write("g.raw", values, sizeof values), {4, 1, 1}, VoxelType::UInt16, {1, 1, 1}, true, {5000, 6000}};
+  RawVolumeSpec s = test::rawSpec(t.write("g.raw", values, sizeof values), {4, 1, 1}, VoxelType::UInt16, {1, 1, 1}, true, {5000, 6000});
   const std::string why = rangeProblem(loadRawVolume(s));
   EXPECT_NE(why.find("range [5000, 6000] lies above every value"), std::string::npos) << why;
   EXPECT_NE(why.find("0 .. 1000"), std::string::npos) << why;
@@ -90,7 +91,7 @@ TEST(Volume, ARangeThatMissesTheDataIsNamedWithTheDataValues) {
 TEST(Volume, LoadFloat32DefaultRangeIsDataMinMax) {
   TempDir t("volume");
   const float f[4] = {-2.0f, 0.0f, 6.0f, 4.0f};
-  RawVolumeSpec s{t.write("c.raw", f, sizeof f), {4, 1, 1}, VoxelType::Float32, {1, 1, 1}, false, {0, 0}};
+  RawVolumeSpec s = test::rawSpec(t.write("c.raw", f, sizeof f), {4, 1, 1}, VoxelType::Float32, {1, 1, 1}, false, {0, 0});
   Volume v = loadRawVolume(s);
   EXPECT_FLOAT_EQ(v.values[0], 0.0f);
   EXPECT_FLOAT_EQ(v.values[1], 0.25f);
@@ -101,7 +102,7 @@ TEST(Volume, LoadFloat32DefaultRangeIsDataMinMax) {
 TEST(Volume, ErrorsAreSpecific) {
   TempDir t("volume");
   uint8_t data[10] = {};
-  RawVolumeSpec s{t.write("d.raw", data, 10), {2, 2, 2}, VoxelType::UInt16, {1, 1, 1}, false, {0, 0}};
+  RawVolumeSpec s = test::rawSpec(t.write("d.raw", data, 10), {2, 2, 2}, VoxelType::UInt16, {1, 1, 1}, false, {0, 0});
   std::string e = errorOf(s);
   EXPECT_NE(e.find("d.raw"), std::string::npos) << e;
   EXPECT_NE(e.find("10 bytes"), std::string::npos) << e;  // the file's size
@@ -111,12 +112,12 @@ TEST(Volume, ErrorsAreSpecific) {
 
   float f[2 * 3 * 2] = {};
   f[1 + 2 * (2 + 3 * 1)] = NAN;  // voxel (1, 2, 1), linear 11
-  RawVolumeSpec n{t.write("e.raw", f, sizeof f), {2, 3, 2}, VoxelType::Float32, {1, 1, 1}, false, {0, 0}};
+  RawVolumeSpec n = test::rawSpec(t.write("e.raw", f, sizeof f), {2, 3, 2}, VoxelType::Float32, {1, 1, 1}, false, {0, 0});
   e = errorOf(n);
   EXPECT_NE(e.find("(1, 2, 1)"), std::string::npos) << e;
   EXPECT_NE(e.find("linear index 11"), std::string::npos) << e;
 
-  RawVolumeSpec r{t.write("f.raw", data, 8), {2, 2, 2}, VoxelType::UInt8, {1, 1, 1}, true, {5, 5}};
+  RawVolumeSpec r = test::rawSpec(t.write("f.raw", data, 8), {2, 2, 2}, VoxelType::UInt8, {1, 1, 1}, true, {5, 5});
   EXPECT_NE(errorOf(r).find("range"), std::string::npos);
 }
 
@@ -167,7 +168,7 @@ TEST(Volume, GeneratorRejectsBadSpecs) {
 // Issue 8: the loader says what is wrong before it allocates or opens.
 TEST(Volume, NotARegularFileSaysWhatItIs) {
   TempDir t("volume");
-  RawVolumeSpec s{t.path.string(), {1, 1, 1}, VoxelType::UInt8, {1, 1, 1}, false, {0, 255}};
+  RawVolumeSpec s = test::rawSpec(t.path.string(), {1, 1, 1}, VoxelType::UInt8, {1, 1, 1}, false, {0, 255});
   EXPECT_NE(errorOf(s).find("is a directory"), std::string::npos) << errorOf(s);
   s.file = (t.path / "absent.raw").string();
   EXPECT_NE(errorOf(s).find("file not found"), std::string::npos) << errorOf(s);
@@ -178,7 +179,7 @@ TEST(Volume, HugeSparseFileNamesTheBytesInsteadOfBadAlloc) {
   const std::string f = t.write("huge.raw", "", 0);
   const std::array<int, 3> dims{65536, 65536, 64};  // 2^38 voxels of uint8: 256 GiB of file
   std::filesystem::resize_file(f, (uintmax_t)1 << 38);  // sparse: no disk used
-  RawVolumeSpec s{f, dims, VoxelType::UInt8, {1, 1, 1}, false, {0, 255}};
+  RawVolumeSpec s = test::rawSpec(f, dims, VoxelType::UInt8, {1, 1, 1}, false, {0, 255});
   const std::string m = errorOf(s);
   EXPECT_NE(m.find("voxels need 1099511627776 bytes"), std::string::npos) << m;  // 4 bytes a voxel
   EXPECT_EQ(m.find("bad_alloc"), std::string::npos) << m;
@@ -201,7 +202,7 @@ TEST(Volume, ARawWindowHoldsOnlyItsBoxAndEqualsThatPartOfTheWhole) {
   const std::array<int, 3> n{13, 11, 9};
   std::vector<uint16_t> data((size_t)n[0] * n[1] * n[2]);
   for (size_t i = 0; i < data.size(); ++i) data[i] = (uint16_t)(100 + (i * 7919) % 3001);
-  RawVolumeSpec s{t.write("w.raw", data.data(), data.size() * 2), n, VoxelType::UInt16, {1, 2, 1}, false, {0, 0}};
+  RawVolumeSpec s = test::rawSpec(t.write("w.raw", data.data(), data.size() * 2), n, VoxelType::UInt16, {1, 2, 1}, false, {0, 0});
   const Volume whole = loadRawVolume(s);
   // Interior, whole rows, whole slices, one voxel, the whole volume.
   for (const VoxelBox& box : {VoxelBox{{2, 3, 1}, {7, 9, 4}}, VoxelBox{{0, 2, 3}, {13, 5, 9}}, VoxelBox{{0, 0, 4}, {13, 11, 6}},
@@ -224,7 +225,7 @@ TEST(Volume, AWindowWithoutARangeStillRefusesANonFiniteValueAnywhere) {
   TempDir t("volume");
   std::vector<float> f(4 * 4 * 4, 1.0f);
   f[3 + 4 * (3 + 4 * 3)] = NAN;  // the last voxel, outside the window below
-  RawVolumeSpec s{t.write("n.raw", f.data(), f.size() * 4), {4, 4, 4}, VoxelType::Float32, {1, 1, 1}, false, {0, 0}};
+  RawVolumeSpec s = test::rawSpec(t.write("n.raw", f.data(), f.size() * 4), {4, 4, 4}, VoxelType::Float32, {1, 1, 1}, false, {0, 0});
   try {
     loadRawVolume(s, VoxelBox{{0, 0, 0}, {2, 2, 2}});
     FAIL() << "the NaN went unseen";

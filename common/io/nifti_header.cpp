@@ -1,0 +1,67 @@
+// NIfTI-1/2 headers through nifticlib (see volume_files.h).
+#include <nifti2_io.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "common/io/volume_files.h"
+
+namespace tessera {
+
+RawVolumeSpec readNiftiHeader(const std::string& path) {
+  auto fail = [&](const std::string& what) -> RawVolumeSpec { throw std::runtime_error(path + ": " + what); };
+  nifti_set_debug_level(0);  // its messages go to stderr; ours name the file and field
+  std::unique_ptr<nifti_image, void (*)(nifti_image*)> nim(nifti_image_read(path.c_str(), 0), nifti_image_free);
+  if (!nim) return fail("not a readable NIfTI-1 or NIfTI-2 file (missing, cut short, or a bad header)");
+  RawVolumeSpec s;
+  s.format = VolumeFormat::Nifti;
+  s.file = path;
+  const int64_t n[3] = {nim->nx, nim->ny, nim->nz};
+  for (int a = 0; a < 3; ++a) {
+    if (n[a] < 1 || n[a] > 65536) fail("dim[" + std::to_string(a + 1) + "] = " + std::to_string(n[a]) + ", must be in 1..65536");
+    s.dims[a] = (int)n[a];
+  }
+  // dim[4..7] beyond dim[0] are unset (0 or 1): only those within dim[0] count.
+  int64_t more = 1;
+  std::string extra;
+  for (int i = 4; i <= 7; ++i) {
+    const int64_t d = i <= nim->dim[0] ? std::max<int64_t>(1, nim->dim[i]) : 1;
+    more *= d;
+    extra += (i > 4 ? ", " : "") + std::to_string(d);
+  }
+  if (more != 1) fail("holds " + std::to_string(more) + " volumes (dim[4..7] = " + extra + "); Tessera renders one 3-D volume");
+  switch (nim->datatype) {
+    case DT_UINT8: s.type = VoxelType::UInt8; break;
+    case DT_INT8: s.type = VoxelType::Int8; break;
+    case DT_UINT16: s.type = VoxelType::UInt16; break;
+    case DT_INT16: s.type = VoxelType::Int16; break;
+    case DT_UINT32: s.type = VoxelType::UInt32; break;
+    case DT_INT32: s.type = VoxelType::Int32; break;
+    case DT_FLOAT32: s.type = VoxelType::Float32; break;
+    case DT_FLOAT64: s.type = VoxelType::Float64; break;
+    default:
+      fail(std::string("datatype ") + std::to_string(nim->datatype) + " (" + nifti_datatype_string(nim->datatype) +
+           ") is not a scalar type Tessera renders (uint8, int8, uint16, int16, uint32, int32, float32, float64)");
+  }
+  const double d[3] = {nim->dx, nim->dy, nim->dz};
+  for (int a = 0; a < 3; ++a) {
+    // A spacing of 0 is common in hand-made headers; pixdim's sign belongs to orientation.
+    s.spacing[a] = d[a] == 0 ? 1.0 : std::fabs(d[a]);
+    if (!std::isfinite(d[a])) fail("pixdim[" + std::to_string(a + 1) + "] = " + std::to_string(d[a]) + " is not finite");
+  }
+  if (std::string p = spacingProblem(s.spacing); !p.empty()) fail("pixdim: " + p);
+  if (nim->scl_slope != 0 && std::isfinite(nim->scl_slope) && std::isfinite(nim->scl_inter)) {
+    s.slope = nim->scl_slope;
+    s.inter = nim->scl_inter;
+  }
+  if (nim->iname && path != nim->iname) s.data_file = nim->iname;  // .hdr + .img
+  s.offset = (uint64_t)std::max<int64_t>(0, nim->iname_offset);
+  s.big_endian = nim->byteorder == 2;  // MSB_FIRST (nifti1_io.h; nifti2_io.h lacks the name)
+  s.gzip = nifti_is_gzfile(s.samples().c_str());
+  return s;
+}
+
+}  // namespace tessera

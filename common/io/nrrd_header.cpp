@@ -1,0 +1,133 @@
+// NRRD headers (teem's format, http://teem.sourceforge.net/nrrd/format.html; see
+// volume_files.h): the fields a scalar 3-D volume needs, checked against teem's own files
+// in the tests. The data follows the header's blank line (.nrrd) or sits in "data file"
+// (.nhdr), raw or gzip-encoded.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "common/io/volume_files.h"
+
+namespace tessera {
+namespace {
+
+std::string trim(const std::string& s) {
+  const size_t a = s.find_first_not_of(" \t\r"), b = s.find_last_not_of(" \t\r");
+  return a == std::string::npos ? "" : s.substr(a, b - a + 1);
+}
+
+std::optional<VoxelType> nrrdType(const std::string& t) {
+  static const std::map<std::string, VoxelType> kNames = {
+      {"uchar", VoxelType::UInt8},          {"unsigned char", VoxelType::UInt8},   {"uint8", VoxelType::UInt8},
+      {"uint8_t", VoxelType::UInt8},        {"signed char", VoxelType::Int8},      {"int8", VoxelType::Int8},
+      {"int8_t", VoxelType::Int8},          {"short", VoxelType::Int16},           {"short int", VoxelType::Int16},
+      {"signed short", VoxelType::Int16},   {"signed short int", VoxelType::Int16}, {"int16", VoxelType::Int16},
+      {"int16_t", VoxelType::Int16},        {"ushort", VoxelType::UInt16},         {"unsigned short", VoxelType::UInt16},
+      {"unsigned short int", VoxelType::UInt16}, {"uint16", VoxelType::UInt16},    {"uint16_t", VoxelType::UInt16},
+      {"int", VoxelType::Int32},            {"signed int", VoxelType::Int32},      {"int32", VoxelType::Int32},
+      {"int32_t", VoxelType::Int32},        {"uint", VoxelType::UInt32},           {"unsigned int", VoxelType::UInt32},
+      {"uint32", VoxelType::UInt32},        {"uint32_t", VoxelType::UInt32},       {"float", VoxelType::Float32},
+      {"double", VoxelType::Float64}};
+  const auto it = kNames.find(t);
+  return it == kNames.end() ? std::nullopt : std::optional<VoxelType>(it->second);
+}
+
+// "spacings: a b c", or "space directions: (x,y,z) (x,y,z) (x,y,z)" whose lengths are the
+// spacing (the rotation is not applied); neither: 1. False if present but unreadable.
+bool readSpacing(std::map<std::string, std::string>& f, std::array<double, 3>& spacing) {
+  if (f.count("spacings")) {
+    std::istringstream sp(f["spacings"]);
+    for (double& x : spacing)
+      if (!(sp >> x) || !(std::fabs(x) > 0)) return false;
+    for (double& x : spacing) x = std::fabs(x);
+  } else if (f.count("space directions")) {
+    std::string d = f["space directions"];
+    std::replace_if(d.begin(), d.end(), [](char c) { return c == '(' || c == ')' || c == ','; }, ' ');
+    std::istringstream sd(d);
+    for (double& x : spacing) {
+      double v[3];
+      if (!(sd >> v[0] >> v[1] >> v[2])) return false;
+      x = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+RawVolumeSpec readNrrdHeader(const std::string& path) {
+  auto fail = [&](const std::string& what) -> RawVolumeSpec { throw std::runtime_error(path + ": " + what); };
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail("cannot open NRRD file");
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("NRRD000", 0) != 0) fail("not a NRRD file (no NRRD000x magic on line 1)");
+  std::map<std::string, std::string> f;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) break;  // the end of the header; attached data follows
+    if (line[0] == '#' || line.find(":=") != std::string::npos) continue;  // comments, key/value pairs
+    const size_t colon = line.find(": ");
+    if (colon == std::string::npos) fail("header line '" + line + "' is not 'field: value'");
+    std::string key = line.substr(0, colon);
+    std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return (char)std::tolower(c); });
+    f[key] = trim(line.substr(colon + 2));
+  }
+  RawVolumeSpec s;
+  s.format = VolumeFormat::Nrrd;
+  s.file = path;
+  auto need = [&](const char* key) -> const std::string& {
+    if (!f.count(key)) fail(std::string("the header has no '") + key + "' field");
+    return f[key];
+  };
+  if (auto t = nrrdType(need("type"))) s.type = *t;
+  else fail("type '" + f["type"] + "' is not a scalar type Tessera renders");
+  if (need("dimension") != "3") fail("dimension " + f["dimension"] + ": Tessera renders 3-D volumes (dimension: 3)");
+  std::istringstream sizes(need("sizes"));
+  for (int a = 0; a < 3; ++a) {
+    long long n = 0;
+    if (!(sizes >> n) || n < 1 || n > 65536) fail("sizes '" + f["sizes"] + "': expected 3 sizes in 1..65536");
+    s.dims[a] = (int)n;
+  }
+  if (!readSpacing(f, s.spacing)) fail("spacing '" + f["spacings"] + f["space directions"] + "'");
+  if (std::string p = spacingProblem(s.spacing); !p.empty()) fail("spacing: " + p);
+  const std::string enc = need("encoding");
+  if (enc == "gzip" || enc == "gz") s.gzip = true;
+  else if (enc != "raw") fail("encoding '" + enc + "': Tessera reads raw and gzip");
+  if (voxelTypeSize(s.type) > 1) {
+    const std::string endian = need("endian");
+    if (endian != "little" && endian != "big") fail("endian '" + endian + "': expected little or big");
+    s.big_endian = endian == "big";
+  }
+  if (f.count("line skip") && f["line skip"] != "0") fail("line skip " + f["line skip"] + " is not supported");
+  const std::string data = f.count("data file") ? f["data file"] : f.count("datafile") ? f["datafile"] : "";
+  if (data.find(' ') != std::string::npos || data == "LIST") fail("data file '" + data + "': one file expected");
+  if (data.empty()) {
+    // Attached: right after the blank line (where a gzip stream starts, if encoded).
+    (s.gzip ? s.gzip_start : s.offset) = (uint64_t)in.tellg();
+  } else {
+    const std::filesystem::path p(data);
+    s.data_file = (p.is_relative() ? std::filesystem::path(path).parent_path() / p : p).lexically_normal().string();
+  }
+  const long long skip = f.count("byte skip") ? std::stoll(f["byte skip"]) : 0;
+  if (skip == -1 && !s.gzip) {  // the data is the file's last bytes
+    std::error_code ec;
+    const uintmax_t size = std::filesystem::file_size(s.samples(), ec);
+    const uintmax_t bytes = (uintmax_t)s.dims[0] * s.dims[1] * s.dims[2] * voxelTypeSize(s.type);
+    if (ec || size < bytes) fail("byte skip -1 but the data file is shorter than the data");
+    s.offset = size - bytes;
+  } else if (skip < 0) {
+    fail("byte skip " + f["byte skip"] + " is not supported with encoding " + enc);
+  } else if (s.gzip) {
+    if (skip) fail("byte skip with gzip encoding is not supported");
+  } else {
+    s.offset += (uint64_t)skip;
+  }
+  return s;
+}
+
+}  // namespace tessera

@@ -1,0 +1,186 @@
+// NIfTI and NRRD volumes, written here by the formats' own libraries (nifticlib, teem),
+// load to exactly the volume of the same samples given as a raw file: values, spacing and
+// axis order; windows read only their box; bad headers are refused by file and field.
+#include <gtest/gtest.h>
+#include <nifti2_io.h>
+#include <teem/nrrd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cstring>
+#include <fstream>
+#include <vector>
+
+#include "common/io/volume_files.h"
+#include "common/scene.h"
+#include "tests/common/raw_spec.h"
+#include "tests/common/temp_dir.h"
+
+namespace tessera {
+namespace {
+
+using test::TempDir;
+
+constexpr int kNx = 13, kNy = 11, kNz = 7;
+const std::array<double, 3> kSpacing{0.75, 1.25, 2.5};
+
+// Signed samples with a different value at every voxel, so any axis mix-up shows.
+std::vector<int16_t> samples() {
+  std::vector<int16_t> v((size_t)kNx * kNy * kNz);
+  for (int z = 0; z < kNz; ++z)
+    for (int y = 0; y < kNy; ++y)
+      for (int x = 0; x < kNx; ++x) v[x + kNx * (y + kNy * z)] = (int16_t)(x * 3 - y * 40 + z * 500 - 900);
+  return v;
+}
+
+Volume fromScene(const std::string& yaml, const std::string& dir, const VoxelBox* box = nullptr) {
+  const Scene s = parseScene(yaml, dir, "s.yaml");
+  return box ? loadVolume(s, *box) : loadVolume(s);
+}
+
+// The same samples as a raw int16 file: the reference every format must reproduce.
+Volume rawReference(const TempDir& t) {
+  const auto v = samples();
+  const auto spec = test::rawSpec(t.write("ref.raw", v.data(), v.size() * 2), {kNx, kNy, kNz}, VoxelType::Int16,
+                                  kSpacing, false, {0, 0});
+  return loadRawVolume(spec);
+}
+
+void expectSameVolume(const Volume& a, const Volume& ref) {
+  EXPECT_EQ(a.dims, ref.dims);
+  EXPECT_EQ(a.spacing, ref.spacing);
+  EXPECT_EQ(a.data_range, ref.data_range);
+  EXPECT_EQ(a.values, ref.values);
+}
+
+void writeNifti(const std::string& path, double slope = 0, double inter = 0) {
+  const int64_t dims[8] = {3, kNx, kNy, kNz, 1, 1, 1, 1};
+  nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 1);
+  ASSERT_NE(nim, nullptr);
+  nim->dx = nim->pixdim[1] = kSpacing[0];
+  nim->dy = nim->pixdim[2] = kSpacing[1];
+  nim->dz = nim->pixdim[3] = kSpacing[2];
+  nim->scl_slope = slope;
+  nim->scl_inter = inter;
+  const auto v = samples();
+  std::memcpy(nim->data, v.data(), v.size() * 2);
+  ASSERT_EQ(nifti_set_filenames(nim, path.c_str(), 0, 1), 0);
+  nifti_image_write(nim);
+  nifti_image_free(nim);
+}
+
+TEST(VolumeFiles, NiftiPlainAndGzippedLoadAsTheRawFileOfTheSameSamples) {
+  TempDir t("nifti");
+  const Volume ref = rawReference(t);
+  for (const char* name : {"head.nii", "head.nii.gz"}) {
+    writeNifti(t.file(name));
+    const Volume v = fromScene(std::string("volume: {file: ") + name + "}\n", t.path.string());
+    expectSameVolume(v, ref);
+    EXPECT_EQ(v.data_range[0], -900 - 400) << "signed values kept";
+    // A window is the same part of the same volume.
+    const VoxelBox box{{2, 3, 1}, {9, 11, 6}};
+    const Volume w = fromScene(std::string("volume: {file: ") + name + "}\n", t.path.string(), &box);
+    for (int z = 0; z < w.dims[2]; ++z)
+      for (int y = 0; y < w.dims[1]; ++y)
+        for (int x = 0; x < w.dims[0]; ++x) ASSERT_EQ(w.at(x, y, z), ref.at(x + 2, y + 3, z + 1)) << name;
+  }
+}
+
+TEST(VolumeFiles, NiftiScalingIsApplied) {
+  TempDir t("nifti-scaled");
+  writeNifti(t.file("s.nii"), 2.0, -5.0);
+  const RawVolumeSpec s = readVolumeHeader(t.file("s.nii"));
+  EXPECT_EQ(s.slope, 2.0);
+  EXPECT_EQ(s.inter, -5.0);
+  const Volume v = fromScene("volume: {file: s.nii}\n", t.path.string());
+  EXPECT_EQ(v.data_range[0], 2.0 * (-1300) - 5) << "the data's own range is of the scaled values";
+  // tessera-info's effective scene names the file only: parsed again, the header decides.
+  const Scene scene = parseScene("volume: {file: s.nii}\n", t.path.string(), "s.yaml");
+  const std::string yaml = sceneYaml(scene);
+  EXPECT_EQ(yaml.find("dims:"), std::string::npos) << yaml;
+  EXPECT_EQ(std::get<RawVolumeSpec>(parseScene(yaml, t.path.string(), "again.yaml").volume).dims,
+            (std::array<int, 3>{kNx, kNy, kNz}));
+}
+
+void writeNrrd(const std::string& path, bool gzip, bool detached) {
+  auto v = samples();
+  Nrrd* n = nrrdNew();
+  ASSERT_EQ(nrrdWrap_va(n, v.data(), nrrdTypeShort, 3, (size_t)kNx, (size_t)kNy, (size_t)kNz), 0);
+  nrrdAxisInfoSet_va(n, nrrdAxisInfoSpacing, kSpacing[0], kSpacing[1], kSpacing[2]);
+  NrrdIoState* io = nrrdIoStateNew();
+  nrrdIoStateEncodingSet(io, gzip ? nrrdEncodingGzip : nrrdEncodingRaw);
+  nrrdIoStateSet(io, nrrdIoStateDetachedHeader, detached);
+  ASSERT_EQ(nrrdSave(path.c_str(), n, io), 0) << path;
+  nrrdIoStateNix(io);
+  nrrdNix(n);  // the data is ours
+}
+
+TEST(VolumeFiles, NrrdAttachedDetachedRawAndGzipLoadAsTheRawFile) {
+  TempDir t("nrrd");
+  const Volume ref = rawReference(t);
+  struct Case {
+    const char* name;
+    bool gzip, detached;
+  };
+  for (const Case c : {Case{"a.nrrd", false, false}, Case{"b.nrrd", true, false}, Case{"c.nhdr", false, true},
+                       Case{"d.nhdr", true, true}}) {
+    writeNrrd(t.file(c.name), c.gzip, c.detached);
+    const RawVolumeSpec s = readVolumeHeader(t.file(c.name));
+    EXPECT_EQ(s.gzip, c.gzip) << c.name;
+    EXPECT_EQ(!s.data_file.empty(), c.detached) << c.name;
+    expectSameVolume(fromScene(std::string("volume: {file: ") + c.name + "}\n", t.path.string()), ref);
+  }
+}
+
+TEST(VolumeFiles, ABigEndianNrrdIsSwapped) {
+  TempDir t("nrrd-big");
+  const Volume ref = rawReference(t);
+  auto v = samples();
+  for (auto& x : v) x = (int16_t)(((uint16_t)x >> 8) | ((uint16_t)x << 8));
+  t.write("big.raw", v.data(), v.size() * 2);
+  std::ofstream(t.file("big.nhdr")) << "NRRD0004\ntype: short\ndimension: 3\nsizes: 13 11 7\n"
+                                       "spacings: 0.75 1.25 2.5\nencoding: raw\nendian: big\ndata file: big.raw\n";
+  expectSameVolume(fromScene("volume: {file: big.nhdr}\n", t.path.string()), ref);
+}
+
+std::string errorOf(const std::string& yaml, const std::string& dir) {
+  try {
+    fromScene(yaml, dir);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+TEST(VolumeFiles, BadHeadersAreNamedByFileAndField) {
+  TempDir t("bad-headers");
+  const int64_t dims[8] = {4, 4, 4, 4, 3, 1, 1, 1};
+  nifti_image* nim = nifti_make_new_nim(dims, DT_UINT8, 1);
+  nifti_set_filenames(nim, t.file("t.nii").c_str(), 0, 1);
+  nifti_image_write(nim);
+  nifti_image_free(nim);
+  EXPECT_NE(errorOf("volume: {file: t.nii}\n", t.path.string()).find("t.nii: holds 3 volumes (dim[4..7] = 3, 1, 1, 1)"),
+            std::string::npos);
+  writeNifti(t.file("h.nii"));
+  EXPECT_NE(errorOf("volume: {file: h.nii, dims: [13, 11, 7]}\n", t.path.string())
+                .find("volume.dims: comes from the header of"),
+            std::string::npos);
+  std::ofstream(t.file("junk.nii")) << "not a nifti file at all";
+  EXPECT_NE(errorOf("volume: {file: junk.nii}\n", t.path.string()).find("junk.nii: not a readable NIfTI"),
+            std::string::npos);
+  std::ofstream(t.file("flat.nrrd")) << "NRRD0004\ntype: float\ndimension: 2\nsizes: 4 4\nencoding: raw\n\n";
+  EXPECT_NE(errorOf("volume: {file: flat.nrrd}\n", t.path.string()).find("flat.nrrd: dimension 2"), std::string::npos);
+  std::ofstream(t.file("hex.nhdr")) << "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: hex\n";
+  EXPECT_NE(errorOf("volume: {file: hex.nhdr}\n", t.path.string()).find("encoding 'hex'"), std::string::npos);
+  // A gzip stream cut short: said when the samples are read.
+  writeNifti(t.file("cut.nii.gz"));
+  const auto full = std::filesystem::file_size(t.file("cut.nii.gz"));
+  std::filesystem::resize_file(t.file("cut.nii.gz"), full / 2);
+  const std::string cut = errorOf("volume: {file: cut.nii.gz}\n", t.path.string());
+  EXPECT_NE(cut.find("cut.nii.gz"), std::string::npos) << cut;
+  EXPECT_TRUE(cut.find("compressed data") != std::string::npos || cut.find("not a readable NIfTI") != std::string::npos)
+      << cut;
+}
+
+}  // namespace
+}  // namespace tessera
