@@ -33,7 +33,7 @@ void parseSize(const std::string& s, int& w, int& h) {
   char rest = 0;
   if (std::sscanf(s.c_str(), "%d%c%d%c", &a, &x, &b, &rest) != 3 || (x != 'x' && x != 'X') || a <= 0 || b <= 0 ||
       a > 16384 || b > 16384)
-    throw std::invalid_argument("--size: expected WxH with 1..16384 each, got '" + s + "'");
+    throw std::invalid_argument("--image: expected WxH with 1..16384 each, got '" + s + "'");
   w = a;
   h = b;
 }
@@ -77,7 +77,7 @@ void addOptions(CLI::App& app, Args& a) {
   app.add_option("--quality", a.quality_name, "reference | default | fast (default: the scene's)");
   app.add_option("--bricks", a.bricks, "split into N bricks and composite them like the farm")->check(CLI::Range(1, 4096));
   app.add_option("--frame", a.frame, "orbit frame K")->check(CLI::NonNegativeNumber);
-  app.add_option("--size", a.size, "image size WxH (default: the scene's)");
+  app.add_option("--image", a.size, "image size WxH (default: the scene's)");
   app.add_option("--backend", a.backend, "volume backend: cpu (ray caster) | osmesa (GLSL on llvmpipe)")
       ->check(CLI::IsMember({"cpu", "osmesa"}))
       ->capture_default_str();

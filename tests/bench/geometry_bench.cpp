@@ -266,7 +266,7 @@ int main(int argc, char** argv) try {
   app.add_option("--lp-threads", o.lp_threads, "farm: LP_NUM_THREADS per renderer (default = llvmpipe's)")
       ->delimiter(',');
   app.add_option("--big-size", o.big_size, "generator size of the large isosurface variant")->check(CLI::Range(8, 512));
-  app.add_option("--size", o.size, "override the scenes' generator size (0: as in the files)");
+  app.add_option("--volume-size", o.size, "override the scenes' generator size (0: as in the files)");
   app.add_option("--image", o.image, "override the scenes' image to NxN (0: as in the files)");
   CLI11_PARSE(app, argc, argv);
   if (o.smoke) {

@@ -76,7 +76,7 @@ int main(int argc, char** argv) {
   app.add_option("--frames", frames, "frames per run")->check(CLI::Range(4, 10000));
   app.add_option("--renderers", renderers)->check(CLI::Range(1, 64));
   app.add_option("--compositors", compositors)->check(CLI::Range(1, 64));
-  app.add_option("--window", window, "frames in flight to compare with 1")->check(CLI::Range(2, 64));
+  app.add_option("--in-flight", window, "frames in flight to compare with 1")->check(CLI::Range(2, 64));
   app.add_option("--codec", codec);
   app.add_option("--format", format);
   app.add_option("--out", out, "folder for metrics and frames");

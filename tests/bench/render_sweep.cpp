@@ -131,7 +131,7 @@ struct Args {
 int parseArgs(int argc, char** argv, Args& a) {
   CLI::App app{"tessera-sweep: ray-caster speed vs error over step, early termination and skipping"};
   std::string image = "1024x1024";
-  app.add_option("--size", a.size, "generated volume edge in voxels")->capture_default_str()->check(CLI::Range(2, 2048));
+  app.add_option("--volume-size", a.size, "generated volume edge in voxels")->capture_default_str()->check(CLI::Range(2, 2048));
   app.add_option("--image", image, "image size WxH")->capture_default_str();
   app.add_option("--repeat", a.repeat, "renders per configuration; the best wall time counts")
       ->capture_default_str()->check(CLI::Range(1, 100));

@@ -153,7 +153,7 @@ def run_tessera(args, tool, scene, png, no_skip, repeat):
     """Returns (best wall ms of `repeat` frames, CPU seconds of the whole process, command)."""
     cmd = [tool] + ([scene] if scene else []) + [
         "--stats", "--repeat", str(repeat), "--threads", str(args.threads),
-        "--size", f"{args.size}x{args.size}", "--background", "0,0,0", "-o", png]
+        "--image", f"{args.size}x{args.size}", "--background", "0,0,0", "-o", png]
     if no_skip:
         cmd.append("--no-skip")
     cpu0 = children_cpu_s()
@@ -175,7 +175,7 @@ def tessera_frame(args, tool, scene, png, no_skip):
 
 def run_vtk(args, raw, png):
     cmd = [sys.executable, os.path.abspath(__file__), "--vtk-worker", "--raw", raw,
-           "--volume-size", str(args.volume_size), "--size", str(args.size),
+           "--volume-size", str(args.volume_size), "--image", str(args.size),
            "--frames", str(args.frames), "--threads", str(args.threads)]
     if png:
         cmd += ["--png", png]
@@ -223,7 +223,7 @@ def main():
     p.add_argument("--rounds", type=int, default=5)
     p.add_argument("--frames", type=int, default=5, help="timed frames per process (VTK: after a warm-up)")
     p.add_argument("--threads", type=int, default=2)
-    p.add_argument("--size", type=int, default=1024, help="image edge in pixels")
+    p.add_argument("--image", dest="size", type=int, default=1024, help="image edge in pixels (N: NxN)")
     p.add_argument("--generator", default="hollow-shell", help="hollow-shell | marschner-lobb | noise-cloud")
     p.add_argument("--volume-size", type=int, default=256)
     p.add_argument("--out-dir", default=os.path.join(REPO, "docs"), help="where the two PNGs go")

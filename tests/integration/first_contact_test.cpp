@@ -44,7 +44,7 @@ TEST(FirstContact, AThreeLineSceneRendersTheDataOverItsOwnRange) {
   writeBall(dir);
   const auto scene = writeSceneFile(dir, "ball.yaml", "volume: {file: ball.raw, dims: [32, 32, 32], type: uint16}\n");
   const std::string pam = (dir.path() / "ball.pam").string();
-  const auto r = runCommand(bin("tessera-render") + " " + scene.string() + " --size 96x96 -o " +
+  const auto r = runCommand(bin("tessera-render") + " " + scene.string() + " --image 96x96 -o " +
                                 (dir.path() / "ball.png").string() + " --premultiplied " + pam,
                             120);
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -72,7 +72,7 @@ TEST(FirstContact, ARangeOutsideTheDataIsSaidWithTheDataValues) {
   writeBall(dir);
   const auto scene = writeSceneFile(dir, "ball.yaml",
                                     "volume: {file: ball.raw, dims: [32, 32, 32], type: uint16, range: [5000, 6000]}\n");
-  const auto r = runCommand(bin("tessera-render") + " " + scene.string() + " --size 32x32 -o " +
+  const auto r = runCommand(bin("tessera-render") + " " + scene.string() + " --image 32x32 -o " +
                                 (dir.path() / "ball.png").string(),
                             120);
   ASSERT_EQ(r.exit_code, 0) << r.output;
