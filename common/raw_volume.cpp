@@ -186,7 +186,7 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box) {
   Volume v;
   for (int a = 0; a < 3; ++a) v.dims[a] = box.hi[a] - box.lo[a];
   // Before allocating: a sparse or huge file would otherwise end in a bare std::bad_alloc.
-  if (std::string p = memoryProblem(v.dims, 0); !p.empty()) fail(spec.file, p);
+  if (std::string p = memoryProblem(v.dims); !p.empty()) fail(spec.file, p);
   v.origin = box.lo;
   v.whole_dims = n;
   v.spacing = spec.spacing;

@@ -327,16 +327,11 @@ Antialiasing Parser::antialiasing(const YAML::Node& n) const {
 
 // The half extents of the scene's box, from the volume's dims and spacing (no voxel read).
 Vec3 sceneHalfExtent(const Scene& s) {
-  Volume shape;
   if (!s.has_volume || s.mesh) return {0.5, 0.5, 0.5};
-  if (const auto* raw = std::get_if<RawVolumeSpec>(&s.volume)) {
-    shape.dims = raw->dims;
-    shape.spacing = raw->spacing;
-  } else {
-    const auto& g = std::get<GeneratorSpec>(s.volume);
-    shape.dims = {g.size, g.size, g.size};
-    shape.spacing = g.spacing;
-  }
+  Volume shape;
+  shape.dims = volumeDims(s);
+  const auto* raw = std::get_if<RawVolumeSpec>(&s.volume);
+  shape.spacing = raw ? raw->spacing : std::get<GeneratorSpec>(s.volume).spacing;
   return shape.halfExtent();
 }
 

@@ -29,10 +29,6 @@ void list(YAML::Emitter& e, const std::array<T, N>& a) {
   e << YAML::EndSeq;
 }
 
-const char* typeWord(VoxelType t) {
-  return voxelTypeName(t);
-}
-
 void volume(YAML::Emitter& e, const Scene& s) {
   e << YAML::Key << "volume" << YAML::Value << YAML::BeginMap;
   if (const auto* raw = std::get_if<RawVolumeSpec>(&s.volume)) {
@@ -40,7 +36,7 @@ void volume(YAML::Emitter& e, const Scene& s) {
     if (raw->format == VolumeFormat::Raw) {  // a NIfTI or NRRD header gives them
       e << YAML::Key << "dims" << YAML::Value;
       list(e, raw->dims);
-      e << YAML::Key << "type" << YAML::Value << typeWord(raw->type);
+      e << YAML::Key << "type" << YAML::Value << voxelTypeName(raw->type);
     }
     e << YAML::Key << "spacing" << YAML::Value;
     list(e, raw->spacing);

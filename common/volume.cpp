@@ -90,9 +90,9 @@ std::string notRegularFile(const std::string& path) {
   }
 }
 
-uint64_t volumeLoadBytes(const std::array<int, 3>& dims, size_t file_bytes_per_voxel) {
+uint64_t volumeLoadBytes(const std::array<int, 3>& dims) {
   const uint64_t n = (uint64_t)std::max(dims[0], 0) * (uint64_t)std::max(dims[1], 0) * (uint64_t)std::max(dims[2], 0);
-  return n * (sizeof(float) + file_bytes_per_voxel);  // <= 2^48 * 8: no overflow
+  return n * sizeof(float);  // <= 2^48 * 4: no overflow
 }
 
 uint64_t physicalMemoryBytes() {
@@ -100,8 +100,8 @@ uint64_t physicalMemoryBytes() {
   return pages > 0 && size > 0 ? (uint64_t)pages * (uint64_t)size : UINT64_MAX;
 }
 
-std::string memoryProblem(const std::array<int, 3>& dims, size_t file_bytes_per_voxel) {
-  const uint64_t need = volumeLoadBytes(dims, file_bytes_per_voxel), have = physicalMemoryBytes();
+std::string memoryProblem(const std::array<int, 3>& dims) {
+  const uint64_t need = volumeLoadBytes(dims), have = physicalMemoryBytes();
   if (need <= have) return "";
   std::string m = "[";  // built by appending: GCC 12 warns falsely (-Wrestrict) on "lit" + string&&
   m += std::to_string(dims[0]) + ", " + std::to_string(dims[1]) + ", " + std::to_string(dims[2]);
@@ -225,7 +225,7 @@ Volume generateVolume(const GeneratorSpec& spec, const VoxelBox& box) {
   if (std::string p = windowProblem(whole, box); !p.empty()) throw std::invalid_argument("generator: " + p);
   Volume v;
   for (int a = 0; a < 3; ++a) v.dims[a] = box.hi[a] - box.lo[a];
-  if (std::string p = memoryProblem(v.dims, 0); !p.empty()) throw std::invalid_argument("generator: " + p);
+  if (std::string p = memoryProblem(v.dims); !p.empty()) throw std::invalid_argument("generator: " + p);
   v.origin = box.lo;
   v.whole_dims = whole;
   v.spacing = spec.spacing;

@@ -76,12 +76,11 @@ inline constexpr double kMinSpacing = 1e-30, kMaxSpacing = 1e30, kMaxSpacingRati
 std::string spacingProblem(const std::array<double, 3>& spacing);
 // "" for a regular file, else e.g. "is a directory", "is a FIFO (named pipe), not a regular file", "file not found".
 std::string notRegularFile(const std::string& path);
-// Bytes needed to hold a volume of dims: the normalised floats plus file_bytes_per_voxel (the
-// raw reader reads in pieces and passes 0).
-uint64_t volumeLoadBytes(const std::array<int, 3>& dims, size_t file_bytes_per_voxel);
+// Bytes needed to hold a volume of dims as normalised floats (files are read in pieces).
+uint64_t volumeLoadBytes(const std::array<int, 3>& dims);
 uint64_t physicalMemoryBytes();
 // "" if volumeLoadBytes fits in this machine's physical memory, else a sentence with both sizes.
-std::string memoryProblem(const std::array<int, 3>& dims, size_t file_bytes_per_voxel);
+std::string memoryProblem(const std::array<int, 3>& dims);
 size_t voxelTypeSize(VoxelType t);
 
 // A box of voxels [lo, hi) of a volume.

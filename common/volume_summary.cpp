@@ -32,7 +32,8 @@ VolumeSummary summarizeVolume(const Scene& original) {
   std::array<double, 2> data{INFINITY, -INFINITY};
   for (int z0 = 0; z0 < n[2]; z0 += s.edge) {
     const Volume slab = loadVolume(scene, VoxelBox{{0, 0, z0}, {n[0], n[1], std::min(n[2], z0 + s.edge)}});
-    if (s.shape.dims[0] == 0) s.shape = slab;  // the first slab gives spacing and ranges
+    s.shape.spacing = slab.spacing;
+    s.shape.mapped_range = slab.mapped_range;  // every slab's: the range was fixed above
     data[0] = std::min(data[0], slab.data_range[0]);
     data[1] = std::max(data[1], slab.data_range[1]);
     const size_t row = (size_t)s.blocks[0] * s.blocks[1] * (z0 / s.edge);
@@ -45,11 +46,7 @@ VolumeSummary summarizeVolume(const Scene& original) {
           s.hi[b] = std::max(s.hi[b], v);
         }
   }
-  s.shape.values.clear();
-  s.shape.values.shrink_to_fit();
   s.shape.dims = n;
-  s.shape.origin = {0, 0, 0};
-  s.shape.whole_dims = n;
   s.shape.data_range = data;  // the slabs' own values: the whole volume's
   return s;
 }

@@ -107,8 +107,9 @@ nlohmann::json Metrics::summarize(const std::vector<proto::StageStats>& renderer
   if (load > 0) j["render_load_ms_max"] = load;  // only frames where a renderer loaded voxels
   j["render_images_made"] = made;
   j["render_images_reused"] = reused;
-  j["rerendered"] = made > 0 || reused == 0;
-  if (!j["rerendered"].get<bool>()) j.erase("render_ms_max"), j.erase("render_imbalance_time");
+  const bool rerendered = made > 0 || reused == 0;
+  j["rerendered"] = rerendered;
+  if (!rerendered) j.erase("render_ms_max"), j.erase("render_imbalance_time");
   double decode = 0;  // only compositors decode what they receive
   for (const auto& s : compositors) decode = std::max(decode, s.decode_ms);
   j["composite_decode_ms_max"] = decode;

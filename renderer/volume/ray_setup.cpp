@@ -7,7 +7,7 @@
 
 namespace tessera::renderer {
 
-VolumeGeometry::VolumeGeometry(const Volume& v) : n(v.dims), origin(v.origin), whole(v.wholeDims()) {
+VolumeGeometry::VolumeGeometry(const Volume& v) : origin(v.origin), whole(v.wholeDims()) {
   const Vec3 h = v.halfExtent();
   for (int a = 0; a < 3; ++a) {
     half[a] = h[a];

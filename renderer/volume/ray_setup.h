@@ -15,7 +15,6 @@ namespace tessera::renderer {
 // voxel i at the centre of its cell). Voxel indices are the held values' (a window's own,
 // from 0); `origin` places them in the whole volume, which alone sets the world box.
 struct VolumeGeometry {
-  std::array<int, 3> n{1, 1, 1};              // voxels held
   std::array<int, 3> origin{0, 0, 0};         // of the held voxels in the whole volume
   std::array<int, 3> whole{1, 1, 1};          // the whole volume's dims
   std::array<double, 3> half{0.5, 0.5, 0.5};  // half extents of the whole box (world)
