@@ -34,9 +34,9 @@ class Sink {
 std::unique_ptr<Sink> makePngSink(const std::string& dir,
                                   std::optional<std::array<double, 3>> background = std::nullopt,
                                   bool premultiplied = false);
-// Opens a window of the image's size; throws std::runtime_error if no display server.
+// Opens a window of the image's size; throws std::runtime_error naming the reason if no X11 or
+// Wayland server answers. Trying is the only probe: a separate probe's connection, once closed,
+// can make an X server reset under the window that follows.
 std::unique_ptr<Sink> makeWindowSink(int width, int height, const std::string& title);
-// True if a display server is reachable (DISPLAY or WAYLAND_DISPLAY set and SDL video inits).
-bool windowAvailable();
 
 }  // namespace tessera::display

@@ -221,9 +221,15 @@ class Stage {
   void openSink(const proto::FrameParams& p) {
     if (sink_) return;
     using Window = StageOptions::Window;
-    bool want_window = opt_.window == Window::On || (opt_.window == Window::Auto && windowAvailable());
-    if (want_window) {
-      sink_ = makeWindowSink(p.width, p.height, "Tessera");
+    if (opt_.window == Window::On) sink_ = makeWindowSink(p.width, p.height, "Tessera");
+    if (opt_.window == Window::Auto) {
+      try {
+        sink_ = makeWindowSink(p.width, p.height, "Tessera");
+      } catch (const std::runtime_error& e) {
+        spdlog::info("no window ({}); writing PNG frames instead", e.what());
+      }
+    }
+    if (sink_) {
       spdlog::info("display window {}x{}", p.width, p.height);
     } else {
       sink_ = makePngSink(opt_.out_dir, opt_.background, opt_.premultiplied);

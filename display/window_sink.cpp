@@ -35,15 +35,31 @@ std::runtime_error sdlError(const std::string& what) {
   return std::runtime_error("display window: " + what + ": " + SDL_GetError());
 }
 
+// Starts SDL video on a real display server, or returns why not. When DISPLAY names a server
+// that does not answer (yet), SDL quietly falls back to its offscreen driver and every frame
+// goes nowhere: a window nobody can see must be an error, not a success.
+std::string initVideo() {
+  SDL_SetHint(SDL_HINT_NO_SIGNAL_HANDLERS, "1");  // the stage owns SIGINT/SIGTERM, not SDL
+  if (SDL_InitSubSystem(SDL_INIT_VIDEO) != 0)
+    return std::string("SDL_Init(VIDEO) failed: ") + SDL_GetError();
+  const std::string driver = SDL_GetCurrentVideoDriver() ? SDL_GetCurrentVideoDriver() : "";
+  if (driver == "x11" || driver == "wayland") return "";
+  SDL_QuitSubSystem(SDL_INIT_VIDEO);
+  const char* x11 = std::getenv("DISPLAY");
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  if ((!x11 || !*x11) && (!wayland || !*wayland)) return "neither DISPLAY nor WAYLAND_DISPLAY is set";
+  return "no X11 or Wayland server answered (DISPLAY=" + std::string(x11 ? x11 : "") +
+         "); SDL offered only its '" + driver + "' driver, which shows nothing";
+}
+
 class WindowSink final : public Sink {
  public:
   WindowSink(int width, int height, const std::string& title) {
     if (width <= 0 || height <= 0)
       throw std::invalid_argument("display window: size must be positive, got " +
                                   std::to_string(width) + "x" + std::to_string(height));
-    // The display process owns SIGINT/SIGTERM; SDL must not turn them into SDL_QUIT.
-    SDL_SetHint(SDL_HINT_NO_SIGNAL_HANDLERS, "1");
-    if (SDL_InitSubSystem(SDL_INIT_VIDEO) != 0) throw sdlError("SDL_Init(VIDEO) failed");
+    if (const std::string why = initVideo(); !why.empty())
+      throw std::runtime_error("display window: " + why);
     window_ = SDL_CreateWindow(title.c_str(), SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED,
                                width, height, SDL_WINDOW_SHOWN);
     if (!window_) {
@@ -61,7 +77,8 @@ class WindowSink final : public Sink {
     }
     SDL_RendererInfo info{};
     SDL_GetRendererInfo(renderer_, &info);
-    spdlog::info("window open size={}x{} renderer={}", width, height, info.name ? info.name : "?");
+    spdlog::info("window open size={}x{} video={} renderer={}", width, height,
+                 SDL_GetCurrentVideoDriver(), info.name ? info.name : "?");
   }
 
   ~WindowSink() override {
@@ -205,16 +222,6 @@ class WindowSink final : public Sink {
 
 std::unique_ptr<Sink> makeWindowSink(int width, int height, const std::string& title) {
   return std::make_unique<WindowSink>(width, height, title);
-}
-
-bool windowAvailable() {
-  const char* x11 = std::getenv("DISPLAY");
-  const char* wayland = std::getenv("WAYLAND_DISPLAY");
-  if ((!x11 || !*x11) && (!wayland || !*wayland)) return false;
-  SDL_SetHint(SDL_HINT_NO_SIGNAL_HANDLERS, "1");
-  if (SDL_InitSubSystem(SDL_INIT_VIDEO) != 0) return false;
-  SDL_QuitSubSystem(SDL_INIT_VIDEO);
-  return true;
 }
 
 }  // namespace tessera::display

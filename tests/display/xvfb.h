@@ -1,7 +1,8 @@
-// Test helpers: a private Xvfb server on a random free display number, and an XWD screenshot
+// Test helpers: a private Xvfb server on a display number it picks itself, and an XWD screenshot
 // reader (xwd's file format: big-endian header, optional colormap, then ZPixmap rows).
 #pragma once
 #include <fcntl.h>
+#include <poll.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -10,8 +11,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
-#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -35,21 +34,48 @@ inline bool onPath(const std::string& exe) {
   return false;
 }
 
-// Starts `Xvfb :N -screen 0 1280x1024x24 -nolisten tcp`; stop() (or the destructor) ends it
-// with SIGTERM and a bounded wait, then SIGKILL.
+// Starts `Xvfb -displayfd F -screen 0 1280x1024x24 -nolisten tcp`: the server picks a free
+// display number itself and writes it to F once it accepts connections, so there is neither a
+// race for a number nor a window opened before the server is ready (SDL would then fall back
+// to an offscreen driver). stop() (or the destructor) ends it with SIGTERM, a bounded wait,
+// then SIGKILL.
 class Xvfb {
  public:
   bool start(std::string& error) {
-    std::mt19937 rng(std::random_device{}());
-    for (int attempt = 0; attempt < 5; ++attempt) {
-      const int n = 200 + (int)(rng() % 700);
-      if (std::filesystem::exists("/tmp/.X" + std::to_string(n) + "-lock") ||
-          std::filesystem::exists("/tmp/.X11-unix/X" + std::to_string(n)))
-        continue;  // taken
-      if (launch(n)) return true;
+    int fds[2];
+    if (pipe(fds) != 0) { error = "pipe failed"; return false; }
+    const std::string fd = std::to_string(fds[1]);
+    std::vector<std::string> args = {"Xvfb", "-displayfd", fd, "-screen", "0", "1280x1024x24",
+                                     "-nolisten", "tcp"};
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addclose(&fa, fds[0]);
+    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
+    const int rc = posix_spawnp(&pid_, "Xvfb", &fa, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&fa);
+    close(fds[1]);
+    if (rc != 0) { close(fds[0]); pid_ = -1; error = "cannot start Xvfb"; return false; }
+    std::string line;
+    for (int i = 0; i < 300 && line.find('\n') == std::string::npos; ++i) {  // up to 30 s
+      pollfd p{fds[0], POLLIN, 0};
+      if (::poll(&p, 1, 100) <= 0) continue;
+      char buf[32];
+      const ssize_t got = read(fds[0], buf, sizeof buf);
+      if (got <= 0) break;  // Xvfb exited
+      line.append(buf, (size_t)got);
     }
-    error = "Xvfb did not come up on any of 5 random display numbers";
-    return false;
+    close(fds[0]);
+    if (line.find('\n') == std::string::npos) {
+      stop();
+      error = "Xvfb did not report a display within 30 s";
+      return false;
+    }
+    number_ = std::atoi(line.c_str());
+    return true;
   }
   std::string display() const { return displayName(number_); }
   void stop() {
@@ -71,30 +97,6 @@ class Xvfb {
     char name[16];
     std::snprintf(name, sizeof name, ":%d", n);
     return name;
-  }
-  bool launch(int n) {
-    const std::string disp = displayName(n);
-    std::vector<std::string> args = {"Xvfb", disp, "-screen", "0", "1280x1024x24", "-nolisten", "tcp"};
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
-    pid_t pid = -1;
-    const int rc = posix_spawnp(&pid, "Xvfb", &fa, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&fa);
-    if (rc != 0) return false;
-    pid_ = pid;
-    const std::string sock = "/tmp/.X11-unix/X" + std::to_string(n);
-    for (int i = 0; i < 250; ++i) {  // up to 5 s for the socket to appear
-      if (std::filesystem::exists(sock)) { number_ = n; return true; }
-      if (waitpid(pid_, nullptr, WNOHANG) == pid_) { pid_ = -1; return false; }  // lost a race
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    stop();
-    return false;
   }
   pid_t pid_ = -1;
   int number_ = -1;
