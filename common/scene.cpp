@@ -140,6 +140,7 @@ class Parser {
   Orbit orbit(const YAML::Node& n) const;
   MeshSpec mesh(const YAML::Node& n, bool has_volume) const;
   Antialiasing antialiasing(const YAML::Node& n) const;
+  Shading shading(const YAML::Node& n) const;
 
   std::string file_, base_;
 };
@@ -325,6 +326,30 @@ Antialiasing Parser::antialiasing(const YAML::Node& n) const {
   return a;
 }
 
+// `shading: true` (VTK's defaults) or a map of coefficients; each coefficient in [0, 1], so a
+// lit colour stays within what the transfer function can give (shininess 1..128 as OpenGL's).
+Shading Parser::shading(const YAML::Node& n) const {
+  Shading sh;
+  if (n.IsScalar()) {
+    sh.on = boolean(n, "shading");
+    return sh;
+  }
+  checkKeys(n, "shading", {"ambient", "diffuse", "specular", "shininess"});
+  sh.on = true;
+  const std::pair<const char*, double*> coefficients[] = {
+      {"ambient", &sh.ambient}, {"diffuse", &sh.diffuse}, {"specular", &sh.specular}};
+  for (const auto& [key, value] : coefficients) {
+    if (!n[key]) continue;
+    *value = number(n[key], std::string("shading.") + key);
+    if (!(*value >= 0 && *value <= 1)) fail(std::string("shading.") + key, "must be in [0, 1]");
+  }
+  if (n["shininess"]) {
+    sh.shininess = number(n["shininess"], "shading.shininess");
+    if (!(sh.shininess >= 1 && sh.shininess <= 128)) fail("shading.shininess", "must be in [1, 128]");
+  }
+  return sh;
+}
+
 // The half extents of the scene's box, from the volume's dims and spacing (no voxel read).
 Vec3 sceneHalfExtent(const Scene& s) {
   if (!s.has_volume || s.mesh) return {0.5, 0.5, 0.5};
@@ -347,7 +372,8 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
   }
   if (!root.IsMap()) p.fail("", "expected a map of scene keys at the top level");
   p.checkKeys(root, "",
-              {"volume", "transfer_function", "camera", "image", "quality", "orbit", "mesh", "light", "antialiasing"});
+              {"volume", "transfer_function", "camera", "image", "quality", "orbit", "mesh", "light", "antialiasing",
+               "shading"});
   Scene s;
   s.path = name_for_errors;
   s.quality = namedQuality(QualityName::Default);
@@ -364,6 +390,10 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
     if (!(length(s.light) > 0)) p.fail("light", "must be non-zero (leave it out for a headlight)");
   }
   if (root["antialiasing"]) s.antialiasing = p.antialiasing(root["antialiasing"]);
+  if (root["shading"]) {
+    if (is_mesh) p.fail("shading", "shades volume samples; a mesh is lit by `light` alone");
+    s.shading = p.shading(root["shading"]);
+  }
   // Left out: fitted to the volume's box (a mesh is fitted to the unit box).
   s.camera = root["camera"] ? p.camera(root["camera"]) : fittedCamera(sceneHalfExtent(s));
   if (root["image"]) {

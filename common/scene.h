@@ -26,12 +26,24 @@ struct MeshSpec {
   double level = 0.5;       // isosurface level, normalised scalar
   bool operator==(const MeshSpec&) const = default;
 };
+// `shading:` gradient lighting of volume samples, as VTK's and ParaView's "Shade": a sample's
+// colour becomes min(1, colour * (ambient + diffuse * |N.L|) + specular * |N.H|^shininess)
+// (a white light, lit from both sides), N the direction of the data's gradient, L towards the
+// light (`light`, else a headlight at the eye) and H halfway between L and the eye. Opacity is
+// unchanged. docs/DESIGN.md defines the gradient.
+struct Shading {
+  bool on = false;
+  double ambient = 0.1, diffuse = 0.7, specular = 0.2, shininess = 10;  // VTK's defaults
+  bool operator==(const Shading&) const = default;
+};
+
 struct Scene {
   std::string path;  // file it was loaded from ("" for built-in)
   std::variant<RawVolumeSpec, GeneratorSpec> volume;
   bool has_volume = true;           // false for a mesh scene without `volume:`
   std::optional<MeshSpec> mesh;     // set: a geometry scene
   Vec3 light{0, 0, 0};              // world direction towards the light; zero: headlight
+  Shading shading;                  // volumes only
   Antialiasing antialiasing;
   TransferFunction tf;
   Camera camera;

@@ -109,6 +109,11 @@ std::string sceneYaml(const Scene& s) {
     e << YAML::Key << "light" << YAML::Value;
     vec(e, s.light);
   }
+  if (s.shading.on)
+    e << YAML::Key << "shading" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "ambient"
+      << YAML::Value << num(s.shading.ambient) << YAML::Key << "diffuse" << YAML::Value << num(s.shading.diffuse)
+      << YAML::Key << "specular" << YAML::Value << num(s.shading.specular) << YAML::Key << "shininess"
+      << YAML::Value << num(s.shading.shininess) << YAML::EndMap;
   if (s.mesh) {
     e << YAML::Key << "antialiasing" << YAML::Value << YAML::BeginMap << YAML::Key << "method" << YAML::Value
       << aaMethodName(s.antialiasing.method);

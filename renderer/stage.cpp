@@ -123,17 +123,19 @@ class Stage {
     link_.report(proto::encode(st, link_.rank()));
   }
 
-  // Loads the voxels of this renderer's bricks and their ghost layer (trilinear sampling
-  // near a brick face reads one voxel beyond it) unless the window held has them all.
+  // Loads the voxels of this renderer's bricks and their ghost layer unless the window held
+  // has them all.
   // Memory follows the bricks, not the volume; a move of bricks costs one load, in the stats.
   void holdBricks(uint64_t frame, const proto::SortLastWork& work, proto::StageStats& st) {
     const auto whole = volumeDims(scene_);
+    // Trilinear sampling near a brick face reads one voxel beyond it; its gradient, one more.
+    const int ghost = scene_.shading.on ? 2 : 1;
     VoxelBox need{whole, {0, 0, 0}};
     for (const auto& b : work.bricks) {
       if (b.renderer != link_.rank()) continue;
       for (int a = 0; a < 3; ++a) {
-        need.lo[a] = std::min(need.lo[a], std::max(0, b.brick.lo[a] - kGhost));
-        need.hi[a] = std::max(need.hi[a], std::min(whole[a], b.brick.hi[a] + kGhost));
+        need.lo[a] = std::min(need.lo[a], std::max(0, b.brick.lo[a] - ghost));
+        need.hi[a] = std::max(need.hi[a], std::min(whole[a], b.brick.hi[a] + ghost));
       }
     }
     if (need.lo[0] >= need.hi[0]) return;  // no brick of ours this frame
@@ -148,7 +150,7 @@ class Stage {
     cache_.clear();
     volume_.reset();  // before loading the next: peak memory is one window
     volume_ = std::make_shared<Volume>(loadVolume(scene_, need));
-    caster_ = makeVolumeBackend(opt_.backend, volume_, scene_.tf);
+    caster_ = makeVolumeBackend(opt_.backend, volume_, scene_.tf, scene_.shading, scene_.light);
     st.load_ms = msSince(t0);
     spdlog::info("frame={} loaded voxels [{}, {}, {}] .. [{}, {}, {}) ({:.1f} MiB) in {:.0f} ms", frame,
                  need.lo[0], need.lo[1], need.lo[2], need.hi[0], need.hi[1], need.hi[2],
@@ -214,7 +216,6 @@ class Stage {
   const StageOptions& opt_;
   zmq::context_t& ctx_;
   StageLink link_;
-  static constexpr int kGhost = 1;  // voxels beyond a brick that its samples read
   Scene scene_;                      // the scene, with the data's range fixed once
   std::shared_ptr<Volume> volume_;   // the window of this renderer's bricks
   std::unique_ptr<VolumeBackend> caster_;  // volume scenes (sort-last)

@@ -45,18 +45,21 @@ std::string bytesText(double bytes) {
 }
 
 // A renderer holds its bricks and one ghost voxel around them: float values, 16-bit
-// quantized values and the min-max hierarchy, about 6 bytes a voxel. Bricks of an even
-// split (the farm balances by visible content, so its largest brick may be bigger).
-void printRendererMemory(const std::array<int, 3>& dims) {
-  std::string line = "memory per renderer (bricks + ghost voxels, about 6 bytes a voxel):";
+// quantized values and the min-max hierarchy, about 6 bytes a voxel; with shading two ghost
+// voxels and 8 bytes more for the gradients. Bricks of an even split (the farm balances by
+// visible content, so its largest brick may be bigger).
+void printRendererMemory(const std::array<int, 3>& dims, bool shaded) {
+  const int ghost = shaded ? 2 : 1, per_voxel = shaded ? 14 : 6;
+  std::string line = "memory per renderer (bricks + ghost voxels, about " + std::to_string(per_voxel) +
+                     " bytes a voxel" + (shaded ? " with shading" : "") + "):";
   for (int n : {1, 2, 4, 8}) {
     size_t most = 0;
     for (const BrickBox& b : splitMask(dims, nullptr, n).bricks) {
       size_t voxels = 1;
-      for (int a = 0; a < 3; ++a) voxels *= (size_t)(std::min(dims[a], b.hi[a] + 1) - std::max(0, b.lo[a] - 1));
+      for (int a = 0; a < 3; ++a) voxels *= (size_t)(std::min(dims[a], b.hi[a] + ghost) - std::max(0, b.lo[a] - ghost));
       most = std::max(most, voxels);
     }
-    line += " " + bytesText(6.0 * (double)most) + " for " + std::to_string(n) + (n < 8 ? "," : "");
+    line += " " + bytesText((double)per_voxel * (double)most) + " for " + std::to_string(n) + (n < 8 ? "," : "");
   }
   std::printf("%s renderers\n", line.c_str());
 }
@@ -121,7 +124,7 @@ int run(int argc, char** argv) {
     plotHistogram(h, plot);
     std::printf("wrote %s\n", plot.c_str());
   }
-  printRendererMemory(v.dims);
+  printRendererMemory(v.dims, scene.shading.on);
   return 0;
 }
 

@@ -108,7 +108,7 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
 
   auto vol = std::make_shared<const Volume>(loadVolume(scene));
   if (std::string why = rangeProblem(*vol); !why.empty()) std::fprintf(stderr, "tessera-render: warning: %s\n", why.c_str());
-  auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, scene.tf);
+  auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, scene.tf, scene.shading, scene.light);
   ImageF img;
   renderer::RenderStats stats;
   double best_ms = 1e300, best_cpu_ms = 1e300;

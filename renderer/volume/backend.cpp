@@ -43,10 +43,15 @@ BackendKind parseBackend(const std::string& name) {
 const char* backendName(BackendKind kind) { return kind == BackendKind::Cpu ? "cpu" : "osmesa"; }
 
 std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_ptr<const Volume> volume,
-                                                 TransferFunction tf) {
-  if (kind == BackendKind::Osmesa) return std::make_unique<GlVolumeRenderer>(std::move(volume), std::move(tf));
+                                                 TransferFunction tf, const Shading& shading,
+                                                 const Vec3& light) {
+  if (kind == BackendKind::Osmesa) {
+    if (shading.on)
+      throw std::invalid_argument("the osmesa volume backend does not shade; use backend cpu or leave out `shading`");
+    return std::make_unique<GlVolumeRenderer>(std::move(volume), std::move(tf));
+  }
   cpuIsa();  // a bad TESSERA_SIMD fails here, on the caller's thread, not in a ray-casting thread
-  return std::make_unique<Raycaster>(std::move(volume), std::move(tf));
+  return std::make_unique<Raycaster>(std::move(volume), std::move(tf), shading, light);
 }
 
 }  // namespace tessera::renderer

@@ -51,7 +51,9 @@ enum class BackendKind { Cpu, Osmesa };
 // "cpu" | "osmesa"; throws std::invalid_argument naming the value otherwise.
 BackendKind parseBackend(const std::string& name);
 const char* backendName(BackendKind kind);
+// Shading (with `light`, zero: a headlight) is the cpu backend's; osmesa refuses it by name.
 std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_ptr<const Volume> volume,
-                                                 TransferFunction tf);
+                                                 TransferFunction tf, const Shading& shading = {},
+                                                 const Vec3& light = {0, 0, 0});
 
 }  // namespace tessera::renderer

@@ -44,10 +44,18 @@ struct Consts {
   const float* rgba;
   const int32_t* nonzero;
   int first_nz, last_nz;  // TfTable::firstNonzero/lastNonzero
+  // Shading (fast_shade.h); grad == nullptr: unlit.
+  const int16_t* grad;
+  int gdims[2];           // held voxels per row / per column
+  int gstride[3];         // int16s to the next voxel on each axis (0 on a one-voxel axis)
+  float ka, kd, ks, shininess;
+  float inv_cell[3], light[3], half[3];
 };
 
 // Table position of a scalar in quantized units [0, 65535].
 constexpr float kToTable = (float)(TfTable::kEntries - 1) / VolumeAccel::kQuantScale;
+
+#include "renderer/volume/fast_shade.h"
 
 #ifdef TESSERA_AVX2
 // Permutations that move the lanes set in an 8-bit mask to the front (AVX2 has no
@@ -153,7 +161,8 @@ inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, __
     for (int i = 0; i < n; ++i) {
       const float* e = c.rgba + 4 * cl.ti[i];
       const __m128 e0 = _mm_load_ps(e), e1 = _mm_load_ps(e + 4);
-      const __m128 pc = _mm_fmadd_ps(_mm_set1_ps(cl.w[i]), _mm_sub_ps(e1, e0), e0);
+      __m128 pc = _mm_fmadd_ps(_mm_set1_ps(cl.w[i]), _mm_sub_ps(e1, e0), e0);
+      if (c.grad) pc = shadeSample(c, j + cl.off[i], pc);
       const __m128 t = _mm_sub_ps(one, _mm_shuffle_ps(acc, acc, 0xFF));
       acc = _mm_fmadd_ps(t, pc, acc);
       if (_mm_movemask_ps(_mm_cmpge_ps(acc, etv)) & 8) {
@@ -170,14 +179,9 @@ inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, __
 inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4], bool& done) {
   auto lerp = [](float a, float b, float t) { return std::fma(t, b - a, a); };
   for (int l = 0; l < lanes; ++l) {
-    const float kf = (float)k0 + (float)l;
     float f[3];
     int i[3];
-    for (int a = 0; a < 3; ++a) {
-      const float u = std::min(std::max(std::fma(kf, c.du[a], c.u0[a]), 0.0f), c.umax[a]);
-      i[a] = std::min((int)u, c.imax[a]);
-      f[a] = u - (float)i[a];
-    }
+    samplePosition(c, k0 + l, i, f);
     constexpr int B = MinMaxHierarchy::kBlock;
     const size_t brick = (size_t)(i[0] / B) + (size_t)(i[1] / B) * c.nb_x + (size_t)(i[2] / B) * c.nb_xy;
     const uint16_t* p = c.vol + brick * VolumeAccel::kBrickSize + (i[0] % B) +
@@ -189,8 +193,11 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4]
     const int ti = std::min((int)ft, TfTable::kEntries - 2);
     const float w = ft - (float)ti;
     if (!c.nonzero[ti]) continue;
+    float pc[4];
+    for (int ch = 0; ch < 4; ++ch) pc[ch] = lerp(c.rgba[4 * ti + ch], c.rgba[4 * ti + 4 + ch], w);
+    if (c.grad) shadeSample(c, k0 + l, pc);
     const float t = 1.0f - acc[3];
-    for (int ch = 0; ch < 4; ++ch) acc[ch] = std::fma(t, lerp(c.rgba[4 * ti + ch], c.rgba[4 * ti + 4 + ch], w), acc[ch]);
+    for (int ch = 0; ch < 4; ++ch) acc[ch] = std::fma(t, pc[ch], acc[ch]);
     if (acc[3] >= et) {
       done = true;
       return l + 1;
@@ -241,10 +248,26 @@ struct RayState {
     c.nonzero = ctx.table->nonzero();
     c.first_nz = ctx.table->firstNonzero();
     c.last_nz = ctx.table->lastNonzero();
+    c.grad = nullptr;
+    if (ctx.shade) setShading(ctx, span);
     skip = ctx.skip && ctx.emptiness;
     if (skip) leaper = Leaper(span, v, ctx.accel->hierarchy, *ctx.emptiness);
     k = span.k_first;
     k_end = span.k_end;
+  }
+
+  void setShading(const FastContext& ctx, const RaySpan& span) {
+    const Volume& v = *ctx.volume;
+    const ShadeParams& p = *ctx.shade;
+    c.grad = ctx.gradients->q.data();
+    c.gdims[0] = v.dims[0], c.gdims[1] = v.dims[1];
+    c.gstride[0] = v.dims[0] > 1 ? 4 : 0;
+    c.gstride[1] = v.dims[1] > 1 ? 4 * v.dims[0] : 0;
+    c.gstride[2] = v.dims[2] > 1 ? 4 * v.dims[0] * v.dims[1] : 0;
+    c.ka = (float)p.ambient, c.kd = (float)p.diffuse, c.ks = (float)p.specular, c.shininess = (float)p.shininess;
+    const RayLight r = rayLight(p, span.du);
+    for (int a = 0; a < 3; ++a)
+      c.inv_cell[a] = (float)r.inv_cell[a], c.light[a] = (float)r.l[a], c.half[a] = (float)r.h[a];
   }
 
   bool active() const { return k < k_end; }

@@ -6,6 +6,7 @@
 
 #include "common/transfer_function.h"
 #include "common/volume.h"
+#include "renderer/volume/gradient.h"
 #include "renderer/volume/minmax.h"
 #include "renderer/volume/ray_setup.h"
 #include "renderer/volume/tf_table.h"
@@ -24,6 +25,8 @@ struct FastContext {
   const MinMaxHierarchy::Emptiness* emptiness = nullptr;  // of `table`'s transfer function
   bool skip = true;                                       // empty-space skipping
   float early_termination = 2.0f;                        // > 1: never
+  const ShadeParams* shade = nullptr;                     // null: unlit
+  const GradientVolume* gradients = nullptr;              // of `volume`, with `shade`
 };
 
 // Samples span.k_first..k_end-1; out receives premultiplied RGBA. Returns true if the ray
@@ -33,9 +36,10 @@ bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCou
 // interleaved so the two dependency chains overlap in the CPU.
 void castFastPair(const FastContext& c, const RaySpan* spans, float* out[2], SampleCounts& counts, bool terminated[2]);
 
-// Double precision, exact transfer function, no skipping, no early termination.
-void castReference(const Volume& v, const TransferFunction& tf, double step, const RaySpan& span,
-                   double out[4], SampleCounts& counts);
+// Double precision, exact transfer function, no skipping, no early termination; `shade`
+// (null: unlit) lights each sample with its exact gradient (sampleGradient).
+void castReference(const Volume& v, const TransferFunction& tf, double step, const ShadeParams* shade,
+                   const RaySpan& span, double out[4], SampleCounts& counts);
 
 // Trilinear interpolation at voxel coordinate u (voxel centres at integers), clamped at
 // the border; double precision (the reference path and tests use it).

@@ -30,9 +30,14 @@ struct Raycaster::Impl {
   std::shared_ptr<const VolumeAccel> accel;
   MinMaxHierarchy::Emptiness emptiness;
   Brick nonempty;  // voxel box holding every sample that can be non-empty (lo == hi: none)
+  Shading shading;
+  Vec3 light;
+  std::unique_ptr<const GradientVolume> gradients;  // with shading
 };
 
-Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf) : impl_(std::make_unique<Impl>()) {
+Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, const Shading& shading,
+                     const Vec3& light)
+    : impl_(std::make_unique<Impl>()) {
   if (!volume) throw std::invalid_argument("Raycaster: null volume");
   const Volume& v = *volume;
   for (int a = 0; a < 3; ++a)
@@ -47,6 +52,9 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf) 
   impl_->volume = std::move(volume);
   impl_->tf = std::move(tf);
   impl_->accel = VolumeAccel::forVolume(impl_->volume);
+  impl_->shading = shading;
+  impl_->light = light;
+  if (shading.on) impl_->gradients = std::make_unique<const GradientVolume>(v);
   const TransferFunction& f = impl_->tf;
   impl_->emptiness = impl_->accel->hierarchy.classify([&f](float lo, float hi) { return TfTable::rangeIsEmpty(f, lo, hi); });
   // Block b holds the samples at voxel coordinates [8b, 8b+8) (clamped at the border); the
@@ -139,6 +147,7 @@ struct FrameRays {
   bool clipping;          // rays are cut to `clip`; the samples cut off count as skipped
   const DepthBounds* depth;  // per-cell depth bounds of non-empty nodes (perspective + skipping)
   const FastContext& fast;
+  const ShadeParams* shade;  // null: unlit
   ImageF& img;
 };
 
@@ -158,7 +167,7 @@ class TileWorker {
         if (f_.q.reference) {
           float* o = f_.img.at(px, py);
           double d[4];
-          castReference(f_.volume, f_.tf, f_.q.step, span, d, counts);
+          castReference(f_.volume, f_.tf, f_.q.step, f_.shade, span, d, counts);
           for (int c = 0; c < 4; ++c) o[c] = (float)d[c];
           mark(px, py);
         } else {
@@ -249,9 +258,13 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   ImageF img(width, height);
   const Rect fp = brickFootprint(gen, geom, brick, width, height);
 
+  std::optional<ShadeParams> shade;
+  if (impl_->shading.on) shade = shadeParams(impl_->shading, impl_->light, geom.cell);
   std::optional<TfTable> table;
   FastContext fast;
   if (!q.reference) {
+    fast.shade = shade ? &*shade : nullptr;
+    fast.gradients = impl_->gradients.get();
     table.emplace(impl_->tf, q.step);
     fast.volume = &v;
     fast.accel = impl_->accel.get();
@@ -285,7 +298,8 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   SampleCounts total;
   Rect act;
 
-  const FrameRays rays{v, impl_->tf, q, gen, geom, brick, clip, clipping, depth ? &*depth : nullptr, fast, img};
+  const FrameRays rays{v, impl_->tf, q, gen, geom, brick, clip, clipping, depth ? &*depth : nullptr, fast,
+                        shade ? &*shade : nullptr, img};
   auto worker = [&] {
     TileWorker w(rays);
     try {

@@ -23,8 +23,11 @@ namespace tessera::renderer {
 
 class Raycaster final : public VolumeBackend {
  public:
-  // Builds the min-max hierarchy and classification tables once per volume/transfer function.
-  Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf);
+  // Builds the min-max hierarchy and classification tables once per volume/transfer function,
+  // and with shading on the gradient volume (8 bytes per voxel). `light`: world direction
+  // towards the light; zero: a headlight.
+  Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, const Shading& shading = {},
+            const Vec3& light = {0, 0, 0});
   ~Raycaster();
 
   // Renders `brick` as seen by `cam` into a width x height image. Pixels outside the

@@ -338,3 +338,19 @@ TEST(Scene, LowEarlyTerminationIsRefusedOnlyForManyBricks) {
   q.early_termination = 2;  // > 1: never terminates
   EXPECT_EQ(farmAccuracyProblem(q, 3), "");
 }
+
+TEST(Scene, ShadingOnOffOrCoefficients) {
+  EXPECT_FALSE(parseScene(kGood, ".", "s.yaml").shading.on);
+  const Shading on = parseScene(std::string(kGood) + "shading: true\n", ".", "s.yaml").shading;
+  EXPECT_TRUE(on.on);
+  EXPECT_EQ(on, (Shading{true, 0.1, 0.7, 0.2, 10}));  // VTK's defaults
+  EXPECT_FALSE(parseScene(std::string(kGood) + "shading: false\n", ".", "s.yaml").shading.on);
+  const Scene s = parseScene(std::string(kGood) + "shading: {ambient: 0.3, shininess: 40}\n", ".", "s.yaml");
+  EXPECT_EQ(s.shading, (Shading{true, 0.3, 0.7, 0.2, 40}));
+  EXPECT_EQ(parseScene(sceneYaml(s), ".", "s.yaml").shading, s.shading);  // the effective scene keeps it
+  EXPECT_ERROR(std::string(kGood) + "shading: {ambient: 1.5}\n", "shading.ambient: must be in [0, 1]");
+  EXPECT_ERROR(std::string(kGood) + "shading: {specular: -0.1}\n", "shading.specular: must be in [0, 1]");
+  EXPECT_ERROR(std::string(kGood) + "shading: {shininess: 0}\n", "shading.shininess: must be in [1, 128]");
+  EXPECT_ERROR(std::string(kGood) + "shading: {glossy: 1}\n", "shading.glossy: unknown key");
+  EXPECT_ERROR(std::string(kGood) + "shading: lots\n", "shading: expected true or false, got 'lots'");
+}

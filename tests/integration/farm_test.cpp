@@ -64,6 +64,21 @@ TEST_P(FarmMatchesOneProcess, EveryFrameWithinOneLevel) {
   EXPECT_EQ(lines, frames);
 }
 
+// Shading reads gradients, one voxel further than sampling: renderers hold two ghost voxels, and
+// the farm still matches tessera-render within one level for a split into four bricks.
+TEST(FarmShaded, FourRenderersMatchOneProcess) {
+  FarmDir dir("shaded-4x2");
+  const int frames = 2;
+  auto scene = dir.writeScene(5);
+  std::ofstream(scene, std::ios::app) << "shading: {specular: 0.4}\nlight: [-1, 1, 1]\n";
+  auto run = dir.runFarm(scene, 4, 2, frames);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  for (int k = 0; k < frames; ++k) {
+    ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " missing\n" << run.output;
+    EXPECT_TRUE(dir.matches(dir.farmFrame(k), dir.reference(scene, k), 1, "shaded_" + std::to_string(k))) << k;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Shapes, FarmMatchesOneProcess,
                          ::testing::Values(Shape{1, 1}, Shape{2, 1}, Shape{2, 2}, Shape{4, 2}),
                          [](const auto& param_info) {

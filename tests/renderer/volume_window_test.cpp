@@ -13,10 +13,11 @@
 namespace tessera::renderer {
 namespace {
 
-// The brick and the voxels its samples read: one beyond each face, inside the volume.
-VoxelBox windowOf(const BrickBox& b, const std::array<int, 3>& whole) {
+// The brick and the voxels its samples read: `ghost` beyond each face, inside the volume (one
+// for trilinear sampling, two with shading: the gradient of the outer one reads one more).
+VoxelBox windowOf(const BrickBox& b, const std::array<int, 3>& whole, int ghost) {
   VoxelBox w;
-  for (int a = 0; a < 3; ++a) w.lo[a] = std::max(0, b.lo[a] - 1), w.hi[a] = std::min(whole[a], b.hi[a] + 1);
+  for (int a = 0; a < 3; ++a) w.lo[a] = std::max(0, b.lo[a] - ghost), w.hi[a] = std::min(whole[a], b.hi[a] + ghost);
   return w;
 }
 
@@ -35,6 +36,7 @@ struct WindowCase {
   const char* generator;
   BackendKind backend;
   const char* quality;
+  bool shaded = false;
 };
 
 class WindowVsWhole : public ::testing::TestWithParam<WindowCase> {};
@@ -44,18 +46,21 @@ TEST_P(WindowVsWhole, EveryBrickRendersAsFromTheWholeVolume) {
   const GeneratorSpec spec{c.generator, 40, 1, {1, 1.5, 1}};
   auto whole = std::make_shared<const Volume>(generateVolume(spec));
   const TransferFunction tf = test::defaultTf();
-  const auto from_whole = makeVolumeBackend(c.backend, whole, tf);
+  Shading shading;
+  shading.on = c.shaded;
+  shading.specular = 0.4;  // highlights make gradient errors visible
+  const auto from_whole = makeVolumeBackend(c.backend, whole, tf, shading);
   const Camera cam = Orbit{12, {0.2, 1, 0.1}}.at(test::defaultCamera(), 5);
   const RenderOptions opt = test::options(c.quality);
   int compared = 0;
   for (int n : {2, 5}) {
     const BrickTree tree = splitBricks(*whole, n, &tf);
     for (const BrickBox& b : tree.bricks) {
-      auto window = std::make_shared<const Volume>(generateVolume(spec, windowOf(b, whole->dims)));
+      auto window = std::make_shared<const Volume>(generateVolume(spec, windowOf(b, whole->dims, c.shaded ? 2 : 1)));
       ASSERT_LT(window->voxelCount(), whole->voxelCount());
       Rect a_whole, a_window;
       const ImageF expected = from_whole->render(cam, 56, 48, b, opt, nullptr, &a_whole);
-      const ImageF actual = makeVolumeBackend(c.backend, window, tf)->render(cam, 56, 48, local(b, *window), opt,
+      const ImageF actual = makeVolumeBackend(c.backend, window, tf, shading)->render(cam, 56, 48, local(b, *window), opt,
                                                                              nullptr, &a_window);
       // Sample positions are computed from the window's own origin: the same point up to
       // float rounding of a coordinate below 64 (2^-18 of a voxel), far below one level.
@@ -71,10 +76,12 @@ INSTANTIATE_TEST_SUITE_P(Windows, WindowVsWhole,
                          ::testing::Values(WindowCase{"hollow-shell", BackendKind::Cpu, "default"},
                                            WindowCase{"noise-cloud", BackendKind::Cpu, "default"},
                                            WindowCase{"marschner-lobb", BackendKind::Cpu, "reference"},
-                                           WindowCase{"noise-cloud", BackendKind::Osmesa, "default"}),
+                                           WindowCase{"noise-cloud", BackendKind::Osmesa, "default"},
+                                           WindowCase{"hollow-shell", BackendKind::Cpu, "default", true},
+                                           WindowCase{"marschner-lobb", BackendKind::Cpu, "reference", true}),
                          [](const auto& tc) {
                            std::string s = std::string(tc.param.generator) + "_" + backendName(tc.param.backend) +
-                                           "_" + tc.param.quality;
+                                           "_" + tc.param.quality + (tc.param.shaded ? "_shaded" : "");
                            std::replace(s.begin(), s.end(), '-', '_');
                            return s;
                          });

@@ -1,0 +1,94 @@
+// Gradients for shading (see gradient.h).
+#include "renderer/volume/gradient.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/parallel.h"
+
+namespace tessera::renderer {
+
+namespace {
+
+// G of voxel (x, y, z) on one axis: central inside, one-sided at a face, 0 on a 1-voxel axis.
+inline double voxelGradient(const Volume& v, int x, int y, int z, int axis) {
+  int lo[3] = {x, y, z}, hi[3] = {x, y, z};
+  const int n = v.dims[axis];
+  lo[axis] = std::max(0, lo[axis] - 1);
+  hi[axis] = std::min(n - 1, hi[axis] + 1);
+  const int span = hi[axis] - lo[axis];
+  if (span == 0) return 0;
+  return ((double)v.at(hi[0], hi[1], hi[2]) - (double)v.at(lo[0], lo[1], lo[2])) / span;
+}
+
+inline void corner(double u, int n, int& i, double& f) {
+  u = std::clamp(u, 0.0, (double)(n - 1));
+  i = std::clamp((int)u, 0, std::max(0, n - 2));
+  f = u - i;
+}
+
+void normalize(double v[3]) {
+  const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  for (int a = 0; a < 3; ++a) v[a] = len > 0 ? v[a] / len : 0;
+}
+
+}  // namespace
+
+void sampleGradient(const Volume& v, double ux, double uy, double uz, double g[3]) {
+  int i[3];
+  double f[3];
+  corner(ux, v.dims[0], i[0], f[0]);
+  corner(uy, v.dims[1], i[1], f[1]);
+  corner(uz, v.dims[2], i[2], f[2]);
+  g[0] = g[1] = g[2] = 0;
+  for (int c = 0; c < 8; ++c) {
+    const int d[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
+    double w = 1;
+    int at[3];
+    for (int a = 0; a < 3; ++a) {
+      w *= d[a] ? f[a] : 1 - f[a];
+      at[a] = std::min(i[a] + d[a], v.dims[a] - 1);
+    }
+    for (int a = 0; a < 3; ++a) g[a] += w * voxelGradient(v, at[0], at[1], at[2], a);
+  }
+}
+
+GradientVolume::GradientVolume(const Volume& v) : q(4 * v.voxelCount() + 4, 0) {
+  auto fill = [&](long long z0, long long z1) {
+    for (int z = (int)z0; z < (int)z1; ++z)
+      for (int y = 0; y < v.dims[1]; ++y)
+        for (int x = 0; x < v.dims[0]; ++x) {
+          int16_t* out = &q[4 * v.index(x, y, z)];
+          for (int a = 0; a < 3; ++a)
+            out[a] = (int16_t)std::lround(std::clamp(voxelGradient(v, x, y, z, a), -1.0, 1.0) * kScale);
+        }
+  };
+  const bool big = v.dims[2] >= 4 && v.voxelCount() >= (1u << 18);  // threads cost more than small volumes
+  parallelRanges(v.dims[2], big ? 2 : 1, fill);
+}
+
+ShadeParams shadeParams(const Shading& s, const Vec3& light, const std::array<double, 3>& cell) {
+  ShadeParams p;
+  p.ambient = s.ambient, p.diffuse = s.diffuse, p.specular = s.specular, p.shininess = s.shininess;
+  p.light = {light[0], light[1], light[2]};
+  normalize(p.light.data());
+  p.cell = cell;
+  return p;
+}
+
+RayLight rayLight(const ShadeParams& p, const std::array<double, 3>& du) {
+  RayLight r;
+  double eye[3];  // towards the eye, world
+  for (int a = 0; a < 3; ++a) eye[a] = -du[a] * p.cell[a];
+  normalize(eye);
+  const bool headlight = p.light[0] == 0 && p.light[1] == 0 && p.light[2] == 0;
+  for (int a = 0; a < 3; ++a) {
+    r.inv_cell[a] = 1 / p.cell[a];
+    r.l[a] = headlight ? eye[a] : p.light[a];
+    r.h[a] = r.l[a] + eye[a];
+  }
+  normalize(r.h);  // zero if the light is exactly behind the volume: no highlight
+  return r;
+}
+
+}  // namespace tessera::renderer
