@@ -48,7 +48,8 @@ struct Consts {
   const int16_t* grad;
   int gdims[2];           // held voxels per row / per column
   int gstride[3];         // int16s to the next voxel on each axis (0 on a one-voxel axis)
-  float ka, kd, ks, shininess;
+  float ka, kd, ks;
+  const float* highlight;  // HighlightTable
   float inv_cell[3], light[3], half[3];
 };
 
@@ -264,7 +265,8 @@ struct RayState {
     c.gstride[0] = v.dims[0] > 1 ? 4 : 0;
     c.gstride[1] = v.dims[1] > 1 ? 4 * v.dims[0] : 0;
     c.gstride[2] = v.dims[2] > 1 ? 4 * v.dims[0] * v.dims[1] : 0;
-    c.ka = (float)p.ambient, c.kd = (float)p.diffuse, c.ks = (float)p.specular, c.shininess = (float)p.shininess;
+    c.ka = (float)p.ambient, c.kd = (float)p.diffuse, c.ks = (float)p.specular;
+    c.highlight = ctx.highlight->values.data();
     const RayLight r = rayLight(p, span.du);
     for (int a = 0; a < 3; ++a)
       c.inv_cell[a] = (float)r.inv_cell[a], c.light[a] = (float)r.l[a], c.half[a] = (float)r.h[a];

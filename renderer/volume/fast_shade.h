@@ -16,7 +16,12 @@ inline void shadeFactors(const Consts& c, const float g[3], float& scale, float&
     }
     const float inv_len = 1.0f / std::sqrt(len2);
     diffuse = std::fabs(nl) * inv_len;
-    if (c.ks > 0) highlight = std::pow(std::min(1.0f, std::fabs(nh) * inv_len), c.shininess);
+    if (c.ks > 0) {
+      constexpr int last = HighlightTable::kEntries - 1;
+      const float t = std::min(1.0f, std::fabs(nh) * inv_len) * (float)last;
+      const int j = std::min((int)t, last - 1);
+      highlight = std::fma(t - (float)j, c.highlight[j + 1] - c.highlight[j], c.highlight[j]);
+    }
   }
   scale = std::fma(c.kd, diffuse, c.ka);  // colour * scale + highlight, premultiplied by alpha
   add = c.ks * highlight;

@@ -54,17 +54,30 @@ void sampleGradient(const Volume& v, double ux, double uy, double uz, double g[3
 }
 
 GradientVolume::GradientVolume(const Volume& v) : q(4 * v.voxelCount() + 4, 0) {
+  const int nx = v.dims[0], ny = v.dims[1], nz = v.dims[2];
+  // Row by row: the neighbours on y and z are whole rows, chosen once per row.
+  auto quantize = [](float g) { return (int16_t)std::lround(std::clamp(g, -1.0f, 1.0f) * kScale); };
   auto fill = [&](long long z0, long long z1) {
     for (int z = (int)z0; z < (int)z1; ++z)
-      for (int y = 0; y < v.dims[1]; ++y)
-        for (int x = 0; x < v.dims[0]; ++x) {
-          int16_t* out = &q[4 * v.index(x, y, z)];
-          for (int a = 0; a < 3; ++a)
-            out[a] = (int16_t)std::lround(std::clamp(voxelGradient(v, x, y, z, a), -1.0, 1.0) * kScale);
+      for (int y = 0; y < ny; ++y) {
+        const int y0 = std::max(0, y - 1), y1 = std::min(ny - 1, y + 1);
+        const int zl = std::max(0, z - 1), zh = std::min(nz - 1, z + 1);
+        const float* row = &v.values[v.index(0, y, z)];
+        const float *ylo = &v.values[v.index(0, y0, z)], *yhi = &v.values[v.index(0, y1, z)];
+        const float *zlo = &v.values[v.index(0, y, zl)], *zhi = &v.values[v.index(0, y, zh)];
+        const float dy = y1 > y0 ? 1.0f / (float)(y1 - y0) : 0.0f, dz = zh > zl ? 1.0f / (float)(zh - zl) : 0.0f;
+        int16_t* out = &q[4 * v.index(0, y, z)];
+        for (int x = 0; x < nx; ++x, out += 4) {
+          const int x0 = std::max(0, x - 1), x1 = std::min(nx - 1, x + 1);
+          const float dx = x1 > x0 ? 1.0f / (float)(x1 - x0) : 0.0f;
+          out[0] = quantize((row[x1] - row[x0]) * dx);
+          out[1] = quantize((yhi[x] - ylo[x]) * dy);
+          out[2] = quantize((zhi[x] - zlo[x]) * dz);
         }
+      }
   };
-  const bool big = v.dims[2] >= 4 && v.voxelCount() >= (1u << 18);  // threads cost more than small volumes
-  parallelRanges(v.dims[2], big ? 2 : 1, fill);
+  const bool big = nz >= 4 && v.voxelCount() >= (1u << 18);  // threads cost more than small volumes
+  parallelRanges(nz, big ? 2 : 1, fill);
 }
 
 ShadeParams shadeParams(const Shading& s, const Vec3& light, const std::array<double, 3>& cell) {
@@ -89,6 +102,11 @@ RayLight rayLight(const ShadeParams& p, const std::array<double, 3>& du) {
   }
   normalize(r.h);  // zero if the light is exactly behind the volume: no highlight
   return r;
+}
+
+HighlightTable::HighlightTable(double shininess) : values(kEntries + 1) {
+  for (int j = 0; j < kEntries; ++j) values[j] = (float)std::pow((double)j / (kEntries - 1), shininess);
+  values[kEntries] = 1;
 }
 
 }  // namespace tessera::renderer

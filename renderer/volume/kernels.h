@@ -27,6 +27,7 @@ struct FastContext {
   float early_termination = 2.0f;                        // > 1: never
   const ShadeParams* shade = nullptr;                     // null: unlit
   const GradientVolume* gradients = nullptr;              // of `volume`, with `shade`
+  const HighlightTable* highlight = nullptr;              // of shade->shininess, with `shade`
 };
 
 // Samples span.k_first..k_end-1; out receives premultiplied RGBA. Returns true if the ray

@@ -261,10 +261,12 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   std::optional<ShadeParams> shade;
   if (impl_->shading.on) shade = shadeParams(impl_->shading, impl_->light, geom.cell);
   std::optional<TfTable> table;
+  std::optional<HighlightTable> highlight;
   FastContext fast;
   if (!q.reference) {
     fast.shade = shade ? &*shade : nullptr;
     fast.gradients = impl_->gradients.get();
+    if (shade) fast.highlight = &highlight.emplace(shade->shininess);
     table.emplace(impl_->tf, q.step);
     fast.volume = &v;
     fast.accel = impl_->accel.get();
