@@ -17,7 +17,7 @@ PKGS=(
   libpng-dev libsdl2-dev nlohmann-json3-dev libfftw3-dev zlib1g-dev libnifti2-dev
   libgtest-dev libgmock-dev libbenchmark-dev libteem-dev
 )
-# optional: python3-vtk9 for tests/bench/vtk_compare.py
+# optional: python3-vtk9 python3-yaml for tests/bench/vtk_compare.py
 # Tests, fuzzing, benchmarks' plots, the window test under Xvfb, compose validation.
 [ "${TESSERA_MINIMAL:-0}" = 1 ] || PKGS+=(gnuplot-nox xvfb x11-apps imagemagick clang docker-compose procps iproute2)
 missing=()

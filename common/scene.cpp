@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <initializer_list>
+#include <tuple>
 
 namespace tessera {
 
@@ -330,34 +331,19 @@ Antialiasing Parser::antialiasing(const YAML::Node& n) const {
 // lit colour stays within what the transfer function can give (shininess 1..128 as OpenGL's).
 Shading Parser::shading(const YAML::Node& n) const {
   Shading sh;
-  if (n.IsScalar()) {
-    sh.on = boolean(n, "shading");
-    return sh;
-  }
+  sh.on = n.IsScalar() ? boolean(n, "shading") : true;
+  if (n.IsScalar()) return sh;
   checkKeys(n, "shading", {"ambient", "diffuse", "specular", "shininess"});
-  sh.on = true;
-  const std::pair<const char*, double*> coefficients[] = {
-      {"ambient", &sh.ambient}, {"diffuse", &sh.diffuse}, {"specular", &sh.specular}};
-  for (const auto& [key, value] : coefficients) {
-    if (!n[key]) continue;
-    *value = number(n[key], std::string("shading.") + key);
-    if (!(*value >= 0 && *value <= 1)) fail(std::string("shading.") + key, "must be in [0, 1]");
-  }
-  if (n["shininess"]) {
-    sh.shininess = number(n["shininess"], "shading.shininess");
-    if (!(sh.shininess >= 1 && sh.shininess <= 128)) fail("shading.shininess", "must be in [1, 128]");
+  const std::tuple<const char*, double*, int, int> keys[] = {
+      {"ambient", &sh.ambient, 0, 1}, {"diffuse", &sh.diffuse, 0, 1}, {"specular", &sh.specular, 0, 1},
+      {"shininess", &sh.shininess, 1, 128}};
+  for (const auto& [key, value, lo, hi] : keys) {
+    const std::string path = std::string("shading.") + key;
+    if (n[key]) *value = number(n[key], path);
+    if (!(*value >= lo && *value <= hi))
+      fail(path, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
   }
   return sh;
-}
-
-// The half extents of the scene's box, from the volume's dims and spacing (no voxel read).
-Vec3 sceneHalfExtent(const Scene& s) {
-  if (!s.has_volume || s.mesh) return {0.5, 0.5, 0.5};
-  Volume shape;
-  shape.dims = volumeDims(s);
-  const auto* raw = std::get_if<RawVolumeSpec>(&s.volume);
-  shape.spacing = raw ? raw->spacing : std::get<GeneratorSpec>(s.volume).spacing;
-  return shape.halfExtent();
 }
 
 }  // namespace
@@ -390,10 +376,8 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
     if (!(length(s.light) > 0)) p.fail("light", "must be non-zero (leave it out for a headlight)");
   }
   if (root["antialiasing"]) s.antialiasing = p.antialiasing(root["antialiasing"]);
-  if (root["shading"]) {
-    if (is_mesh) p.fail("shading", "shades volume samples; a mesh is lit by `light` alone");
-    s.shading = p.shading(root["shading"]);
-  }
+  if (root["shading"] && is_mesh) p.fail("shading", "shades volume samples; a mesh is lit by `light` alone");
+  if (root["shading"]) s.shading = p.shading(root["shading"]);
   // Left out: fitted to the volume's box (a mesh is fitted to the unit box).
   s.camera = root["camera"] ? p.camera(root["camera"]) : fittedCamera(sceneHalfExtent(s));
   if (root["image"]) {

@@ -91,5 +91,8 @@ Volume loadVolume(const Scene& scene);
 Volume loadVolume(const Scene& scene, const VoxelBox& box);
 // The volume's dims from the scene alone (no voxel read).
 std::array<int, 3> volumeDims(const Scene& scene);
+// Half extents of the scene's box from the volume's dims and spacing (no voxel read); a mesh
+// scene's unit box.
+Vec3 sceneHalfExtent(const Scene& s);
 
 }  // namespace tessera

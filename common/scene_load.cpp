@@ -18,6 +18,15 @@ Scene loadScene(const std::string& path) {
   return s;
 }
 
+Vec3 sceneHalfExtent(const Scene& s) {
+  if (!s.has_volume || s.mesh) return {0.5, 0.5, 0.5};
+  Volume shape;
+  shape.dims = volumeDims(s);
+  const auto* raw = std::get_if<RawVolumeSpec>(&s.volume);
+  shape.spacing = raw ? raw->spacing : std::get<GeneratorSpec>(s.volume).spacing;
+  return shape.halfExtent();
+}
+
 Scene defaultScene() {
   Scene s;
   s.path = "";

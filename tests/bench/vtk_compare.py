@@ -1,18 +1,22 @@
 #!/usr/bin/python3
 """Tessera's one-process CPU ray caster against VTK 9's vtkFixedPointVolumeRayCastMapper.
 
-Same case on both sides: the generated volume (default 256^3 hollow shell, dumped exactly by
-tessera-dump-volume), Tessera's default-scene transfer function and camera, a 1024x1024 image,
-a one-voxel step (Tessera's L0 = 1/256 of the unit box = one voxel), 2 threads, no shading.
+Same case on both sides: a scene with a generated volume (default: the built-in hollow shell;
+--scene takes any scene file whose volume is a cubic generator, with its transfer function,
+camera, shading and light), the volume dumped exactly by tessera-dump-volume, a 1024x1024
+image, a one-voxel step (Tessera's L0 = 1/256 of the unit box = one voxel), 2 threads.
+Shading maps to VTK's ShadeOn with the same ambient/diffuse/specular/specular power, under
+VTK's headlight or, for a scene `light`, one directional scene light from that direction.
 Each round runs, back to back: VTK (a fresh process: warm-up render, then --frames timed
 renders), tessera-render with empty-space skipping, tessera-render with --no-skip. A round's
 figure is each side's best frame (wall) and CPU ms per frame (all threads; Tessera's from the
 CPU difference between a run of frames+1 and a run of 1 frame); the summary gives min and
 median over rounds.
 
-Needs Debian's python3-vtk9 and python3-numpy (use /usr/bin/python3, not a pyenv one) and an
+Needs Debian's python3-vtk9, python3-numpy and python3-yaml (use /usr/bin/python3, not a pyenv one) and an
 X display for VTK's offscreen window (re-runs itself under xvfb-run when DISPLAY is unset).
-Usage: tests/bench/vtk_compare.py [--build-dir build-h7] [--rounds 5] [--frames 5]
+Usage: tests/bench/vtk_compare.py [--build-dir build] [--scene scenes/shaded-lobb.yaml] [--no-shading]
+                                  [--rounds 5] [--frames 5]
 """
 import argparse
 import json
@@ -28,13 +32,48 @@ import time
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 # Tessera's defaultScene() (common/scene.cpp): scalar, r, g, b, alpha per L0 = 1/256.
-TF = [(0.00, 0.0, 0.0, 0.0, 0.0),
+DEFAULT_TF = [(0.00, 0.0, 0.0, 0.0, 0.0),
       (0.05, 1.0, 0.45, 0.1, 0.0),
       (0.50, 1.0, 0.55, 0.15, 0.06),
       (0.70, 1.0, 0.8, 0.5, 0.2),
       (1.00, 1.0, 1.0, 0.9, 0.9)]
 L0 = 1.0 / 256  # Tessera's reference length and default step (common/transfer_function.h)
-EYE, TARGET, UP, FOV = (0.0, 0.6, 2.2), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 30.0
+DEFAULT_CAMERA = {"eye": [0.0, 0.6, 2.2], "target": [0.0, 0.0, 0.0], "up": [0.0, 1.0, 0.0], "fov": 30.0}
+SHADING_DEFAULTS = {"ambient": 0.1, "diffuse": 0.7, "specular": 0.2, "shininess": 10}  # VTK's, as Tessera's
+
+
+def load_case(args):
+    """The compared case: generator, transfer function, camera, shading and light, from
+    --scene (a generator scene file) or the built-in default scene."""
+    case = {"generator": args.generator, "volume_size": args.volume_size, "tf": DEFAULT_TF,
+            "camera": DEFAULT_CAMERA, "shading": None, "light": None}
+    if not args.scene:
+        return case
+    import yaml
+    with open(args.scene) as f:
+        sc = yaml.safe_load(f)
+    gen = (sc.get("volume") or {}).get("generator")
+    if not gen or "spacing" in gen:
+        sys.exit(f"vtk_compare: {args.scene}: needs a volume generator with unit spacing (a cube)")
+    case["generator"] = gen["name"]
+    if args.volume_size_given is None:
+        case["volume_size"] = gen.get("size", 256)
+    tf = sc.get("transfer_function")
+    if tf is not None:
+        if not isinstance(tf, list):
+            sys.exit(f"vtk_compare: {args.scene}: give the transfer function as points, not a preset")
+        case["tf"] = [tuple(p) for p in tf]
+    cam = sc.get("camera")
+    if cam:
+        if cam.get("orthographic"):
+            sys.exit(f"vtk_compare: {args.scene}: perspective cameras only")
+        case["camera"] = {"eye": cam["eye"], "target": cam["target"], "up": cam.get("up", [0, 1, 0]),
+                          "fov": cam.get("fov", 30)}
+    sh = sc.get("shading")
+    if sh and not args.no_shading:
+        case["shading"] = dict(SHADING_DEFAULTS, **(sh if isinstance(sh, dict) else {}))
+    case["light"] = sc.get("light")
+    return case
 
 
 def require_modules():
@@ -52,7 +91,9 @@ def vtk_worker(args):
     import vtk
     from vtk.util import numpy_support
 
-    n = args.volume_size
+    with open(args.case) as f:
+        case = json.load(f)
+    n = case["volume_size"]
     vol = np.fromfile(args.raw, dtype="<f4")
     if vol.size != n ** 3:
         sys.exit(f"vtk_compare: {args.raw} has {vol.size} values, expected {n}^3")
@@ -72,7 +113,7 @@ def vtk_worker(args):
 
     color = vtk.vtkColorTransferFunction()
     opacity = vtk.vtkPiecewiseFunction()
-    for s, r, g, b, a in TF:
+    for s, r, g, b, a in case["tf"]:
         color.AddRGBPoint(s, r, g, b)
         opacity.AddPoint(s, a)
     prop = vtk.vtkVolumeProperty()
@@ -80,7 +121,15 @@ def vtk_worker(args):
     prop.SetScalarOpacity(opacity)
     prop.SetScalarOpacityUnitDistance(L0)  # alpha per L0, as Tessera's (one voxel at 256^3)
     prop.SetInterpolationTypeToLinear()   # Tessera: trilinear, post-classification
-    prop.ShadeOff()                       # Tessera: emission-absorption, no shading
+    sh = case["shading"]
+    if sh:  # Tessera's shading: the same coefficients (VTK lights two-sided by default)
+        prop.ShadeOn()
+        prop.SetAmbient(sh["ambient"])
+        prop.SetDiffuse(sh["diffuse"])
+        prop.SetSpecular(sh["specular"])
+        prop.SetSpecularPower(sh["shininess"])
+    else:
+        prop.ShadeOff()                   # Tessera: emission-absorption, no shading
 
     mapper = vtk.vtkFixedPointVolumeRayCastMapper()
     mapper.SetInputData(img)
@@ -97,12 +146,20 @@ def vtk_worker(args):
     ren = vtk.vtkRenderer()
     ren.SetBackground(0, 0, 0)
     ren.AddVolume(volume)
+    if case["light"]:  # else VTK's automatic headlight, as Tessera's
+        light = vtk.vtkLight()
+        light.SetLightTypeToSceneLight()
+        light.SetPositional(False)
+        light.SetPosition(*case["light"])
+        light.SetFocalPoint(0, 0, 0)
+        ren.AddLight(light)
+    c = case["camera"]
     cam = ren.GetActiveCamera()
     cam.ParallelProjectionOff()
-    cam.SetPosition(*EYE)
-    cam.SetFocalPoint(*TARGET)
-    cam.SetViewUp(*UP)
-    cam.SetViewAngle(FOV)  # vertical, like Tessera's fov
+    cam.SetPosition(*c["eye"])
+    cam.SetFocalPoint(*c["target"])
+    cam.SetViewUp(*c["up"])
+    cam.SetViewAngle(c["fov"])  # vertical, like Tessera's fov
     cam.SetClippingRange(0.05, 10.0)
     win = vtk.vtkRenderWindow()
     win.SetOffScreenRendering(1)
@@ -135,13 +192,19 @@ def vtk_worker(args):
                       "warm_ms": warm_ms, "wall_ms": wall, "cpu_ms": cpu, "mapper_ms": mapper_ms}))
 
 
-def scene_yaml(args):
-    """A scene file equal to the default scene but for the volume generator and size."""
-    rows = "\n".join(f"  - [{s}, {r}, {g}, {b}, {a}]" for s, r, g, b, a in TF)
-    return (f"volume:\n  generator: {{name: {args.generator}, size: {args.volume_size}, seed: 1}}\n"
+def scene_yaml(case, size):
+    """The case as a Tessera scene file."""
+    rows = "\n".join(f"  - [{s}, {r}, {g}, {b}, {a}]" for s, r, g, b, a in case["tf"])
+    c, sh = case["camera"], case["shading"]
+    text = (f"volume:\n  generator: {{name: {case['generator']}, size: {case['volume_size']}, seed: 1}}\n"
             f"transfer_function:\n{rows}\n"
-            f"camera: {{eye: {list(EYE)}, target: {list(TARGET)}, up: {list(UP)}, fov: {FOV}}}\n"
-            f"image: [{args.size}, {args.size}]\nquality: default\n")
+            f"camera: {{eye: {list(c['eye'])}, target: {list(c['target'])}, up: {list(c['up'])}, fov: {c['fov']}}}\n"
+            f"image: [{size}, {size}]\nquality: default\n")
+    if sh:
+        text += "shading: {" + ", ".join(f"{k}: {v}" for k, v in sh.items()) + "}\n"
+    if case["light"]:
+        text += f"light: {list(case['light'])}\n"
+    return text
 
 
 def children_cpu_s():
@@ -173,9 +236,9 @@ def tessera_frame(args, tool, scene, png, no_skip):
     return wall, (cpu_n - cpu_1) / args.frames * 1e3, cmd
 
 
-def run_vtk(args, raw, png):
-    cmd = [sys.executable, os.path.abspath(__file__), "--vtk-worker", "--raw", raw,
-           "--volume-size", str(args.volume_size), "--image", str(args.size),
+def run_vtk(args, raw, case_json, png):
+    cmd = [sys.executable, os.path.abspath(__file__), "--vtk-worker", "--raw", raw, "--case", case_json,
+           "--image", str(args.size),
            "--frames", str(args.frames), "--threads", str(args.threads)]
     if png:
         cmd += ["--png", png]
@@ -209,6 +272,7 @@ def compare_images(a_png, b_png):
             "mean_rgb_b": b.reshape(-1, 3).mean(0).round(2).tolist(),
             "mean_abs": round(float(d.mean()), 3), "max_abs": int(d.max()),
             "rmse": round(float(np.sqrt((d ** 2).mean())), 3),
+            "psnr_db": round(float(20 * np.log10(255 / max(np.sqrt((d ** 2).mean()), 1e-9))), 2),
             "px_over_8": round(float((d.max(axis=2) > 8).mean()) * 100, 3),
             "footprint_a": footprint(a), "footprint_b": footprint(b)}
 
@@ -224,14 +288,18 @@ def main():
     p.add_argument("--frames", type=int, default=5, help="timed frames per process (VTK: after a warm-up)")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--image", dest="size", type=int, default=1024, help="image edge in pixels (N: NxN)")
-    p.add_argument("--generator", default="hollow-shell", help="hollow-shell | marschner-lobb | noise-cloud")
-    p.add_argument("--volume-size", type=int, default=256)
+    p.add_argument("--scene", help="a scene file with a cubic volume generator (default: the built-in scene)")
+    p.add_argument("--no-shading", action="store_true", help="leave out the scene's shading")
+    p.add_argument("--generator", default="hollow-shell", help="without --scene: hollow-shell | marschner-lobb | noise-cloud")
+    p.add_argument("--volume-size", dest="volume_size_given", type=int, help="volume edge (default: the scene's, 256)")
     p.add_argument("--out-dir", default=os.path.join(REPO, "docs"), help="where the two PNGs go")
     p.add_argument("--prefix", default="vtk-compare", help="PNG names: <prefix>-vtk.png, <prefix>-tessera.png")
     p.add_argument("--vtk-worker", action="store_true", help=argparse.SUPPRESS)
     p.add_argument("--raw", help=argparse.SUPPRESS)
     p.add_argument("--png", help=argparse.SUPPRESS)
+    p.add_argument("--case", help=argparse.SUPPRESS)
     args = p.parse_args()
+    args.volume_size = args.volume_size_given or 256
     require_modules()
     if args.vtk_worker:
         return vtk_worker(args)
@@ -251,21 +319,24 @@ def main():
     vtk_png = os.path.join(args.out_dir, f"{args.prefix}-vtk.png")
     tes_png = os.path.join(args.out_dir, f"{args.prefix}-tessera.png")
 
+    case = load_case(args)
     with tempfile.TemporaryDirectory(prefix="vtk_compare_") as tmp:
         raw = os.path.join(tmp, "volume.raw")
-        subprocess.run([dump, args.generator, str(args.volume_size), "1", raw], check=True, capture_output=True)
-        scene = None
-        if (args.generator, args.volume_size, args.size) != ("hollow-shell", 256, 1024):
-            scene = os.path.join(tmp, "scene.yaml")
-            with open(scene, "w") as f:
-                f.write(scene_yaml(args))
-        print(f"case: {args.generator} {args.volume_size}^3, {args.size}x{args.size}, one-voxel step, "
+        subprocess.run([dump, case["generator"], str(case["volume_size"]), "1", raw], check=True, capture_output=True)
+        scene, case_json = os.path.join(tmp, "scene.yaml"), os.path.join(tmp, "case.json")
+        with open(scene, "w") as f:
+            f.write(scene_yaml(case, args.size))
+        with open(case_json, "w") as f:
+            json.dump(case, f)
+        shading = "shading " + json.dumps(case["shading"]) if case["shading"] else "no shading"
+        print(f"case: {args.scene or 'built-in scene'}: {case['generator']} {case['volume_size']}^3, {shading}, "
+              f"light {case['light'] or 'headlight'}, {args.size}x{args.size}, one-voxel step, "
               f"{args.threads} threads; {args.rounds} rounds of (VTK, Tessera skip, Tessera no-skip), "
               f"best of {args.frames} frames each", flush=True)
         rows = []
         for r in range(args.rounds):
             last = r == args.rounds - 1
-            v = run_vtk(args, raw, vtk_png if last else None)
+            v = run_vtk(args, raw, case_json, vtk_png if last else None)
             t_skip, c_skip, cmd_skip = tessera_frame(args, render, scene, tes_png, False)
             t_noskip, c_noskip, cmd_noskip = tessera_frame(args, render, scene, os.path.join(tmp, "noskip.png"), True)
             row = {"vtk": min(v["wall_ms"]), "vtk_median_frame": statistics.median(v["wall_ms"]),
