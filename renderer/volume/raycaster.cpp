@@ -135,6 +135,16 @@ DepthBounds depthBounds(const RayGenerator& gen, const VolumeGeometry& g, const 
   return d;
 }
 
+// The part of `brick` inside `box` (empty, lo == hi, on an axis where they do not meet).
+Brick clippedTo(const Brick& brick, const Brick& box) {
+  Brick clip;
+  for (int a = 0; a < 3; ++a) {
+    clip.lo[a] = std::max(brick.lo[a], box.lo[a]);
+    clip.hi[a] = std::max(clip.lo[a], std::min(brick.hi[a], box.hi[a]));
+  }
+  return clip;
+}
+
 // What every worker of one render call reads (nothing here changes while they run).
 struct FrameRays {
   const Volume& volume;
@@ -279,14 +289,7 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   // With skipping, rays are cut to the box that can be non-empty (same sample grid, so the
   // image is unchanged); samples outside it count as skipped.
   const bool clipping = !q.reference && q.skip_empty;
-  Brick clip = brick;
-  if (clipping) {
-    const Brick& ne = impl_->nonempty;
-    for (int a = 0; a < 3; ++a) {
-      clip.lo[a] = std::max(brick.lo[a], ne.lo[a]);
-      clip.hi[a] = std::max(clip.lo[a], std::min(brick.hi[a], ne.hi[a]));
-    }
-  }
+  const Brick clip = clipping ? clippedTo(brick, impl_->nonempty) : brick;
 
   // Perspective rays with skipping: per-cell depth bounds of the non-empty nodes.
   std::optional<DepthBounds> depth;
