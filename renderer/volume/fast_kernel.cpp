@@ -76,7 +76,10 @@ constexpr CompressTable kCompress;
 // Classified samples of a chunk, in ray order: table index, interpolation weight and the
 // sample's offset in the chunk; only samples that may have alpha > 0 are listed.
 struct Classified {
-  static constexpr int kChunk = 64;  // samples per chunk (a multiple of kLanes)
+  // Samples per chunk (a multiple of kLanes). Opaque rays end a few samples in, and a chunk is
+  // classified whole first: 32 rather than 64 made an opaque Marschner-Lobb frame ~15% faster
+  // at an unchanged hollow-shell time; 16 cost the shell (AMD EPYC, AVX2, 1024^2, 2 threads).
+  static constexpr int kChunk = 32;
   alignas(32) int32_t ti[kChunk + kLanes];
   alignas(32) float w[kChunk + kLanes];
   alignas(32) int32_t off[kChunk + kLanes];
