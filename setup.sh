@@ -7,7 +7,9 @@
 #                       the unit tests again under ASan + UBSan)
 # TESSERA_MINIMAL=1 installs only what building and running need (the Docker image).
 set -euo pipefail
+CALLER_DIR=$PWD  # `run` starts the farm from here: TESSERA_SCENE/TESSERA_OUT are the user's paths
 cd "$(dirname "$0")"
+REPO=$PWD
 SUDO=""
 [ "$(id -u)" -eq 0 ] || SUDO="sudo"
 PKGS=(
@@ -39,8 +41,10 @@ case "$mode" in
   build) echo "built: $BUILD/bin" ;;
   run)
     shift || true
-    echo "running the farm on the built-in scene; frames go to out/ (a window opens if DISPLAY is set)"
-    exec "$BUILD/bin/tessera-up" compose.yaml "$@"
+    echo "running the farm on ${TESSERA_SCENE:-the built-in scene} (a window opens if DISPLAY is set)"
+    case "$BUILD" in /*) bin=$BUILD/bin ;; *) bin=$REPO/$BUILD/bin ;; esac
+    cd "$CALLER_DIR"
+    exec "$bin/tessera-up" "$REPO/compose.yaml" "$@"
     ;;
   test)
     docker-compose -f compose.yaml config -q

@@ -49,7 +49,7 @@ class Stage {
       return 1;
     }
     spdlog::info("renderer rank={} joined backend={} simd={}", link_.rank(),
-                 caster_ ? backendName(opt_.backend) : "osmesa-mesh", isaName(cpuIsa()));
+                 scene_.mesh ? "osmesa-mesh" : backendName(opt_.backend), isaName(cpuIsa()));
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
       pollFor(items, 1, std::chrono::milliseconds(100));

@@ -17,6 +17,7 @@
 #include "common/net/log.h"
 #include "master/launcher/compose.h"
 #include "master/launcher/launcher.h"
+#include "master/launcher/output_lock.h"
 #include "master/launcher/settings.h"
 
 extern char** environ;
@@ -45,8 +46,8 @@ bool printPlan(const tessera::launcher::ComposeProject& project,
 }
 
 // Checks the user's TESSERA_* settings (--env, environment, the .env beside the file) and
-// puts absolute paths in their place; logs what it found.
-void checkUserSettings(const std::string& file, tessera::launcher::ComposeOptions& options,
+// puts absolute paths in their place; logs what it found. Returns the output folder.
+std::filesystem::path checkUserSettings(const std::string& file, tessera::launcher::ComposeOptions& options,
                        const std::shared_ptr<spdlog::logger>& log) {
   namespace launcher = tessera::launcher;
   std::map<std::string, std::string> dotenv;
@@ -72,8 +73,10 @@ void checkUserSettings(const std::string& file, tessera::launcher::ComposeOption
   for (const auto& w : checked.warnings) log->warn("{}", w);
   for (const auto& [k, v] : checked.overrides) options.overrides[k] = v;
   const auto out = lookup("TESSERA_OUT");
-  log->info("frames and metrics go to {}",
-            out && !out->empty() ? *out : (std::filesystem::absolute(file).parent_path() / "out").string());
+  const std::filesystem::path folder =
+      out && !out->empty() ? std::filesystem::path(*out) : std::filesystem::absolute(file).parent_path() / "out";
+  log->info("frames and metrics go to {}", folder.string());
+  return folder;
 }
 
 // 48 random bits as 12 hex digits: the run's identity (TESSERA_RUN).
@@ -123,7 +126,7 @@ int main(int argc, char** argv) {
       if (eq == 0 || eq == std::string::npos) throw std::runtime_error("--env " + kv + ": expected KEY=VALUE");
       options.overrides[kv.substr(0, eq)] = kv.substr(eq + 1);
     }
-    checkUserSettings(file, options, log);
+    const std::filesystem::path out_folder = checkUserSettings(file, options, log);
     // One identity per run: stages say it in their Hello and a master refuses another run's;
     // compose.yaml's default endpoints are a folder named after it, so two farms never meet.
     if (!options.overrides.count("TESSERA_RUN") && !std::getenv("TESSERA_RUN"))
@@ -140,6 +143,7 @@ int main(int argc, char** argv) {
     if (dry_run) {
       return printPlan(project, tessera::launcher::planProcesses(project, launch_options, true)) ? 0 : 1;
     }
+    const tessera::launcher::OutputLock out_lock(out_folder);  // one farm per output folder
     if (!folder.empty()) log->info("run {}: sockets in {}", run, folder.string());
     const int rc = tessera::launcher::launch(project, launch_options);
     std::error_code ignored;

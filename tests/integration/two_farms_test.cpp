@@ -73,6 +73,26 @@ TEST(TwoFarms, AFarmOnTheEndpointsOfALiveFarmRefusesToStartAndTheLiveOneGoesOn) 
   EXPECT_TRUE(left.empty()) << "left in the socket folder: " << left.size() << " entries, first " << left.front();
 }
 
+// Two farms writing one output folder would overwrite each other's frames and splice their
+// metrics.jsonl lines (seen by a new user): the second refuses, naming the folder and the first.
+TEST(TwoFarms, ASecondFarmOnTheSameOutputFolderRefusesAndTheFirstGoesOn) {
+  FarmDir a("out-a"), b("out-b");
+  const int frames = 30;
+  const auto scene = a.writeScene(frames, 40, 96, 80);
+  auto run_a = std::async(std::launch::async, [&] { return a.runFarm(scene, 2, 1, frames); });
+  // B starts once A is running (its first frame is out), on A's output folder.
+  for (int i = 0; i < 600 && !fs::exists(a.frame(0)); ++i) std::this_thread::sleep_for(50ms);
+  ASSERT_TRUE(fs::exists(a.frame(0))) << "farm A never rendered";
+  const auto rb = b.runFarm(scene, 1, 1, 2, 60, "--env TESSERA_OUT=" + (a.path() / "out").string());
+  EXPECT_NE(rb.exit_code, 0) << rb.output;
+  EXPECT_NE(rb.output.find("output folder " + (a.path() / "out").string() + " is in use by another farm (tessera-up pid "),
+            std::string::npos) << rb.output;
+  const auto ra = run_a.get();
+  ASSERT_EQ(ra.exit_code, 0) << ra.output;
+  expectFramesMatch(a, scene, frames);
+  EXPECT_FALSE(fs::exists(a.path() / "out" / ".tessera-farm")) << "farm A left its lock file";
+}
+
 TEST(TwoFarms, CtrlCLeavesNoSocketBehind) {
   FarmDir dir("ctrl-c");
   const auto scene = dir.writeScene(1, 24, 64, 48);
