@@ -1,6 +1,7 @@
 // Scene file parser (scenes/README.md): strict YAML with errors naming file and key path.
 #include "common/scene.h"
 
+#include "common/closest.h"
 #include "common/io/volume_files.h"
 
 #include <yaml-cpp/yaml.h>
@@ -42,9 +43,10 @@ class Parser {
       bool ok = false;
       for (const char* a : allowed) ok = ok || k == a;
       if (!ok) {
-        std::string list;
+        const std::vector<std::string> names(allowed.begin(), allowed.end());
+        std::string list, near = closestName(k, names);
         for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-        fail(join(path, k), "unknown key (allowed: " + list + ")");
+        fail(join(path, k), "unknown key" + (near.empty() ? "" : "; did you mean " + near + "?") + " (allowed: " + list + ")");
       }
     }
   }

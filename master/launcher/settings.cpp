@@ -4,6 +4,7 @@
 #include <charconv>
 #include <optional>
 
+#include "common/closest.h"
 #include "master/launcher/launcher.h"
 
 namespace tessera::launcher {
@@ -16,6 +17,7 @@ struct Setting {
   Kind kind;
   long long min = 0, max = 0;  // Int
   const char* words = "";      // Word: accepted values separated by '|'
+  const char* meaning = "";    // said after a refused value, so the user knows what to give
 };
 
 // Every TESSERA_* variable the farm, its scripts and its tests read.
@@ -24,9 +26,10 @@ const Setting kSettings[] = {
     {"TESSERA_OUT", Kind::Path},
     {"TESSERA_KEYS", Kind::Path},
     {"TESSERA_METRICS", Kind::Path},
-    {"TESSERA_RENDERERS", Kind::Int, 1, 1024},
-    {"TESSERA_COMPOSITORS", Kind::Int, 1, 256},
-    {"TESSERA_FRAMES", Kind::Int, -1, 100000000},
+    {"TESSERA_RENDERERS", Kind::Int, 1, 1024, "", "renderer processes"},
+    {"TESSERA_COMPOSITORS", Kind::Int, 1, 256, "", "compositor processes"},
+    {"TESSERA_FRAMES", Kind::Int, -1, 100000000, "",
+     "frames to render; -1: the scene's orbit, 0: interactive until the window closes or Ctrl-C"},
     {"TESSERA_IN_FLIGHT", Kind::Int, 1, 64},
     {"TESSERA_TILES_PER_RENDERER", Kind::Int, 1, 64},
     {"TESSERA_THREADS", Kind::Int, 0, 1024},
@@ -53,20 +56,6 @@ const Setting kSettings[] = {
     {"TESSERA_KEEP_TEST_DIRS", Kind::Free},
 };
 
-size_t editDistance(const std::string& a, const std::string& b) {
-  std::vector<size_t> row(b.size() + 1);
-  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (size_t i = 1; i <= a.size(); ++i) {
-    size_t diagonal = row[0];
-    row[0] = i;
-    for (size_t j = 1; j <= b.size(); ++j) {
-      const size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diagonal = up;
-    }
-  }
-  return row[b.size()];
-}
 
 bool isWord(const std::string& value, const std::string& words) {
   size_t start = 0;
@@ -80,7 +69,9 @@ bool isWord(const std::string& value, const std::string& words) {
 
 std::string describe(const Setting& s) {
   switch (s.kind) {
-    case Kind::Int: return "a whole number from " + std::to_string(s.min) + " to " + std::to_string(s.max);
+    case Kind::Int:
+      return "a whole number from " + std::to_string(s.min) + " to " + std::to_string(s.max) +
+             (*s.meaning ? std::string(" (") + s.meaning + ")" : "");
     case Kind::Word: {
       std::string w = s.words;
       std::replace(w.begin(), w.end(), '|', ',');
@@ -105,13 +96,9 @@ std::string problem(const Setting& s, const std::string& value) {
 }  // namespace
 
 std::string closestSetting(const std::string& name) {
-  std::string best;
-  size_t best_d = 4;
-  for (const Setting& s : kSettings) {
-    const size_t d = editDistance(name, s.name);
-    if (d < best_d) best_d = d, best = s.name;
-  }
-  return best;
+  std::vector<std::string> names;
+  for (const Setting& s : kSettings) names.push_back(s.name);
+  return closestName(name, names);
 }
 
 CheckedSettings checkSettings(const std::vector<std::string>& names, const VariableLookup& lookup,

@@ -354,3 +354,10 @@ TEST(Scene, ShadingOnOffOrCoefficients) {
   EXPECT_ERROR(std::string(kGood) + "shading: {glossy: 1}\n", "shading.glossy: unknown key");
   EXPECT_ERROR(std::string(kGood) + "shading: lots\n", "shading: expected true or false, got 'lots'");
 }
+
+TEST(Scene, AMisspeltKeyGetsTheNearestKnownOne) {
+  std::string misspelt = kGood;
+  misspelt.replace(misspelt.find("transfer_function"), 17, "tranfer_function");
+  EXPECT_ERROR(misspelt, "tranfer_function: unknown key; did you mean transfer_function? (allowed: ");
+  EXPECT_ERROR(std::string(kGood) + "colour: red\n", "colour: unknown key (allowed: ");  // nothing near
+}

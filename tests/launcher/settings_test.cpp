@@ -34,8 +34,8 @@ std::string errorOf(const std::map<std::string, std::string>& vars) {
 }
 
 TEST(Settings, ErrorsNameTheVariableAndTheValueTyped) {
-  EXPECT_EQ(errorOf({{"TESSERA_RENDERERS", "0"}}), "TESSERA_RENDERERS=0: expected a whole number from 1 to 1024");
-  EXPECT_EQ(errorOf({{"TESSERA_FRAMES", "-5"}}), "TESSERA_FRAMES=-5: expected a whole number from -1 to 100000000");
+  EXPECT_EQ(errorOf({{"TESSERA_RENDERERS", "0"}}), "TESSERA_RENDERERS=0: expected a whole number from 1 to 1024 (renderer processes)");
+  EXPECT_EQ(errorOf({{"TESSERA_FRAMES", "-5"}}), "TESSERA_FRAMES=-5: expected a whole number from -1 to 100000000 (frames to render; -1: the scene's orbit, 0: interactive until the window closes or Ctrl-C)");
   EXPECT_EQ(errorOf({{"TESSERA_IN_FLIGHT", "3x"}}), "TESSERA_IN_FLIGHT=3x: expected a whole number from 1 to 64");
   EXPECT_EQ(errorOf({{"TESSERA_CODEC", "gzip"}}), "TESSERA_CODEC=gzip: expected one of none,lzo,lz4,zstd");
   EXPECT_EQ(errorOf({{"TESSERA_FRAMES", "-1"}, {"TESSERA_CODEC", "lz4"}, {"TESSERA_RENDERERS", ""}}), "no error");
