@@ -183,9 +183,12 @@ std::variant<RawVolumeSpec, GeneratorSpec> Parser::volume(const YAML::Node& n) c
   std::error_code ec;
   uintmax_t have = std::filesystem::file_size(s.file, ec);
   uintmax_t need = (uintmax_t)s.dims[0] * s.dims[1] * s.dims[2] * voxelTypeSize(s.type);
+  const uintmax_t slice = (uintmax_t)s.dims[0] * s.dims[1] * voxelTypeSize(s.type);  // what z can fix
   if (ec || have != need)
     fail("volume.file", s.file + " has " + std::to_string(have) + " bytes but dims x type size need " +
-                            std::to_string(need) + " bytes");
+                            std::to_string(need) + " bytes; " +
+                            (!ec && have > 0 && have % slice == 0 ? "dims [" + std::to_string(s.dims[0]) + ", " +
+                             std::to_string(s.dims[1]) + ", " + std::to_string(have / slice) + "] would match" : "check dims and type"));
   return s;
 }
 

@@ -39,15 +39,16 @@ std::runtime_error sdlError(const std::string& what) {
 // that does not answer (yet), SDL quietly falls back to its offscreen driver and every frame
 // goes nowhere: a window nobody can see must be an error, not a success.
 std::string initVideo() {
+  const char* x11 = std::getenv("DISPLAY");
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  // Nothing to try (and SDL's Wayland probe would print an XDG_RUNTIME_DIR error on headless hosts).
+  if ((!x11 || !*x11) && (!wayland || !*wayland)) return "neither DISPLAY nor WAYLAND_DISPLAY is set";
   SDL_SetHint(SDL_HINT_NO_SIGNAL_HANDLERS, "1");  // the stage owns SIGINT/SIGTERM, not SDL
   if (SDL_InitSubSystem(SDL_INIT_VIDEO) != 0)
     return std::string("SDL_Init(VIDEO) failed: ") + SDL_GetError();
   const std::string driver = SDL_GetCurrentVideoDriver() ? SDL_GetCurrentVideoDriver() : "";
   if (driver == "x11" || driver == "wayland") return "";
   SDL_QuitSubSystem(SDL_INIT_VIDEO);
-  const char* x11 = std::getenv("DISPLAY");
-  const char* wayland = std::getenv("WAYLAND_DISPLAY");
-  if ((!x11 || !*x11) && (!wayland || !*wayland)) return "neither DISPLAY nor WAYLAND_DISPLAY is set";
   return "no X11 or Wayland server answered (DISPLAY=" + std::string(x11 ? x11 : "") +
          "); SDL offered only its '" + driver + "' driver, which shows nothing";
 }

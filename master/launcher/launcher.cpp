@@ -235,6 +235,12 @@ class Supervisor {
       say(ended + "; giving up on it: " + v.reason + "; stopping the farm");
       exit_code_ = 1;
       beginStop();
+    } else if (WIFEXITED(status)) {
+      // An error exit, not a crash: the process said why just above (a bad scene, say).
+      say(c.plan.label + " stopped with an error (" + describe(status) +
+          "; its message is above): the farm cannot continue without it; stopping");
+      exit_code_ = 1;
+      beginStop();
     } else {
       say(ended + ": the farm cannot continue without it; stopping");
       exit_code_ = 1;

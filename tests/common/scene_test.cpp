@@ -361,3 +361,23 @@ TEST(Scene, AMisspeltKeyGetsTheNearestKnownOne) {
   EXPECT_ERROR(misspelt, "tranfer_function: unknown key; did you mean transfer_function? (allowed: ");
   EXPECT_ERROR(std::string(kGood) + "colour: red\n", "colour: unknown key (allowed: ");  // nothing near
 }
+
+TEST(Scene, AWrongSizeRawFileNamesBothSizesAndTheDimsThatWouldFit) {
+  TempDir t("rawsize");
+  const std::vector<uint16_t> voxels(4 * 4 * 3, 7);
+  t.write("v.raw", voxels.data(), voxels.size() * 2);
+  auto errorFor = [&](const std::string& dims) {
+    try {
+      parseScene("volume: {file: v.raw, dims: " + dims + ", type: uint16}\n", t.path.string(), "s.yaml");
+    } catch (const SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string("<no error>");
+  };
+  const std::string fits_z = errorFor("[4, 4, 4]");
+  EXPECT_NE(fits_z.find("has 96 bytes but dims x type size need 128 bytes; dims [4, 4, 3] would match"),
+            std::string::npos) << fits_z;
+  const std::string no_z = errorFor("[5, 4, 4]");
+  EXPECT_NE(no_z.find("has 96 bytes but dims x type size need 160 bytes; check dims and type"), std::string::npos)
+      << no_z;
+}

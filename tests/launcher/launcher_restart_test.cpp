@@ -145,7 +145,8 @@ services:
   EXPECT_EQ(code, 1) << allLines();
   EXPECT_TRUE(hasLine("tessera-up | renderer died (signal 9); restarting (restart: on-failure, attempt 1)"))
       << allLines();
-  EXPECT_TRUE(hasLine("tessera-up | master died (exit code 3): the farm cannot continue without it; stopping"))
+  EXPECT_TRUE(hasLine("tessera-up | master stopped with an error (exit code 3; its message is above): the farm cannot continue "
+                      "without it; stopping"))
       << allLines();
   EXPECT_TRUE(hasLine("tessera-up | renderer will not be restarted: the farm is stopping")) << allLines();
   EXPECT_FALSE(hasLineStarting("tessera-up | renderer restarted")) << allLines();

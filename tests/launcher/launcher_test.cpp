@@ -103,7 +103,8 @@ services:
   display: {command: sleep 30}
 )");
   EXPECT_EQ(code, 1);
-  EXPECT_TRUE(hasLine("tessera-up | master died (exit code 3): the farm cannot continue without it; stopping"))
+  EXPECT_TRUE(hasLine("tessera-up | master stopped with an error (exit code 3; its message is above): the farm cannot continue "
+                      "without it; stopping"))
       << allLines();
   EXPECT_FALSE(hasLineStarting("tessera-up | display did not stop")) << allLines();
 }
