@@ -221,11 +221,11 @@ class Stage {
   void openSink(const proto::FrameParams& p) {
     if (sink_) return;
     using Window = StageOptions::Window;
-    if (opt_.window == Window::On) sink_ = makeWindowSink(p.width, p.height, "Tessera");
-    if (opt_.window == Window::Auto) {
+    if (opt_.window != Window::Off) {
       try {
         sink_ = makeWindowSink(p.width, p.height, "Tessera");
       } catch (const std::runtime_error& e) {
+        if (opt_.window == Window::On) throw;
         spdlog::info("no window ({}); writing PNG frames instead", e.what());
       }
     }

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "common/parallel.h"
+#include "renderer/volume/kernels.h"
 
 namespace tessera::renderer {
 
@@ -21,12 +22,6 @@ inline double voxelGradient(const Volume& v, int x, int y, int z, int axis) {
   return ((double)v.at(hi[0], hi[1], hi[2]) - (double)v.at(lo[0], lo[1], lo[2])) / span;
 }
 
-inline void corner(double u, int n, int& i, double& f) {
-  u = std::clamp(u, 0.0, (double)(n - 1));
-  i = std::clamp((int)u, 0, std::max(0, n - 2));
-  f = u - i;
-}
-
 void normalize(double v[3]) {
   const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
   for (int a = 0; a < 3; ++a) v[a] = len > 0 ? v[a] / len : 0;
@@ -37,9 +32,9 @@ void normalize(double v[3]) {
 void sampleGradient(const Volume& v, double ux, double uy, double uz, double g[3]) {
   int i[3];
   double f[3];
-  corner(ux, v.dims[0], i[0], f[0]);
-  corner(uy, v.dims[1], i[1], f[1]);
-  corner(uz, v.dims[2], i[2], f[2]);
+  trilinearCorner(ux, v.dims[0], i[0], f[0]);
+  trilinearCorner(uy, v.dims[1], i[1], f[1]);
+  trilinearCorner(uz, v.dims[2], i[2], f[2]);
   g[0] = g[1] = g[2] = 0;
   for (int c = 0; c < 8; ++c) {
     const int d[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};

@@ -42,6 +42,10 @@ void castFastPair(const FastContext& c, const RaySpan* spans, float* out[2], Sam
 void castReference(const Volume& v, const TransferFunction& tf, double step, const ShadeParams* shade,
                    const RaySpan& span, double out[4], SampleCounts& counts);
 
+// Lower corner index i and weight f of coordinate u on an axis of n voxels, clamped so both
+// corners exist (the reference path's sampleTrilinear and sampleGradient share it).
+void trilinearCorner(double u, int n, int& i, double& f);
+
 // Trilinear interpolation at voxel coordinate u (voxel centres at integers), clamped at
 // the border; double precision (the reference path and tests use it).
 double sampleTrilinear(const Volume& v, double ux, double uy, double uz);

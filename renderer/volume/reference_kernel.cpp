@@ -6,21 +6,18 @@
 
 namespace tessera::renderer {
 
-namespace {
-// Lower corner index and weight on one axis, clamped so both corners exist.
-inline void corner(double u, int n, int& i, double& f) {
+void trilinearCorner(double u, int n, int& i, double& f) {
   u = std::clamp(u, 0.0, (double)(n - 1));
   i = std::clamp((int)u, 0, std::max(0, n - 2));
   f = u - i;
 }
-}  // namespace
 
 double sampleTrilinear(const Volume& v, double ux, double uy, double uz) {
   int ix, iy, iz;
   double fx, fy, fz;
-  corner(ux, v.dims[0], ix, fx);
-  corner(uy, v.dims[1], iy, fy);
-  corner(uz, v.dims[2], iz, fz);
+  trilinearCorner(ux, v.dims[0], ix, fx);
+  trilinearCorner(uy, v.dims[1], iy, fy);
+  trilinearCorner(uz, v.dims[2], iz, fz);
   // A one-voxel axis has no second corner; its weight is 0 there anyway.
   const size_t sx = v.dims[0] > 1 ? 1 : 0;
   const size_t sy = v.dims[1] > 1 ? (size_t)v.dims[0] : 0;
