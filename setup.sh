@@ -17,7 +17,7 @@ PKGS=(
   libzmq3-dev cppzmq-dev liblzo2-dev liblz4-dev libzstd-dev
   libosmesa6-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev
   libpng-dev libsdl2-dev nlohmann-json3-dev libfftw3-dev zlib1g-dev libnifti2-dev
-  libgtest-dev libgmock-dev libbenchmark-dev libteem-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libteem-dev libxtst-dev
 )
 # optional: python3-vtk9 python3-yaml for tests/bench/vtk_compare.py
 # Tests, fuzzing, benchmarks' plots, the window test under Xvfb, compose validation.

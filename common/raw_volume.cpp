@@ -163,7 +163,8 @@ class RawFile {
     const size_t nx = spec_.dims[0], ny = spec_.dims[1];
     fail(spec_.samples(), "non-finite value " + std::to_string(x) + " at voxel (" + std::to_string(i % nx) + ", " +
                          std::to_string(i / nx % ny) + ", " + std::to_string(i / (nx * ny)) + "), linear index " +
-                         std::to_string(i));
+                         std::to_string(i) + "; Tessera needs finite samples: replace NaN and infinities with a value "
+                         "outside the data's range (e.g. numpy.nan_to_num(v, nan=v_min)) and give range: to map it");
   }
 
   const RawVolumeSpec& spec_;

@@ -108,6 +108,12 @@ std::string Gather::addParams(proto::FrameParams p) {
     }
     if (p.frame < next_expected_) next_expected_ = p.frame;  // frames in flight are issued again
   }
+  if (p.first_wanted > next_expected_ && p.epoch == epoch_) {  // an interaction cancelled the frames before it
+    cancelled_lo_ = next_expected_;
+    cancelled_hi_ = p.first_wanted;
+    frames_.erase(frames_.begin(), frames_.lower_bound(p.first_wanted));
+    next_expected_ = p.first_wanted;
+  }
   if (p.frame < next_expected_) return "FrameParams for a finished frame";
   if (!newest_ || p.epoch > newest_->epoch || p.frame > newest_->frame)
     newest_ = Membership{p.frame, p.epoch, p.sortLast() ? p.sortLast()->bricks.size() : 0, routedRenderers(p)};
@@ -137,6 +143,7 @@ std::string Gather::addParams(proto::FrameParams p) {
 template <class Part>
 std::string Gather::add(Part part, uint32_t key, std::map<uint32_t, Part> Frame::*parts, const char* what) {
   if (part.epoch < epoch_) return std::string(what) + " of an older epoch";
+  if (part.frame >= cancelled_lo_ && part.frame < cancelled_hi_) return "";  // cancelled: discarded
   if (part.frame < next_expected_ && part.epoch == epoch_) return std::string(what) + " for a finished frame";
   auto it = frames_.find(part.frame);
   if (it != frames_.end() && (it->second.*parts).count(key)) return std::string("duplicate ") + what + " " + std::to_string(key);

@@ -34,7 +34,8 @@ class Gather {
 
   explicit Gather(uint32_t rank, size_t waiting_budget = kDefaultWaitingBudget)
       : rank_(rank), waiting_budget_(waiting_budget) {}
-  // All return "" when accepted, else the reason the message is dropped.
+  // All return "" when accepted (or quietly discarded: a part of a cancelled frame), else the
+  // reason the message is dropped.
   std::string addParams(proto::FrameParams p);
   std::string addPiece(proto::Piece piece);
   std::string addFramebuffer(proto::Framebuffer fb);
@@ -84,6 +85,9 @@ class Gather {
   std::vector<std::string> late_drops_;
   uint32_t epoch_ = 0;
   uint64_t next_expected_ = 0;  // frames below this are finished
+  // The frames the latest cancel (FrameParams::first_wanted) gave up: their late parts are
+  // expected, not faults, and are discarded without a word.
+  uint64_t cancelled_lo_ = 0, cancelled_hi_ = 0;
   std::map<uint64_t, Frame> frames_;
 };
 

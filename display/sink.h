@@ -2,6 +2,7 @@
 // A Sink is used from one thread (the display loop). Frames are premultiplied rgba8.
 #pragma once
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -18,15 +19,20 @@ struct InputEvent {
   double zoom = 1;                    // multiply eye distance (wheel)
   std::optional<QualityName> quality;  // keys 1/2/3: reference, default, fast
   bool quit = false;                  // window closed, Esc or q
+  bool interacting = false;           // a drag, wheel or resize goes on (false: button released, a key)
+  int width = 0, height = 0;          // the window's new size (0: unchanged)
+  std::chrono::steady_clock::time_point at;  // when the (first merged) event reached the display
 };
 
 class Sink {
  public:
   virtual ~Sink() = default;
   // Shows or writes frame `id`; `status` is the fps/latency/per-stage line drawn on screen.
+  // A window scales the frame to fit it (bilinear, centred, the same shape); files keep its size.
   virtual void present(const Image8& frame, uint64_t id, const std::string& status) = 0;
   // Input since the last call (windows only).
   virtual std::vector<InputEvent> poll() { return {}; }
+  virtual bool interactive() const { return false; }  // a window: it takes input
 };
 
 // Writes <dir>/frame_<id 6 digits>.png (straight alpha, or composited over background) and,

@@ -38,7 +38,8 @@ class Stage {
                                {link_.control().handle(), 0, ZMQ_POLLIN, 0},
                                {inbox_.socket().handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
-      pollFor(items, 3, std::chrono::milliseconds(20));
+      // With a window, input is read every 4 ms: its wait counts in the input-to-present time.
+      pollFor(items, 3, std::chrono::milliseconds(sink_ ? 4 : 20));
       if (items[0].revents & ZMQ_POLLIN) readParams();
       if (link_.masterLost()) return 1;
       // The roster before the strips: a new compositor's first strips may wait for it.
@@ -71,6 +72,7 @@ class Stage {
         epoch_ = p.epoch;
         for (auto& [f, pend] : frames_) std::erase_if(pend.strips, [&](auto& kv) { return kv.second.epoch < epoch_; });
       }
+      if (p.first_wanted > next_) cancelBelow(p.first_wanted);
       if (p.frame < next_) continue;
       if (!newest_ || p.epoch > newest_->epoch || p.frame > newest_->frame) newest_ = p;
       auto& pend = frames_[p.frame];
@@ -84,6 +86,14 @@ class Stage {
     if (!newest_) return;
     for (auto it = frames_.upper_bound(newest_->frame + kAheadWithoutParams); it != frames_.end();)
       it = it->second.params ? std::next(it) : dropWaiting(it, "strips waited too far ahead of the newest FrameParams");
+  }
+
+  // An interaction made the frames before `first_wanted` stale: they are never shown, and
+  // their strips, still on their way, are expected rather than faults.
+  void cancelBelow(uint64_t first_wanted) {
+    frames_.erase(frames_.begin(), frames_.lower_bound(first_wanted));
+    cancelled_lo_ = next_;
+    next_ = cancelled_hi_ = first_wanted;
   }
 
   static std::string checkMember(const proto::FrameParams& p, const proto::Strips& s) {
@@ -139,6 +149,7 @@ class Stage {
         continue;
       }
       if (s->epoch < epoch_) continue;  // stale, not malformed
+      if (s->frame >= cancelled_lo_ && s->frame < cancelled_hi_) continue;  // cancelled, not malformed
       if (s->frame < next_) {
         drops_.drop(s->compositor, "strips for a frame already shown");
         continue;
@@ -199,10 +210,15 @@ class Stage {
                      ? (fps_times_.size() - 1) * 1000.0 /
                            std::chrono::duration<double, std::milli>(fps_times_.back() - fps_times_.front()).count()
                      : 0;
-    std::string status = fmt::format("frame {}  {:.1f} fps  latency {:.0f} ms  render {:.0f}  composite {:.1f}  display {:.1f} ms",
-                                     params.frame, fps, msSince(p.first_seen), render_ms, composite_ms, last_display_ms_);
+    std::string status = fmt::format("frame {}  {}  {:.1f} fps  latency {:.0f} ms  render {:.0f}  composite {:.1f}  display {:.1f} ms",
+                                     params.frame, params.interactive ? fmt::format("moving: {}x{}", params.width, params.height)
+                                                                      : std::string("sharp"),
+                                     fps, msSince(p.first_seen), render_ms, composite_ms, last_display_ms_);
+    if (input_ms_ > 0) status += fmt::format("  input {:.0f} ms", input_ms_);
+    if (sink_->interactive()) status += "  h: help";
     sink_->present(image_, params.frame, status);
     last_display_ms_ = msSince(t0);
+    const double input_ms = inputShown(params.input_seq);
     ++presented_;
     if (msSince(last_status_) > 1000) {
       spdlog::info("{}", status);
@@ -215,7 +231,21 @@ class Stage {
     d.bytes_encoded = p.bytes;
     d.strips_rejected = rejected_;
     d.dropped = drops_.total();
+    d.input_ms = input_ms;
     link_.report(proto::encode(d, 0));
+  }
+
+  // A frame showing input `seq` is on screen: the time since the oldest input it is the
+  // first to show reached the display (0: it shows no new input).
+  double inputShown(uint64_t seq) {
+    if (seq <= shown_input_) return 0;
+    shown_input_ = seq;
+    auto first = input_at_.begin();
+    if (first == input_at_.end() || first->first > seq) return 0;
+    const double ms = msSince(first->second);
+    input_at_.erase(input_at_.begin(), input_at_.upper_bound(seq));
+    input_ms_ = ms;
+    return ms;
   }
 
   void openSink(const proto::FrameParams& p) {
@@ -242,10 +272,16 @@ class Stage {
     for (const auto& e : sink_->poll()) {
       if (e.quit) return true;
       proto::Input in;
+      in.seq = ++input_seq_;
       in.orbit_dx = e.orbit_dx;
       in.orbit_dy = e.orbit_dy;
       in.zoom = e.zoom;
       in.quality = e.quality;
+      in.interacting = e.interacting;
+      in.width = e.width;
+      in.height = e.height;
+      input_at_[in.seq] = e.at;
+      if (input_at_.size() > 4096) input_at_.erase(input_at_.begin());  // inputs no frame showed
       link_.report(proto::encode(in, 0));
     }
     return false;
@@ -265,6 +301,10 @@ class Stage {
   static constexpr size_t kWaitingFrames = 8;
   std::optional<proto::FrameParams> newest_;
   uint64_t next_ = 0, presented_ = 0, rejected_ = 0;
+  uint64_t cancelled_lo_ = 0, cancelled_hi_ = 0;  // the frames the latest cancel gave up
+  uint64_t input_seq_ = 0, shown_input_ = 0;      // inputs sent; the newest one shown
+  std::map<uint64_t, Clock::time_point> input_at_;  // inputs not shown yet: when they arrived
+  double input_ms_ = 0;                            // the latest input-to-present time
   uint32_t epoch_ = 0;
   bool shutdown_ = false;
   Image8 image_;

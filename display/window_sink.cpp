@@ -1,5 +1,7 @@
-// SDL2 window sink: premultiplied frames composited over a dark background, a status strip
-// drawn with the built-in font, and mouse/keyboard input translated to InputEvents.
+// SDL2 window sink: premultiplied frames scaled to fit the window (bilinear, centred) and
+// composited over a dark background, a status strip and an optional help overlay drawn at the
+// window's own resolution with the built-in font, and mouse/keyboard/resize input translated
+// to InputEvents.
 #include <SDL.h>
 
 #include <algorithm>
@@ -9,6 +11,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "common/resample.h"
 #include "display/font.h"
 #include "display/sink.h"
 
@@ -20,6 +23,12 @@ constexpr double kZoomPerNotch = 0.9;     // wheel "in" shrinks the eye distance
 constexpr uint8_t kBackground[3] = {32, 32, 36};  // a window has no alpha: show over dark grey
 constexpr uint8_t kStripDim = 96;  // strip pixels keep 96/256 of their colour behind the text
 constexpr std::array<uint8_t, 4> kTextColor = {230, 230, 230, 255};
+constexpr const char* kHelp[] = {
+    "drag: orbit    wheel: zoom    resize: re-render at the window's size",
+    "while the mouse moves the farm shows reduced frames, then the full one",
+    "1 / 2 / 3: reference / default / fast quality",
+    "h: this help    Esc, q or closing the window: stop the farm",
+};
 
 // Premultiplied over an opaque background: out = c + (1 - a) * bg. term[ch][a] holds the
 // rounded second term, so each channel costs one table look-up and one add.
@@ -62,7 +71,7 @@ class WindowSink final : public Sink {
     if (const std::string why = initVideo(); !why.empty())
       throw std::runtime_error("display window: " + why);
     window_ = SDL_CreateWindow(title.c_str(), SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED,
-                               width, height, SDL_WINDOW_SHOWN);
+                               width, height, SDL_WINDOW_SHOWN | SDL_WINDOW_RESIZABLE);
     if (!window_) {
       auto err = sdlError("SDL_CreateWindow failed");
       SDL_QuitSubSystem(SDL_INIT_VIDEO);
@@ -96,13 +105,12 @@ class WindowSink final : public Sink {
     if (frame.width <= 0 || frame.height <= 0) return;
     if (frame.px.size() != (size_t)frame.width * frame.height * 4)
       throw std::invalid_argument("display window: frame pixel buffer has the wrong size");
-    ensureTexture(frame.width, frame.height);
-    composite(frame);
-    drawStatus(status);
-    if (SDL_UpdateTexture(texture_, nullptr, buffer_.px.data(), buffer_.width * 4) != 0)
-      throw sdlError("SDL_UpdateTexture failed");
-    redraw();
+    frame_ = frame;  // kept to draw again after a resize, an expose or the help key
+    status_ = status;
+    draw();
   }
+
+  bool interactive() const override { return true; }
 
   std::vector<InputEvent> poll() override {
     std::vector<InputEvent> out;
@@ -113,6 +121,29 @@ class WindowSink final : public Sink {
   }
 
  private:
+  // The frame scaled to fit the window (same shape, centred), the status strip and the help.
+  void draw() {
+    if (frame_.width <= 0) return;
+    int ww = 0, wh = 0;
+    SDL_GetRendererOutputSize(renderer_, &ww, &wh);
+    if (ww <= 0 || wh <= 0) return;
+    ensureTexture(ww, wh);
+    const double s = std::min((double)ww / frame_.width, (double)wh / frame_.height);
+    const int dw = std::clamp((int)std::lround(frame_.width * s), 1, ww);
+    const int dh = std::clamp((int)std::lround(frame_.height * s), 1, wh);
+    const bool same = dw == frame_.width && dh == frame_.height;
+    const Image8 scaled = same ? Image8() : resizeBilinear(frame_, dw, dh);
+    composite(same ? frame_ : scaled, (ww - dw) / 2, (wh - dh) / 2);
+    const int scale = ww >= 800 ? 2 : 1;
+    drawLines(wrap(status_, ww, scale), scale, false);
+    if (help_) drawLines({std::begin(kHelp), std::end(kHelp)}, scale, true);
+    if (SDL_UpdateTexture(texture_, nullptr, buffer_.px.data(), buffer_.width * 4) != 0)
+      throw sdlError("SDL_UpdateTexture failed");
+    SDL_RenderClear(renderer_);
+    SDL_RenderCopy(renderer_, texture_, nullptr, nullptr);
+    SDL_RenderPresent(renderer_);
+  }
+
   void ensureTexture(int w, int h) {
     if (texture_ && w == buffer_.width && h == buffer_.height) return;
     if (texture_) SDL_DestroyTexture(texture_);
@@ -123,44 +154,62 @@ class WindowSink final : public Sink {
     buffer_ = Image8(w, h);
   }
 
-  void composite(const Image8& frame) {
+  // The frame at (x0, y0) over the background, which fills the rest of the window.
+  void composite(const Image8& frame, int x0, int y0) {
     static const BackgroundTable table;
-    const size_t n = (size_t)frame.width * frame.height;
-    const uint8_t* __restrict s = frame.px.data();
-    uint8_t* __restrict d = buffer_.px.data();
-    for (size_t i = 0; i < n; ++i, s += 4, d += 4) {
-      const uint8_t a = s[3];
-      for (int ch = 0; ch < 3; ++ch) {
-        const int v = s[ch] + table.term[ch][a];  // > 255 only for invalid input (colour > alpha)
-        d[ch] = (uint8_t)std::min(v, 255);
+    for (size_t i = 0; i < buffer_.px.size(); i += 4)
+      buffer_.px[i] = kBackground[0], buffer_.px[i + 1] = kBackground[1], buffer_.px[i + 2] = kBackground[2],
+      buffer_.px[i + 3] = 255;
+    for (int y = 0; y < frame.height; ++y) {
+      const uint8_t* __restrict s = frame.px.data() + (size_t)y * frame.width * 4;
+      uint8_t* __restrict d = buffer_.at(x0, y0 + y);
+      for (int x = 0; x < frame.width; ++x, s += 4, d += 4) {
+        const uint8_t a = s[3];
+        for (int ch = 0; ch < 3; ++ch) {
+          const int v = s[ch] + table.term[ch][a];  // > 255 only for invalid input (colour > alpha)
+          d[ch] = (uint8_t)std::min(v, 255);
+        }
       }
-      d[3] = 255;
     }
   }
 
-  // A dimmed strip along the bottom edge with the status text, so it reads over any image.
-  void drawStatus(const std::string& status) {
-    if (status.empty()) return;
-    const int scale = buffer_.width >= 800 ? 2 : 1;
-    const int pad = 2 * scale;
-    const int strip_h = std::min(kCellH * scale + 2 * pad, buffer_.height);
-    for (int y = buffer_.height - strip_h; y < buffer_.height; ++y) {
+  // The status line broken at its double spaces into lines that fit the window's width.
+  static std::vector<std::string> wrap(const std::string& text, int width, int scale) {
+    std::vector<std::string> lines{""};
+    for (size_t pos = 0; pos < text.size();) {
+      size_t end = text.find("  ", pos);
+      if (end == std::string::npos) end = text.size();
+      const std::string part = text.substr(pos, end - pos);
+      const std::string joined = lines.back().empty() ? part : lines.back() + "  " + part;
+      if (lines.back().empty() || textWidth(joined, scale) + 4 * scale <= width) lines.back() = joined;
+      else lines.push_back(part);
+      pos = text.find_first_not_of(' ', end);
+      if (pos == std::string::npos) break;
+    }
+    return lines;
+  }
+
+  // A dimmed strip with the lines, along the bottom edge (or the top: help), so it reads
+  // over any image.
+  void drawLines(const std::vector<std::string>& lines, int scale, bool top) {
+    if (lines.empty() || (lines.size() == 1 && lines[0].empty())) return;
+    const int pad = 2 * scale, line_h = kCellH * scale + pad;
+    const int strip_h = std::min((int)lines.size() * line_h + pad, buffer_.height);
+    const int y0 = top ? 0 : buffer_.height - strip_h;
+    for (int y = y0; y < y0 + strip_h; ++y) {
       uint8_t* p = buffer_.at(0, y);
       for (int x = 0; x < buffer_.width * 4; ++x)
         if ((x & 3) != 3) p[x] = (uint8_t)((p[x] * kStripDim) >> 8);
     }
-    drawText(buffer_, pad, buffer_.height - strip_h + pad, status, kTextColor, scale);
-  }
-
-  void redraw() {
-    if (!texture_) return;
-    SDL_RenderClear(renderer_);
-    SDL_RenderCopy(renderer_, texture_, nullptr, nullptr);  // scales if the window was resized
-    SDL_RenderPresent(renderer_);
+    for (size_t i = 0; i < lines.size(); ++i)
+      drawText(buffer_, pad, y0 + pad + (int)i * line_h, lines[i], kTextColor, scale);
   }
 
   void translate(const SDL_Event& e, std::vector<InputEvent>& out) {
     InputEvent ev;
+    // SDL stamps an event when it reads it from the server: its age says when it arrived.
+    const Uint32 now = SDL_GetTicks();
+    ev.at = std::chrono::steady_clock::now() - std::chrono::milliseconds(now >= e.common.timestamp ? now - e.common.timestamp : 0);
     switch (e.type) {
       case SDL_QUIT:
         ev.quit = true;
@@ -170,27 +219,36 @@ class WindowSink final : public Sink {
           ev.quit = true;
           break;
         }
-        // Nothing else keeps the last frame on screen after an expose or resize.
-        if (e.window.event == SDL_WINDOWEVENT_EXPOSED ||
-            e.window.event == SDL_WINDOWEVENT_SIZE_CHANGED)
-          redraw();
+        if (e.window.event == SDL_WINDOWEVENT_SIZE_CHANGED) {  // the farm renders at the new size
+          draw();
+          ev.width = e.window.data1;
+          ev.height = e.window.data2;
+          ev.interacting = true;  // a resize drag: sharp frames once it stops
+          break;
+        }
+        if (e.window.event == SDL_WINDOWEVENT_EXPOSED) draw();  // nothing else keeps the frame on screen
         return;
+      case SDL_MOUSEBUTTONUP:
+        if (e.button.button != SDL_BUTTON_LEFT) return;
+        break;  // released: the master renders the full frame now
       case SDL_MOUSEMOTION:
         if (!(e.motion.state & SDL_BUTTON_LMASK)) return;
         // Consecutive drag motions collapse into one event: the master only needs the sum.
-        if (!out.empty() && isDragOnly(out.back())) {
+        if (!out.empty() && isDrag(out.back())) {
           out.back().orbit_dx += e.motion.xrel * kDegreesPerPixel;
           out.back().orbit_dy += e.motion.yrel * kDegreesPerPixel;
           return;
         }
         ev.orbit_dx = e.motion.xrel * kDegreesPerPixel;
         ev.orbit_dy = e.motion.yrel * kDegreesPerPixel;
+        ev.interacting = true;
         break;
       case SDL_MOUSEWHEEL: {
         int notches = e.wheel.y;
         if (e.wheel.direction == SDL_MOUSEWHEEL_FLIPPED) notches = -notches;
         if (notches == 0) return;
         ev.zoom = std::pow(kZoomPerNotch, notches);  // positive (away from user) zooms in
+        ev.interacting = true;  // wheel notches come in bursts: sharp once they stop
         break;
       }
       case SDL_KEYDOWN:
@@ -200,6 +258,10 @@ class WindowSink final : public Sink {
           case SDLK_2: case SDLK_KP_2: ev.quality = QualityName::Default; break;
           case SDLK_3: case SDLK_KP_3: ev.quality = QualityName::Fast; break;
           case SDLK_ESCAPE: case SDLK_q: ev.quit = true; break;
+          case SDLK_h:
+            help_ = !help_;
+            draw();
+            return;
           default: return;
         }
         break;
@@ -209,14 +271,17 @@ class WindowSink final : public Sink {
     out.push_back(ev);
   }
 
-  static bool isDragOnly(const InputEvent& ev) {
-    return ev.zoom == 1 && !ev.quality && !ev.quit;
+  static bool isDrag(const InputEvent& ev) {
+    return ev.interacting && ev.zoom == 1 && !ev.quality && !ev.quit && ev.width == 0;
   }
 
   SDL_Window* window_ = nullptr;
   SDL_Renderer* renderer_ = nullptr;
   SDL_Texture* texture_ = nullptr;
-  Image8 buffer_;  // opaque copy of the last frame with the status strip, as uploaded
+  Image8 buffer_;  // the window's pixels as uploaded: the scaled frame, status and help
+  Image8 frame_;   // the last frame as it came
+  std::string status_;
+  bool help_ = false;
 };
 
 }  // namespace

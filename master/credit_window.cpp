@@ -4,9 +4,16 @@
 
 namespace tessera::master {
 
-void CreditWindow::issue(uint64_t frame, const Camera& cam, std::set<uint32_t> renderers,
+void CreditWindow::issue(uint64_t frame, const FrameSpec& spec, std::set<uint32_t> renderers,
                          std::set<uint32_t> compositors, Clock::time_point now) {
-  frames_[frame] = InFlight{now, cam, std::move(renderers), std::move(compositors), {}, {}};
+  frames_[frame] = InFlight{now, spec, std::move(renderers), std::move(compositors), {}, {}};
+}
+
+size_t CreditWindow::cancelBelow(uint64_t first_wanted) {
+  const auto end = frames_.lower_bound(first_wanted);
+  const size_t n = (size_t)std::distance(frames_.begin(), end);
+  frames_.erase(frames_.begin(), end);
+  return n;
 }
 
 void CreditWindow::stats(proto::Role role, uint32_t rank, uint64_t frame) {
@@ -16,14 +23,15 @@ void CreditWindow::stats(proto::Role role, uint32_t rank, uint64_t frame) {
   if (role == proto::Role::Compositor) it->second.compositors_in.insert(rank);
 }
 
-std::optional<double> CreditWindow::done(uint64_t frame, Clock::time_point now) {
+std::optional<std::pair<FrameSpec, double>> CreditWindow::done(uint64_t frame, Clock::time_point now) {
   auto it = frames_.find(frame);
   if (it == frames_.end()) return std::nullopt;
   double ms = std::chrono::duration<double, std::milli>(now - it->second.issued).count();
+  FrameSpec spec = std::move(it->second.spec);
   frames_.erase(it);
-  latencies_.push_back(ms);
+  if (!spec.interactive) latencies_.push_back(ms);
   if (latencies_.size() > kSamples) latencies_.pop_front();
-  return ms;
+  return std::make_pair(std::move(spec), ms);
 }
 
 std::optional<std::pair<uint64_t, double>> CreditWindow::oldest(Clock::time_point now) const {

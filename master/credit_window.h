@@ -3,6 +3,7 @@
 // per-frame deadline, derived from recent frame latencies, after which the oldest frame's
 // missing stage is blamed. Plain values, no sockets; time is passed in.
 #pragma once
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -11,8 +12,8 @@
 #include <set>
 #include <vector>
 
-#include "common/camera.h"
 #include "common/wire/protocol.h"
+#include "master/refinement.h"
 
 namespace tessera::master {
 
@@ -29,7 +30,7 @@ class CreditWindow {
 
   struct InFlight {
     Clock::time_point issued;
-    Camera camera;
+    FrameSpec spec;
     std::set<uint32_t> renderers, compositors;  // expected to report Stats
     std::set<uint32_t> renderers_in, compositors_in;  // reported
   };
@@ -43,14 +44,21 @@ class CreditWindow {
   CreditWindow(int in_flight, DeadlineOptions deadline) : in_flight_(in_flight), deadline_(deadline) {}
 
   bool hasRoom() const { return (int)frames_.size() < in_flight_; }
+  // Room under a lower limit (interactive frames keep fewer in flight: latency, not throughput).
+  bool hasRoom(int limit) const { return (int)frames_.size() < std::min(in_flight_, limit); }
+  int inFlight() const { return in_flight_; }
   bool empty() const { return frames_.empty(); }
   // Issues `frame` (again, under a new epoch: its deliveries start over).
-  void issue(uint64_t frame, const Camera& cam, std::set<uint32_t> renderers, std::set<uint32_t> compositors,
+  void issue(uint64_t frame, const FrameSpec& spec, std::set<uint32_t> renderers, std::set<uint32_t> compositors,
              Clock::time_point now);
+  // Frames below `first_wanted` leave the window without being done (an interaction made them
+  // stale); returns how many.
+  size_t cancelBelow(uint64_t first_wanted);
   // A stage's Stats for `frame` (ignored when the frame is not in flight).
   void stats(proto::Role role, uint32_t rank, uint64_t frame);
-  // The display's FrameDone: the latency in ms, or nothing if the frame is not in flight.
-  std::optional<double> done(uint64_t frame, Clock::time_point now);
+  // The display's FrameDone: the frame and its latency in ms, or nothing if it is not in
+  // flight. Only full frames set the deadline: interactive ones are cheaper by design.
+  std::optional<std::pair<FrameSpec, double>> done(uint64_t frame, Clock::time_point now);
 
   const std::map<uint64_t, InFlight>& frames() const { return frames_; }
   // The oldest frame in flight and how long it has waited (ms), if any.

@@ -12,7 +12,6 @@
 #include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/net/transport.h"
-#include "master/interaction.h"
 #include "master/membership.h"
 #include "master/metrics.h"
 #include "master/sort_first_plan.h"
@@ -32,7 +31,7 @@ class Master {
  public:
   Master(const MasterOptions& opt, zmq::context_t& ctx)
       : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router, kMaxControlMessage)),
-        window_(opt.in_flight, opt.deadline), base_camera_(opt.scene.camera), quality_(opt.scene.quality),
+        window_(opt.in_flight, opt.deadline), refinement_(opt.scene.camera, opt.scene.quality, opt.scene.width, opt.scene.height),
         metrics_(opt.metrics_path, opt.frames < 0 ? opt.scene.orbit.frames : opt.frames) {
     // No receive bound on the control socket: with makeSocket's 64, libzmq lost messages of
     // a peer that sent faster than the master read (a third of 300 junk messages, never
@@ -51,9 +50,9 @@ class Master {
                    "zoom, h: help); without a window only the first frame is rendered. Ctrl-C or closing the window stops it");
     // Sort-first (geometry) scenes need no volume here: renderers own the mesh.
     if (sortFirst())
-      plan_ = std::make_unique<SortFirstPlan>(width(), height(), opt_.balance, opt_.tiles_per_renderer);
+      plan_ = std::make_unique<SortFirstPlan>(opt_.balance, opt_.tiles_per_renderer);
     else
-      plan_ = std::make_unique<SortLastPlan>(summarizeVolume(opt_.scene), opt_.scene.tf, width(), height(), opt_.balance);
+      plan_ = std::make_unique<SortLastPlan>(summarizeVolume(opt_.scene), opt_.scene.tf, opt_.balance);
   }
 
   int run(const std::atomic<bool>* stop) {
@@ -64,12 +63,11 @@ class Master {
     while (!(stop && *stop) && !display_lost_) {
       issueFrames();
       if (finished()) break;
-      pollControl(50);
+      pollControl(refinement_.interacting(Clock::now()) ? 10 : 50);  // the still frame soon after the drag
       if (msSince(last_tick) > 250) {
         probe();  // lets late joiners (spares) join
         checkHeartbeats();
-        warnIfStalled();
-        checkDeadline();
+        watchOldestFrame();
         last_tick = Clock::now();
       }
       metrics_.flushOlderThan(Clock::now() - std::chrono::milliseconds(500));
@@ -161,28 +159,24 @@ class Master {
     return describeWaiting(members_, w.renderers, w.compositors, w.display, culprit);
   }
 
-  void warnIfStalled() {
+  // A frame waiting long gets a warning naming who it waits for; past its deadline, the first
+  // stage that has not delivered for it is lost (its heartbeat may be fine: a stage can be
+  // alive and useless), and its work goes to the others.
+  void watchOldestFrame() {
     auto oldest = window_.oldest(Clock::now());
-    if (!oldest || oldest->second < window_.stallMs() || msSince(last_stall_warning_) < 2000) return;
+    if (!oldest || oldest->second < window_.stallMs()) return;
+    const Member* culprit = nullptr;
+    const std::string who = waitingFor(oldest->first, &culprit);
+    if (oldest->second >= window_.deadlineMs() && culprit && culprit->alive) {  // dead ones: already handled
+      spdlog::warn("frame={} missed its deadline of {:.0f} ms waiting for {}: {} {} (pid {}) lost; reassigning its work",
+                   oldest->first, window_.deadlineMs(), who, roleName(culprit->role), culprit->rank, culprit->pid);
+      members_.missedDeadline(*members_.find(culprit->role, culprit->rank), Clock::now());
+      return afterLoss();
+    }
+    if (msSince(last_stall_warning_) < 2000) return;
     last_stall_warning_ = Clock::now();
-    const Member* culprit = nullptr;
     spdlog::warn("frame={} waited_ms={:.0f} deadline_ms={:.0f} epoch={}: frame {} waits for {}", oldest->first,
-                 oldest->second, window_.deadlineMs(), members_.epoch(), oldest->first,
-                 waitingFor(oldest->first, &culprit));
-  }
-
-  // A frame past its deadline: the first stage that has not delivered for it is lost (its
-  // heartbeat may be fine: a stage can be alive and useless), its work goes to the others.
-  void checkDeadline() {
-    auto oldest = window_.oldest(Clock::now());
-    if (!oldest || oldest->second < window_.deadlineMs()) return;
-    const Member* culprit = nullptr;
-    std::string who = waitingFor(oldest->first, &culprit);
-    if (!culprit || !culprit->alive) return;  // already handled: frames are re-issued when it changes
-    spdlog::warn("frame={} missed its deadline of {:.0f} ms waiting for {}: {} {} (pid {}) lost; reassigning its work",
-                 oldest->first, window_.deadlineMs(), who, roleName(culprit->role), culprit->rank, culprit->pid);
-    members_.missedDeadline(*members_.find(culprit->role, culprit->rank), Clock::now());
-    afterLoss();
+                 oldest->second, window_.deadlineMs(), members_.epoch(), oldest->first, who);
   }
 
   Workers workers() const {
@@ -204,9 +198,9 @@ class Master {
       spdlog::warn("no {} left: waiting for one to join", w.renderers.empty() ? "renderer" : "compositor");
       return;  // frames in flight are issued again when one joins (its Hello bumps the epoch)
     }
-    std::vector<std::pair<uint64_t, Camera>> again;
-    for (const auto& [frame, f] : window_.frames()) again.emplace_back(frame, f.camera);
-    for (const auto& [frame, cam] : again) publish(frame, cam, w);
+    std::vector<std::pair<uint64_t, FrameSpec>> again;
+    for (const auto& [frame, f] : window_.frames()) again.emplace_back(frame, f.spec);
+    for (const auto& [frame, spec] : again) publish(frame, spec, w);
     metrics_.reissued(again.size());
   }
 
@@ -219,44 +213,57 @@ class Master {
 
   // ---- frames ---------------------------------------------------------------------------
   bool sortFirst() const { return opt_.scene.mesh.has_value(); }
-  int width() const { return opt_.scene.width; }
-  int height() const { return opt_.scene.height; }
-
-  Camera cameraFor(uint64_t frame) const {
-    if (total_frames_ == 0) return base_camera_;
-    return opt_.scene.orbit.at(base_camera_, (int)(frame % std::max(1, opt_.scene.orbit.frames)));
-  }
 
   void issueFrames() {
     Workers w = workers();
-    while (window_.hasRoom() && !w.renderers.empty() && !w.compositors.empty()) {
-      if (total_frames_ > 0 && next_frame_ >= (uint64_t)total_frames_) return;
-      Camera cam = cameraFor(next_frame_);
-      // Interactive: a frame whose inputs did not change is not rendered again.
-      if (total_frames_ == 0 && next_frame_ > 0 && cam == last_camera_ && quality_ == last_quality_) return;
-      publish(next_frame_, cam, w);
-      last_camera_ = cam;
-      last_quality_ = quality_;
+    while (!w.renderers.empty() && !w.compositors.empty()) {
+      if (total_frames_ > 0) {
+        if (!window_.hasRoom() || next_frame_ >= (uint64_t)total_frames_) return;
+        publish(next_frame_, orbitFrame(opt_.scene, next_frame_), w);
+        ++next_frame_;
+        continue;
+      }
+      // Interactive: the newest view, or nothing when it would show nothing new.
+      auto spec = refinement_.next(Clock::now());
+      if (!spec) return;
+      if (spec->interactive) cancelStale();
+      if (!window_.hasRoom(spec->interactive ? kInteractiveInFlight : window_.inFlight())) return;
+      publish(next_frame_, *spec, w);
+      refinement_.issued(*spec);
       ++next_frame_;
     }
   }
 
-  void publish(uint64_t frame, const Camera& cam, const Workers& w) {
+  // Once the camera moves, full frames in flight show a view that is gone: cancel them (they
+  // leave the credit window now; stages skip or drop their work) rather than show them.
+  void cancelStale() {
+    bool stale = false;
+    for (const auto& [frame, f] : window_.frames()) stale = stale || !f.spec.interactive;
+    if (!stale) return;
+    for (const auto& [frame, f] : window_.frames()) metrics_.cancelled(frame);
+    first_wanted_ = next_frame_;
+    window_.cancelBelow(first_wanted_);
+  }
+
+  void publish(uint64_t frame, const FrameSpec& spec, const Workers& w) {
     proto::FrameParams p;
     p.frame = frame;
     p.epoch = members_.epoch();
-    p.camera = cam;
-    p.quality = quality_;
-    p.width = width();
-    p.height = height();
+    p.camera = spec.camera;
+    p.quality = spec.quality;
+    p.width = spec.width;
+    p.height = spec.height;
     p.codec = opt_.codec;
     p.format = opt_.format;
+    p.first_wanted = first_wanted_;
+    p.input_seq = spec.input_seq;
+    p.interactive = spec.interactive;
     plan_->fill(p, w);
     p.display_endpoint = opt_.endpoints.display();
     std::set<uint32_t> renderers = proto::renderersWithWork(p), compositors;
     for (const auto& r : p.regions) compositors.insert(r.compositor);
-    window_.issue(frame, cam, renderers, compositors, Clock::now());
-    metrics_.issued(frame, p.epoch, (int)w.renderers.size(), (int)p.regions.size());
+    window_.issue(frame, spec, renderers, compositors, Clock::now());
+    metrics_.issued(frame, p.epoch, (int)w.renderers.size(), (int)p.regions.size(), spec);
     sendBytes(pub_, proto::encode(p, kMasterRank));
   }
 
@@ -267,20 +274,10 @@ class Master {
     zmq::pollitem_t items[] = {{ctl_.handle(), 0, ZMQ_POLLIN, 0}};
     pollFor(items, 1, std::chrono::milliseconds(timeout_ms));
     for (int budget = 0; (items[0].revents & ZMQ_POLLIN) && budget < 1000; ++budget) {
-      zmq::message_t id, body;
-      if (!ctl_.recv(id, zmq::recv_flags::dontwait)) break;
-      if (!id.more()) {
-        drops_.drop(~0u, "control message without routing id");
-        continue;
-      }
-      (void)ctl_.recv(body, zmq::recv_flags::none);
-      // A peer sent extra frames: keep only the first (a multi-part message arrives whole).
-      for (bool more = body.more(); more;) {
-        zmq::message_t extra;
-        if (!ctl_.recv(extra, zmq::recv_flags::dontwait)) break;
-        more = extra.more();
-      }
-      handle(id.to_string(), body);
+      auto m = receiveRouted(ctl_);  // a multi-part message keeps its first part
+      if (!m) break;
+      if (!m->has_body) drops_.drop(~0u, "control message without routing id");
+      else handle(m->identity, m->body);
     }
   }
 
@@ -343,15 +340,16 @@ class Master {
   }
 
   void onFrameDone(const proto::FrameDone& d, uint32_t key) {
-    auto latency = window_.done(d.frame, Clock::now());
-    if (!latency) return drops_.drop(key, "FrameDone for a frame not in flight");
-    metrics_.done(d, *latency, drops_.total());
+    auto done = window_.done(d.frame, Clock::now());
+    if (!done && d.frame < first_wanted_) return;  // cancelled, shown before the display heard it
+    if (!done) return drops_.drop(key, "FrameDone for a frame not in flight");
+    refinement_.interactiveDone(done->first, done->second);
+    metrics_.done(d, done->second, drops_.total());
   }
 
   void onInput(const proto::Input& in, uint32_t key) {
     try {
-      base_camera_ = applyInput(base_camera_, in);
-      if (in.quality) quality_ = namedQuality(*in.quality);
+      refinement_.input(in, Clock::now());
     } catch (const std::invalid_argument& e) {
       drops_.drop(key, e.what());
     }
@@ -373,6 +371,8 @@ class Master {
   }
 
   static constexpr uint32_t kMasterRank = 0xFFFF;
+  // Interactive frames in flight at most: each one more adds a frame time to the latency.
+  static constexpr int kInteractiveInFlight = 1;
 
   const MasterOptions& opt_;
   zmq::socket_t pub_, ctl_;
@@ -381,10 +381,9 @@ class Master {
   std::unique_ptr<Plan> plan_;
   bool started_ = false, display_lost_ = false;
   Clock::time_point last_stall_warning_;
-  uint64_t next_frame_ = 0;
+  uint64_t next_frame_ = 0, first_wanted_ = 0;
   int total_frames_ = 0;
-  Camera base_camera_, last_camera_;
-  Quality quality_, last_quality_;
+  Refinement refinement_;
   DropCounter drops_;
   Metrics metrics_;
   std::unique_ptr<FarmNote> note_;

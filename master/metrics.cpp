@@ -11,28 +11,34 @@
 namespace tessera::master {
 
 Metrics::Metrics(const std::string& path, uint64_t total_frames)
-    : start_(std::chrono::steady_clock::now()), run_(total_frames, start_) {
+    : interactive_run_(total_frames == 0), start_(std::chrono::steady_clock::now()), run_(total_frames, start_) {
   if (path.empty()) return;
   auto dir = std::filesystem::path(path).parent_path();
   if (!dir.empty()) std::filesystem::create_directories(dir);
-  out_.open(path);
-  if (!out_) throw std::runtime_error("cannot write metrics file " + path);
+  // Checked now, truncated only at the first line: a run that fails to start keeps the
+  // previous run's metrics.
+  existed_ = std::filesystem::exists(path);
+  if (!std::ofstream(path, std::ios::app)) throw std::runtime_error("cannot write metrics file " + path);
   path_ = path;
 }
 
 Metrics::~Metrics() {
-  if (path_.empty() || wrote_) return;
-  out_.close();
+  if (path_.empty() || wrote_ || existed_) return;
   std::error_code ignored;
-  std::filesystem::remove(path_, ignored);
+  std::filesystem::remove(path_, ignored);  // the empty file this run created
 }
 
-void Metrics::issued(uint64_t frame, uint32_t epoch, int renderers, int compositors) {
+void Metrics::issued(uint64_t frame, uint32_t epoch, int renderers, int compositors, const FrameSpec& spec) {
   Frame& f = frames_[frame];
   f = Frame{};  // a frame issued again under a new epoch starts over
   f.epoch = epoch;
   f.renderers = renderers;
   f.compositors = compositors;
+  f.spec = spec;
+}
+
+void Metrics::cancelled(uint64_t frame) {
+  if (frames_.erase(frame)) ++cancelled_;
 }
 
 void Metrics::stats(const proto::StageStats& s) {
@@ -143,13 +149,24 @@ void Metrics::write(uint64_t frame, Frame& f) {
   j["refused_peers"] = refused_;
   // When FrameDone arrived, from the first frame's: throughput = frames / span.
   j["done_ms"] = std::chrono::duration<double, std::milli>(f.done_at - start_).count();
+  if (interactive_run_) {
+    const Camera& c = f.spec.camera;
+    j["interactive"] = f.spec.interactive;
+    j["width"] = f.spec.width;
+    j["height"] = f.spec.height;
+    j["camera"] = {{"eye", {c.eye.x, c.eye.y, c.eye.z}}, {"target", {c.target.x, c.target.y, c.target.z}},
+                   {"up", {c.up.x, c.up.y, c.up.z}}, {"fov", c.fov}};
+    if (f.d.input_ms > 0) j["input_ms"] = f.d.input_ms;
+    j["cancelled_frames"] = cancelled_;
+  }
   spdlog::debug("frame={} latency_ms={:.1f} render_ms={:.1f} composite_ms={:.1f} display_ms={:.1f} bytes_raw={} "
                "bytes_encoded={} render_imbalance={:.2f} composite_imbalance={:.2f}",
                frame, f.latency_ms, j.value("render_ms_max", 0.0), j["composite_ms_max"].get<double>(),
                f.d.display_ms, j["render_bytes_raw"].get<uint64_t>(), j["render_bytes_encoded"].get<uint64_t>(),
                j.value("render_imbalance_time", 0.0), j["composite_imbalance_pixels"].get<double>());
-  if (out_) out_ << j.dump() << '\n' << std::flush;
-  wrote_ = wrote_ || out_;
+  if (!path_.empty() && !out_.is_open()) out_.open(path_, std::ios::trunc);
+  if (out_.is_open() && out_) out_ << j.dump() << '\n' << std::flush;
+  wrote_ = wrote_ || (out_.is_open() && out_);
   if (!warned_empty_ && j["composite_reports"].get<size_t>() > 0 && j["composite_active_pixels"].get<double>() == 0) {
     warned_empty_ = true;  // once a run: an empty frame is usually the scene, not the farm
     spdlog::warn("frame {} has no visible pixel: is the camera looking at the volume, and does the transfer "

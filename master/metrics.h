@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/wire/protocol.h"
+#include "master/refinement.h"
 #include "master/run_summary.h"
 
 namespace tessera::master {
@@ -22,11 +23,14 @@ class Metrics {
  public:
   // path "" = log only; total_frames 0 = interactive (progress without an estimate).
   explicit Metrics(const std::string& path, uint64_t total_frames = 0);
-  ~Metrics();  // a metrics file that got no line (a failed start, no frame done) is removed
+  // A failed start (no line written) leaves an existing file as it was and removes one it created.
+  ~Metrics();
   Metrics(const Metrics&) = delete;
   Metrics& operator=(const Metrics&) = delete;
 
-  void issued(uint64_t frame, uint32_t epoch, int renderers, int compositors);
+  void issued(uint64_t frame, uint32_t epoch, int renderers, int compositors, const FrameSpec& spec);
+  // A frame an interaction made stale: no line, counted in cancelled_frames.
+  void cancelled(uint64_t frame);
   void stats(const proto::StageStats& s);
   void done(const proto::FrameDone& d, double latency_ms, uint64_t master_dropped);
   void flushOlderThan(std::chrono::steady_clock::time_point t);
@@ -52,6 +56,7 @@ class Metrics {
   struct Frame {
     uint32_t epoch = 0;
     int renderers = 0, compositors = 0;
+    FrameSpec spec;
     std::vector<proto::StageStats> r, c;
     bool done = false;
     proto::FrameDone d;
@@ -63,10 +68,11 @@ class Metrics {
 
   std::ofstream out_;
   std::string path_;
-  bool wrote_ = false, warned_empty_ = false;
+  bool wrote_ = false, warned_empty_ = false, existed_ = false;
   std::map<uint64_t, Frame> frames_;
   uint64_t frames_done_ = 0;
-  uint64_t reassignments_ = 0, reissued_ = 0, refused_ = 0;
+  uint64_t reassignments_ = 0, reissued_ = 0, refused_ = 0, cancelled_ = 0;
+  bool interactive_run_ = false;  // lines say what each frame showed (camera, size, level of detail)
   std::chrono::steady_clock::time_point start_;
   RunSummary run_;
 };

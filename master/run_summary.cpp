@@ -63,10 +63,10 @@ std::string RunSummary::line(Clock::time_point now) const {
   const uint64_t dropped = counter(last_, "master_dropped") + counter(last_, "render_dropped") +
                            counter(last_, "composite_dropped") + counter(last_, "display_dropped");
   return fmt::format(
-      "run summary: {} frames in {:.1f} s, {:.2f} fps; median per frame: render {}, composite {:.1f} ms, "
+      "run summary: {} frames in {:.1f} s, {}; median per frame: render {}, composite {:.1f} ms, "
       "display {:.0f} ms, latency {:.0f} ms; {:.2f} MB per frame between stages; dropped {} messages, "
       "{} strips rejected, {} stages reassigned",
-      n, seconds(now - start_), fps(), renderPart(), median(composite_), median(display_), median(latency_),
+      n, seconds(now - start_), n > 1 ? fmt::format("{:.2f} fps", fps()) : std::string("no rate from one frame"), renderPart(), median(composite_), median(display_), median(latency_),
       n ? bytes_ / (double)n / 1e6 : 0.0, dropped, counter(last_, "strips_rejected"), counter(last_, "reassignments"));
 }
 

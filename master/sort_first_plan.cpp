@@ -2,14 +2,14 @@
 
 namespace tessera::master {
 
-SortFirstPlan::SortFirstPlan(int width, int height, bool balance, int tiles_per_renderer)
-    : width_(width), height_(height), balance_(balance), tiles_per_renderer_(tiles_per_renderer) {}
+SortFirstPlan::SortFirstPlan(bool balance, int tiles_per_renderer)
+    : balance_(balance), tiles_per_renderer_(tiles_per_renderer) {}
 
 void SortFirstPlan::fill(proto::FrameParams& p, const Workers& w) {
   const int r = (int)w.renderers.size(), m = (int)w.compositors.size();
   if (r == 0 || m == 0) return;
-  auto tiles = balance_ ? balancedTiles(width_, height_, r * tiles_per_renderer_, cost_)
-                        : equalTiles(width_, height_, r * tiles_per_renderer_);
+  auto tiles = balance_ ? balancedTiles(p.width, p.height, r * tiles_per_renderer_, cost_.resized(p.width, p.height))
+                        : equalTiles(p.width, p.height, r * tiles_per_renderer_);
   auto& work = p.work.emplace<proto::SortFirstWork>();
   std::map<uint32_t, Rect> bounds;  // compositor -> bounds of its tiles
   for (size_t i = 0; i < tiles.size(); ++i) {
@@ -20,7 +20,7 @@ void SortFirstPlan::fill(proto::FrameParams& p, const Workers& w) {
   }
   for (const CompositorSlot& c : w.compositors)
     if (bounds.count(c.rank)) p.regions.push_back({c.rank, bounds[c.rank], c.endpoint});
-  frames_[p.frame] = {0, CostGrid(width_, height_), work.tiles};
+  frames_[p.frame] = {0, CostGrid(p.width, p.height), work.tiles};
 }
 
 // A renderer's per-tile times, in FrameParams::tiles order; a frame's costs replace the

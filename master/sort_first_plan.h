@@ -12,7 +12,8 @@ namespace tessera::master {
 
 class SortFirstPlan : public Plan {
  public:
-  SortFirstPlan(int width, int height, bool balance, int tiles_per_renderer);
+  // Tiles are cut for each frame's own size (interactive frames are smaller).
+  SortFirstPlan(bool balance, int tiles_per_renderer);
   void reassign(const Workers&) override {}
   void fill(proto::FrameParams& p, const Workers& w) override;
   void stats(const proto::StageStats& s, const Workers& w) override;
@@ -23,7 +24,6 @@ class SortFirstPlan : public Plan {
     CostGrid grid{1, 1};
     std::vector<proto::TileAssignment> tiles;
   };
-  int width_, height_;
   bool balance_;
   int tiles_per_renderer_;
   CostGrid cost_{1, 1};

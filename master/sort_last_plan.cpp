@@ -1,6 +1,7 @@
 #include "master/sort_last_plan.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include <spdlog/spdlog.h>
 
@@ -8,8 +9,8 @@
 
 namespace tessera::master {
 
-SortLastPlan::SortLastPlan(VolumeSummary volume, const TransferFunction& tf, int width, int height, bool balance)
-    : volume_(std::move(volume)), tf_(tf), width_(width), height_(height), balance_(balance) {
+SortLastPlan::SortLastPlan(VolumeSummary volume, const TransferFunction& tf, bool balance)
+    : volume_(std::move(volume)), tf_(tf), balance_(balance) {
   // Said once, by the master: a range that misses the data makes every frame empty or uniform.
   if (std::string why = rangeProblem(volume_.shape); !why.empty()) spdlog::warn("volume: {}", why);
 }
@@ -63,16 +64,28 @@ void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
   auto& work = p.work.emplace<proto::SortLastWork>();
   for (size_t i = 0; i < tree_.bricks.size() && i < owner_.size(); ++i) work.bricks.push_back({owner_[i], tree_.bricks[i]});
   work.order = tree_.visibilityOrder(volume_.shape, p.camera);
-  auto bands = balancedBands(width_, height_, (int)w.compositors.size(), balance_ ? last_active_ : std::vector<Rect>{});
+  std::vector<Rect> active;
+  for (const auto& f : balance_ ? last_active_ : decltype(last_active_){}) {
+    const int x0 = (int)std::floor(f[0] * p.width), y0 = (int)std::floor(f[1] * p.height);
+    active.push_back({x0, y0, (int)std::ceil(f[2] * p.width) - x0, (int)std::ceil(f[3] * p.height) - y0});
+  }
+  sizes_[p.frame] = {p.width, p.height};
+  while (sizes_.size() > 256) sizes_.erase(sizes_.begin());  // frames whose stats never come
+  auto bands = balancedBands(p.width, p.height, (int)w.compositors.size(), active);
   for (size_t i = 0; i < bands.size(); ++i)
     p.regions.push_back({w.compositors[i].rank, bands[i], w.compositors[i].endpoint});
 }
 
 void SortLastPlan::stats(const proto::StageStats& s, const Workers&) {
   if (s.role != proto::Role::Renderer || s.frame + 1 < latest_active_frame_) return;
+  auto size = sizes_.find(s.frame);
+  if (size == sizes_.end()) return;  // not a frame of ours
   if (s.frame + 1 > latest_active_frame_) last_active_.clear();
   latest_active_frame_ = s.frame + 1;
-  last_active_.push_back(s.active);
+  sizes_.erase(sizes_.begin(), size);
+  const auto [w, h] = size->second;
+  const Rect& a = s.active;
+  if (!a.empty()) last_active_.push_back({(double)a.x / w, (double)a.y / h, (double)(a.x + a.w) / w, (double)(a.y + a.h) / h});
 }
 
 }  // namespace tessera::master

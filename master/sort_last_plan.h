@@ -2,7 +2,9 @@
 // function may show, from a streamed summary: no voxel is held here), a back-to-front order per camera, and one screen band per compositor,
 // balanced by the renderers' active pixels of the latest reported frame.
 #pragma once
+#include <array>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -16,7 +18,8 @@ namespace tessera::master {
 
 class SortLastPlan : public Plan {
  public:
-  SortLastPlan(VolumeSummary volume, const TransferFunction& tf, int width, int height, bool balance);
+  // Compositor bands are cut for each frame's own size (interactive frames are smaller).
+  SortLastPlan(VolumeSummary volume, const TransferFunction& tf, bool balance);
   void reassign(const Workers& w) override;
   void fill(proto::FrameParams& p, const Workers& w) override;
   void stats(const proto::StageStats& s, const Workers& w) override;
@@ -26,12 +29,14 @@ class SortLastPlan : public Plan {
 
   VolumeSummary volume_;  // the master never holds the voxels
   const TransferFunction& tf_;
-  int width_, height_;
   bool balance_;
   BrickTree tree_;
   std::vector<uint32_t> owner_;  // renderer rank of each brick
-  std::vector<Rect> last_active_;  // renderers' active rects of the latest reported frame
+  // Renderers' active rects of the latest reported frame, as fractions of its image (x0, y0,
+  // x1, y1), so frames of another size can use them.
+  std::vector<std::array<double, 4>> last_active_;
   uint64_t latest_active_frame_ = 0;  // that frame + 1 (0: none yet)
+  std::map<uint64_t, std::pair<int, int>> sizes_;  // frames filled and not reported yet: their size
 };
 
 }  // namespace tessera::master

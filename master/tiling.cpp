@@ -9,6 +9,14 @@ CostGrid::CostGrid(int width, int height, int cells)
     : width_(width), height_(height), cx_(std::min(cells, width)), cy_(std::min(cells, height)),
       ms_((size_t)cx_ * cy_, 0.0) {}
 
+CostGrid CostGrid::resized(int width, int height) const {
+  if (width < cx_ || height < cy_) return CostGrid(width, height);
+  CostGrid g = *this;
+  g.width_ = width;
+  g.height_ = height;
+  return g;
+}
+
 Rect CostGrid::cell(int i, int j) const {
   int x0 = (int)((long long)i * width_ / cx_), x1 = (int)((long long)(i + 1) * width_ / cx_);
   int y0 = (int)((long long)j * height_ / cy_), y1 = (int)((long long)(j + 1) * height_ / cy_);

@@ -17,6 +17,9 @@ class CostGrid {
   // Cost of the pixels of `r` (cells partly covered count by area).
   double cost(const Rect& r) const;
   bool empty() const { return total_ <= 0; }
+  // The same costs over an image of another size (each cell covers the same fraction of it);
+  // an empty grid when the new size has fewer pixels than this grid has cells along an axis.
+  CostGrid resized(int width, int height) const;
 
  private:
   int width_, height_, cx_, cy_;

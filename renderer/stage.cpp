@@ -51,15 +51,23 @@ class Stage {
     spdlog::info("renderer rank={} joined backend={} simd={}", link_.rank(),
                  scene_.mesh ? "osmesa-mesh" : backendName(opt_.backend), isaName(cpuIsa()));
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}};
+    std::deque<proto::FrameParams> queued;
     while (!(stop && *stop)) {
-      pollFor(items, 1, std::chrono::milliseconds(100));
-      // Drain first, so frames superseded by a newer epoch are skipped, not rendered.
+      pollFor(items, 1, std::chrono::milliseconds(queued.empty() ? 100 : 0));
+      // Drain before every frame, so frames superseded by a newer epoch or cancelled by an
+      // interaction are skipped, not rendered.
       auto published = link_.receive(drops_);
       if (published.shutdown) return 0;
-      for (const auto& p : published.params) epoch_ = std::max(epoch_, p.epoch);
+      for (auto& p : published.params) {
+        epoch_ = std::max(epoch_, p.epoch);
+        first_wanted_ = std::max(first_wanted_, p.first_wanted);
+        queued.push_back(std::move(p));
+      }
       if (link_.masterLost()) return 1;
-      for (const auto& p : published.params)
-        if (p.epoch == epoch_) renderFrameOrLog(p);
+      std::erase_if(queued, [&](const auto& p) { return p.epoch != epoch_ || p.frame < first_wanted_; });
+      if (queued.empty()) continue;
+      renderFrameOrLog(queued.front());
+      queued.pop_front();
     }
     return 0;
   }
@@ -223,6 +231,7 @@ class Stage {
   std::deque<Cached> cache_;
   std::map<std::string, zmq::socket_t> pushes_;
   uint32_t epoch_ = 0;
+  uint64_t first_wanted_ = 0;  // frames below it were cancelled
   uint64_t frames_failed_ = 0;
   DropCounter drops_;
 };

@@ -35,18 +35,12 @@ void DataInbox::bind(const std::string& endpoint) { bindTo(socket_, endpoint); }
 std::vector<DataInbox::Message> DataInbox::receive(DropCounter& drops, int max) {
   std::vector<Message> out;
   for (int i = 0; i < max; ++i) {
-    zmq::message_t id, body;
-    if (!socket_.recv(id, zmq::recv_flags::dontwait)) break;
-    if (!id.more()) continue;  // a ROUTER always prefixes the routing id; nothing else to read
-    (void)socket_.recv(body, zmq::recv_flags::dontwait);
-    bool extra = false;
-    for (bool more = body.more(); more;) {  // parts beyond the first: junk, read and drop
-      zmq::message_t part;
-      if (!socket_.recv(part, zmq::recv_flags::dontwait)) break;
-      more = part.more();
-      extra = true;
-    }
-    std::string identity = id.to_string();
+    auto m = receiveRouted(socket_);
+    if (!m) break;
+    if (!m->has_body) continue;
+    std::string identity = std::move(m->identity);
+    zmq::message_t body = std::move(m->body);
+    const bool extra = m->extra;
     if (auto rank = filter_.rankOf(identity)) {
       if (extra) drops.drop(*rank, "multi-part message");
       else out.push_back({*rank, std::move(body)});

@@ -88,4 +88,20 @@ FarmNote::~FarmNote() {
   if (!path_.empty()) std::filesystem::remove(path_, ignored);
 }
 
+std::optional<Routed> receiveRouted(zmq::socket_t& router) {
+  zmq::message_t id;
+  if (!router.recv(id, zmq::recv_flags::dontwait)) return std::nullopt;
+  Routed m;
+  m.identity = id.to_string();
+  if (!id.more()) return m;
+  m.has_body = router.recv(m.body, zmq::recv_flags::dontwait).has_value();
+  for (bool more = m.has_body && m.body.more(); more;) {
+    zmq::message_t part;
+    if (!router.recv(part, zmq::recv_flags::dontwait)) break;
+    more = part.more();
+    m.extra = true;
+  }
+  return m;
+}
+
 }  // namespace tessera

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -20,6 +21,16 @@ bool sendBytes(zmq::socket_t& s, std::vector<std::byte>&& bytes, bool more = fal
 inline std::span<const std::byte> view(const zmq::message_t& m) {
   return {static_cast<const std::byte*>(m.data()), m.size()};
 }
+
+// One message from a ROUTER socket, without waiting: nothing when none is queued. `body` is
+// its first part after the routing id (empty when a peer sent no routing id, which a ROUTER
+// never does); parts beyond it are a peer's junk: read, dropped, and `extra` says so.
+struct Routed {
+  std::string identity;
+  zmq::message_t body;
+  bool has_body = false, extra = false;
+};
+std::optional<Routed> receiveRouted(zmq::socket_t& router);
 
 // zmq::poll that treats a signal (EINTR) as "nothing ready": the caller's loop then
 // sees its stop flag. Other errors propagate.

@@ -324,6 +324,7 @@ std::vector<std::byte> encode(const FrameDone& m, uint32_t sender) {
     w.u64(m.bytes_encoded);
     w.u64(m.strips_rejected);
     w.u64(m.dropped);
+    w.f64(m.input_ms);
   });
 }
 Result<FrameDone> decodeFrameDone(std::span<const std::byte> msg) {
@@ -334,19 +335,26 @@ Result<FrameDone> decodeFrameDone(std::span<const std::byte> msg) {
     m.bytes_encoded = r.u64("bytes_encoded");
     m.strips_rejected = r.u64("strips_rejected");
     m.dropped = r.u64("dropped");
+    m.input_ms = detail::readFinite(r, "input_ms");
+    if (r.ok() && m.input_ms < 0) r.fail("input_ms " + std::to_string(m.input_ms) + " negative");
   });
 }
 
 std::vector<std::byte> encode(const Input& m, uint32_t sender) {
   return encodeStructured(Type::Input, 0, sender, [&](ByteWriter& w) {
+    w.u64(m.seq);
     w.f64(m.orbit_dx);
     w.f64(m.orbit_dy);
     w.f64(m.zoom);
     w.u8(m.quality ? static_cast<uint8_t>(*m.quality) : 0);
+    w.boolean(m.interacting);
+    w.i32(m.width);
+    w.i32(m.height);
   });
 }
 Result<Input> decodeInput(std::span<const std::byte> msg) {
   return decodeStructured<Input>(msg, Type::Input, [](ByteReader& r, const Header&, Input& m) {
+    m.seq = r.u64("seq");
     m.orbit_dx = detail::readFinite(r, "orbit_dx");
     m.orbit_dy = detail::readFinite(r, "orbit_dy");
     m.zoom = detail::readFinite(r, "zoom");
@@ -356,6 +364,12 @@ Result<Input> decodeInput(std::span<const std::byte> msg) {
     if (r.ok() && q > static_cast<uint8_t>(QualityName::Fast))
       r.fail("quality " + std::to_string(q) + " not in 0..3 (unchanged, reference, default, fast)");
     if (q != 0) m.quality = static_cast<QualityName>(q);
+    m.interacting = r.boolean("interacting");
+    m.width = r.i32("width");
+    m.height = r.i32("height");
+    const bool unchanged = m.width == 0 && m.height == 0;
+    if (r.ok() && !unchanged && (m.width < 1 || m.width > detail::kMaxDimension || m.height < 1 || m.height > detail::kMaxDimension))
+      r.fail("window size " + std::to_string(m.width) + "x" + std::to_string(m.height) + " neither 0x0 nor within 1..16384");
   });
 }
 

@@ -41,7 +41,8 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 3;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads
+inline constexpr uint16_t kVersion = 4;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
+                                         // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms)
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -147,6 +148,9 @@ struct CompositorRegion {
 //   width, height              i32 x2   8     1..16384 each
 //   codec                      u8       1     < kCodecCount
 //   format                     u8       1     1..PixelFormat::Last
+//   first_wanted               u64      8     <= frame
+//   input_seq                  u64      8
+//   interactive                bool     1
 //   regions                    u32      4     count <= 65536, then per region (>= 24 bytes):
 //   regions.compositor         u32      4
 //   regions.region             rect     16    0 <= x, y, w, h; inside width x height
@@ -186,6 +190,11 @@ struct FrameParams {                                                       // ma
   PixelFormat format = PixelFormat::RGBA8;   // of pieces
   std::vector<CompositorRegion> regions;     // sort-last: tile the image; sort-first: each router's tiles' bounds
   std::string display_endpoint;
+  // Frames below this one are cancelled (an interaction made them stale): stages skip them,
+  // drop their parts without counting them as faults, and the display never waits for them.
+  uint64_t first_wanted = 0;
+  uint64_t input_seq = 0;                    // the newest display Input this frame shows (0: none)
+  bool interactive = false;                  // a reduced frame while the camera moves (level of detail)
   std::variant<SortLastWork, SortFirstWork> work;  // the mode: each stage dispatches on it once
   FrameMode mode() const { return work.index() == 0 ? FrameMode::SortLast : FrameMode::SortFirst; }
   const SortLastWork* sortLast() const { return std::get_if<SortLastWork>(&work); }    // null if sort-first
@@ -279,21 +288,31 @@ struct StageStats {                            // renderer/compositor -> master,
 // FrameDone (header frame = frame):
 //   display_ms, route_ms                     f64 x2  16  finite
 //   bytes_encoded, strips_rejected, dropped  u64 x3  24
+//   input_ms                                 f64     8   finite, >= 0
 struct FrameDone {                             // display -> master
   uint64_t frame = 0;
   double display_ms = 0, route_ms = 0;
+  // From the oldest input this frame is the first to show (its event reaching the display)
+  // to the frame on screen; 0 when the frame shows no new input.
+  double input_ms = 0;
   uint64_t bytes_encoded = 0, strips_rejected = 0, dropped = 0;
   bool operator==(const FrameDone&) const = default;
 };
 
 // Input:
+//   seq                 u64     8    any (the display numbers its inputs 1, 2, ...)
 //   orbit_dx, orbit_dy  f64 x2  16   finite
 //   zoom                f64     8    finite, > 0
 //   quality             u8      1    0 = unchanged, else QualityName Reference..Fast
+//   interacting         bool    1
+//   width, height       i32 x2  8    both 0 (unchanged) or both 1..16384
 struct Input {                                 // display -> master (interactive camera)
+  uint64_t seq = 0;                            // echoed in FrameParams::input_seq
   double orbit_dx = 0, orbit_dy = 0;           // degrees
   double zoom = 1;                             // multiply eye distance
   std::optional<QualityName> quality;          // nullopt = unchanged
+  bool interacting = false;                    // a drag (button held) or a wheel/resize burst goes on
+  int width = 0, height = 0;                   // the window's new size (0: unchanged)
   bool operator==(const Input&) const = default;
 };
 

@@ -153,6 +153,9 @@ std::vector<std::byte> encode(const FrameParams& m, uint32_t sender) {
     w.i32(m.height);
     w.u8(static_cast<uint8_t>(m.codec));
     w.u8(static_cast<uint8_t>(m.format));
+    w.u64(m.first_wanted);
+    w.u64(m.input_seq);
+    w.boolean(m.interactive);
     w.u32(static_cast<uint32_t>(m.regions.size()));
     for (const CompositorRegion& c : m.regions) {
       w.u32(c.compositor);
@@ -210,6 +213,11 @@ Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
         uint8_t format = r.u8("format");
         if (r.ok() && !validPixelFormat(format)) r.fail("format " + std::to_string(format) + " unknown");
         m.format = static_cast<PixelFormat>(format);
+        m.first_wanted = r.u64("first_wanted");
+        if (r.ok() && m.first_wanted > m.frame)
+          r.fail("first_wanted " + std::to_string(m.first_wanted) + " after the frame itself (" + std::to_string(m.frame) + ")");
+        m.input_seq = r.u64("input_seq");
+        m.interactive = r.boolean("interactive");
         readRegions(r, m);
         m.display_endpoint = r.str("display_endpoint");
         const uint8_t mode = r.u8("mode");

@@ -23,6 +23,9 @@ inline FrameParams sampleParams() {
   p.format = PixelFormat::RGBA16F;
   p.regions = {{0, {0, 0, 640, 240}, "ipc:///tmp/c0"}, {1, {0, 240, 640, 240}, "tcp://127.0.0.1:5601"}};
   p.display_endpoint = "ipc:///tmp/display";
+  p.first_wanted = 40;
+  p.input_seq = 77;
+  p.interactive = true;
   p.work = SortLastWork{{{0, {{0, 0, 0}, {128, 256, 256}}}, {1, {{128, 0, 0}, {256, 256, 256}}}, {1, {{0, 0, 0}, {1, 1, 1}}}},
                         {2, 0, 1}};
   return p;

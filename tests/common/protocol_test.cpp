@@ -57,9 +57,9 @@ TEST(Protocol, EveryStructuredMessageRoundTrips) {
   }
   StageStats st{Role::Compositor, 2, 99, 4.5, 1.25, 0.75, 4000000, 700000, 12345, {1, 2, 300, 400}, 6, {1.5, 0.25}, 7, 3, 99, 5, 4, 812.5};
   expectRoundTrip(st, encode(st, 11), decodeStageStats, Type::Stats);
-  FrameDone fd{1000, 16.5, 2.25, 888888, 3, 1};
+  FrameDone fd{1000, 16.5, 2.25, 33.5, 888888, 3, 1};
   expectRoundTrip(fd, encode(fd, 11), decodeFrameDone, Type::FrameDone);
-  Input in{-5.5, 10, 0.9, QualityName::Reference};
+  Input in{12, -5.5, 10, 0.9, QualityName::Reference, true, 800, 600};
   expectRoundTrip(in, encode(in, 11), decodeInput, Type::Input);
   EXPECT_EQ(decodeHeader(encode(sampleParams(), 11))->frame, 42u) << "FrameParams::frame travels in the header";
 }
@@ -106,7 +106,7 @@ TEST(Protocol, TruncatedAtEveryLengthFails) {
   expectTruncationsFail(encode(samplePiece(PixelFormat::RGBA8), 1, Codec::Lzo), decodePiece);
   expectTruncationsFail(encode(sampleStrips(), 1, Codec::Zstd), decodeStrips);
   expectTruncationsFail(encode(sampleFramebuffer(), 1, Codec::Lz4), decodeFramebuffer);
-  expectTruncationsFail(encode(Input{1, 2, 3, QualityName::Fast}, 1), decodeInput);
+  expectTruncationsFail(encode(Input{9, 1, 2, 3, QualityName::Fast, true, 640, 480}, 1), decodeInput);
   expectTruncationsFail(encode(Probe{}, 1), decodeProbe);
 }
 
@@ -267,6 +267,27 @@ TEST(Protocol, RoleAndFormatRangesDeriveFromLast) {
   auto f = decodeFrameParams(encode(p, 1));
   ASSERT_FALSE(f);
   EXPECT_NE(f.error().find("format"), std::string::npos) << f.error();
+}
+
+TEST(Protocol, InteractionFieldsOutOfRangeAreRefusedByName) {
+  FrameParams p = sampleParams();
+  p.first_wanted = p.frame + 1;  // a frame cannot cancel itself
+  auto f = decodeFrameParams(encode(p, 1));
+  ASSERT_FALSE(f);
+  EXPECT_NE(f.error().find("first_wanted 43 after the frame itself (42)"), std::string::npos) << f.error();
+  for (auto [w, h] : {std::pair{0, 5}, std::pair{-1, -1}, std::pair{16385, 10}}) {
+    Input in;
+    in.width = w;
+    in.height = h;
+    auto r = decodeInput(encode(in, 1));
+    ASSERT_FALSE(r) << w << "x" << h;
+    EXPECT_NE(r.error().find("window size"), std::string::npos) << r.error();
+  }
+  FrameDone d;
+  d.input_ms = -1;
+  auto r = decodeFrameDone(encode(d, 1));
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("input_ms"), std::string::npos) << r.error();
 }
 
 }  // namespace

@@ -257,18 +257,30 @@ TEST_F(WindowSinkXvfb, PollTranslatesInput) {
   e.wheel.y = 2;
   SDL_PushEvent(&e);
   e = {};
+  e.type = SDL_MOUSEBUTTONUP;
+  e.button.button = SDL_BUTTON_LEFT;
+  SDL_PushEvent(&e);  // the drag ends: the farm renders the full frame
+  e = {};
   e.type = SDL_KEYDOWN;
+  e.key.keysym.sym = SDLK_h;
+  SDL_PushEvent(&e);  // help: drawn by the window, nothing for the farm
   e.key.keysym.sym = SDLK_q;
   SDL_PushEvent(&e);
 
   const auto ev = sink->poll();
-  ASSERT_EQ(ev.size(), 4u);
+  ASSERT_EQ(ev.size(), 5u);
   EXPECT_EQ(ev[0].quality, QualityName::Default);
+  EXPECT_FALSE(ev[0].interacting);
   // 0.3 degree per pixel; 1e-12 covers double rounding of the products.
   EXPECT_NEAR(ev[1].orbit_dx, 15 * 0.3, 1e-12);
   EXPECT_NEAR(ev[1].orbit_dy, -4 * 0.3, 1e-12);
+  EXPECT_TRUE(ev[1].interacting);
   EXPECT_NEAR(ev[2].zoom, 0.81, 1e-12);  // two notches in
-  EXPECT_TRUE(ev[3].quit);
+  EXPECT_TRUE(ev[2].interacting);
+  EXPECT_FALSE(ev[3].interacting);
+  EXPECT_EQ(ev[3].orbit_dx, 0);
+  EXPECT_FALSE(ev[3].quit);
+  EXPECT_TRUE(ev[4].quit);
   EXPECT_TRUE(sink->poll().empty());
 }
 

@@ -82,7 +82,7 @@ void writeSeeds(const std::string& dir) {
   writeSeed(dir, n, encode(fp, 1));
   writeSeed(dir, n, encode(StageStats{Role::Renderer, 1, 3, 1, 2, 0.5, 3, 4, 5, {0, 0, 4, 4}, 0}, 1));
   writeSeed(dir, n, encode(FrameDone{3, 1, 2, 3, 4, 5}, 1));
-  writeSeed(dir, n, encode(Input{1, 2, 1.5, QualityName::Fast}, 1));
+  writeSeed(dir, n, encode(Input{3, 1, 2, 1.5, QualityName::Fast, true, 640, 480}, 1));
   for (uint8_t c = 0; c < kCodecCount; ++c) {
     Piece p;
     p.region = {0, 0, 16, 16};

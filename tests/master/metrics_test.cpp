@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <unistd.h>
+
 namespace tessera::master {
 namespace {
 
@@ -54,7 +56,7 @@ TEST(Metrics, LineWrittenOnceDoneAndAllStatsAreInWithTheFaultCounters) {
   auto path = std::filesystem::temp_directory_path() / ("tessera_metrics_test_" + std::to_string(::getpid()) + ".jsonl");
   {
     Metrics m(path.string());
-    m.issued(0, 2, 1, 1);
+    m.issued(0, 2, 1, 1, FrameSpec{});
     m.stats(stats(proto::Role::Renderer, 0, 0, 10));
     m.reassigned();
     m.reissued(3);
@@ -84,13 +86,36 @@ TEST(Metrics, LineWrittenOnceDoneAndAllStatsAreInWithTheFaultCounters) {
 
 TEST(Metrics, FlushWritesDoneFramesWhoseStatsNeverCame) {
   Metrics m("");
-  m.issued(0, 0, 2, 1);
+  m.issued(0, 0, 2, 1, FrameSpec{});
   proto::FrameDone d;
   m.done(d, 1, 0);
   EXPECT_EQ(m.pending(), 1u);
   m.flushAll();
   EXPECT_EQ(m.pending(), 0u);
   EXPECT_EQ(m.framesDone(), 1u);
+}
+
+// A new-user finding: a run that failed to start wiped the last run's metrics.
+TEST(Metrics, ARunThatWritesNoLineKeepsThePreviousFileAndLeavesNoneOfItsOwn) {
+  const auto dir = std::filesystem::temp_directory_path() / ("tessera-metrics-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto path = (dir / "metrics.jsonl").string();
+  { Metrics failed_start(path); }
+  EXPECT_FALSE(std::filesystem::exists(path)) << "an empty metrics file was left behind";
+  std::ofstream(path) << "{\"frame\":0}\n";
+  { Metrics failed_start(path); }
+  std::ifstream in(path);
+  std::string line;
+  EXPECT_TRUE(std::getline(in, line) && line == "{\"frame\":0}") << "the previous run's line is gone";
+  {
+    Metrics run(path);
+    run.issued(0, 0, 0, 0, FrameSpec{});
+    run.done(proto::FrameDone{}, 1, 0);
+  }
+  std::ifstream again(path);
+  ASSERT_TRUE(std::getline(again, line));
+  EXPECT_NE(line.find("\"latency_ms\""), std::string::npos) << "a run that writes replaces the file: " << line;
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -7,15 +7,22 @@
 namespace tessera::master {
 namespace {
 
+proto::FrameParams sized(int width, int height) {
+  proto::FrameParams p;
+  p.width = width;
+  p.height = height;
+  return p;
+}
+
 Workers twoByTwo() { return {{0, 2}, {{0, "ep0"}, {3, "ep3"}}}; }
 
 TEST(SortLastPlan, OneBrickPerRendererAndOneBandPerCompositor) {
   Scene scene = defaultScene();
   scene.volume = GeneratorSpec{"hollow-shell", 16, 1};
-  SortLastPlan plan(summarizeVolume(scene), scene.tf, 64, 48, true);
+  SortLastPlan plan(summarizeVolume(scene), scene.tf, true);
   Workers w = twoByTwo();
   plan.reassign(w);
-  proto::FrameParams p;
+  proto::FrameParams p = sized(64, 48);
   p.camera = scene.camera;
   plan.fill(p, w);
   ASSERT_EQ(p.mode(), proto::FrameMode::SortLast);
@@ -35,9 +42,9 @@ TEST(SortLastPlan, OneBrickPerRendererAndOneBandPerCompositor) {
 TEST(SortLastPlan, ALostRendererBricksGoToANeighbourAndNoOtherBrickMoves) {
   Scene scene = defaultScene();
   scene.volume = GeneratorSpec{"hollow-shell", 64, 1};
-  SortLastPlan plan(summarizeVolume(scene), scene.tf, 64, 48, true);
+  SortLastPlan plan(summarizeVolume(scene), scene.tf, true);
   auto bricksOf = [&](const Workers& w) {
-    proto::FrameParams p;
+    proto::FrameParams p = sized(64, 48);
     p.camera = scene.camera;
     plan.fill(p, w);
     return p.sortLast()->bricks;
@@ -69,9 +76,14 @@ TEST(SortLastPlan, ALostRendererBricksGoToANeighbourAndNoOtherBrickMoves) {
 TEST(SortLastPlan, BandsFollowTheLatestFramesActivePixels) {
   Scene scene = defaultScene();
   scene.volume = GeneratorSpec{"hollow-shell", 16, 1};
-  SortLastPlan plan(summarizeVolume(scene), scene.tf, 64, 48, true);
+  SortLastPlan plan(summarizeVolume(scene), scene.tf, true);
   Workers w = twoByTwo();
   plan.reassign(w);
+  for (uint64_t f : {1, 3}) {
+    proto::FrameParams issued = sized(64, 48);
+    issued.frame = f;
+    plan.fill(issued, w);
+  }
   proto::StageStats s;
   s.frame = 3;
   s.active = {0, 0, 64, 8};  // everything in the top rows
@@ -79,16 +91,26 @@ TEST(SortLastPlan, BandsFollowTheLatestFramesActivePixels) {
   s.frame = 1;
   s.active = {0, 40, 64, 8};  // an older frame: ignored
   plan.stats(s, w);
-  proto::FrameParams p;
+  proto::FrameParams p = sized(64, 48);
+  p.frame = 4;
   plan.fill(p, w);
   ASSERT_EQ(p.regions.size(), 2u);
   EXPECT_LT(p.regions[0].region.h, 24) << "the first band should shrink onto the active rows";
+  // A reduced (interactive) frame: the same balance at its own size, its bands tiling it.
+  proto::FrameParams half = sized(32, 24);
+  half.frame = 5;
+  plan.fill(half, w);
+  ASSERT_EQ(half.regions.size(), 2u);
+  EXPECT_LT(half.regions[0].region.h, 12);
+  EXPECT_EQ(half.regions[0].region.h + half.regions[1].region.h, 24);
+  EXPECT_EQ(half.regions[1].region.y + half.regions[1].region.h, 24);
+  EXPECT_EQ(half.regions[0].region.w, 32);
 }
 
 TEST(SortFirstPlan, TilesDealtToRenderersAndRoutedByCompositorRendererModM) {
-  SortFirstPlan plan(64, 48, true, 2);
+  SortFirstPlan plan(true, 2);
   Workers w = twoByTwo();
-  proto::FrameParams p;
+  proto::FrameParams p = sized(64, 48);
   p.frame = 0;
   plan.fill(p, w);
   ASSERT_EQ(p.mode(), proto::FrameMode::SortFirst);
@@ -105,9 +127,9 @@ TEST(SortFirstPlan, TilesDealtToRenderersAndRoutedByCompositorRendererModM) {
 }
 
 TEST(SortFirstPlan, CostsOfAFullyReportedFrameRebalanceTheTiles) {
-  SortFirstPlan plan(64, 48, true, 1);
+  SortFirstPlan plan(true, 1);
   Workers w{{0, 1}, {{0, ""}}};
-  proto::FrameParams p0;
+  proto::FrameParams p0 = sized(64, 48);
   p0.frame = 0;
   plan.fill(p0, w);
   ASSERT_EQ(p0.sortFirst()->tiles.size(), 2u);
@@ -118,12 +140,19 @@ TEST(SortFirstPlan, CostsOfAFullyReportedFrameRebalanceTheTiles) {
     s.tile_ms = {r == 0 ? 100.0 : 1.0};  // renderer 0's tile is expensive
     plan.stats(s, w);
   }
-  proto::FrameParams p1;
+  proto::FrameParams p1 = sized(64, 48);
   p1.frame = 1;
   plan.fill(p1, w);
   ASSERT_EQ(p1.sortFirst()->tiles.size(), 2u);
   EXPECT_LT(p1.sortFirst()->tiles[0].tile.area(), p0.sortFirst()->tiles[0].tile.area())
       << "the expensive tile should shrink";
+  // A reduced frame keeps the balance at its own size: its tiles cover exactly its pixels.
+  proto::FrameParams half = sized(21, 16);
+  half.frame = 2;
+  plan.fill(half, w);
+  ASSERT_EQ(half.sortFirst()->tiles.size(), 2u);
+  EXPECT_LT(half.sortFirst()->tiles[0].tile.area(), 21 * 16 / 2);
+  EXPECT_EQ(half.sortFirst()->tiles[0].tile.area() + half.sortFirst()->tiles[1].tile.area(), 21 * 16);
 }
 
 }  // namespace

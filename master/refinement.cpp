@@ -1,0 +1,97 @@
+#include "master/refinement.h"
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+
+#include "master/interaction.h"
+
+namespace tessera::master {
+namespace {
+
+double msBetween(Refinement::Clock::time_point a, Refinement::Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+// What makes two frames show the same: the rung and the input number do not count, so a
+// change of rung alone or an input that moved nothing issues no frame.
+bool sameView(const FrameSpec& a, const FrameSpec& b) {
+  return a.camera == b.camera && a.interactive == b.interactive && a.quality == b.quality &&
+         a.full_width == b.full_width && a.full_height == b.full_height;
+}
+
+}  // namespace
+
+FrameSpec orbitFrame(const Scene& scene, uint64_t frame) {
+  FrameSpec s;
+  s.camera = scene.orbit.at(scene.camera, (int)(frame % std::max(1, scene.orbit.frames)));
+  s.quality = scene.quality;
+  s.width = s.full_width = scene.width;
+  s.height = s.full_height = scene.height;
+  return s;
+}
+
+Refinement::Refinement(const Camera& camera, const Quality& quality, int width, int height)
+    : camera_(camera), quality_(quality), max_w_(width), max_h_(height), width_(width), height_(height) {}
+
+Quality Refinement::interactiveQuality(const Quality& full) {
+  Quality q = namedQuality(QualityName::Default);
+  q.name = QualityName::Custom;
+  q.step = 2 * std::max(full.step, q.step);
+  return q;
+}
+
+std::pair<int, int> Refinement::fitWindow(int ww, int wh, int max_w, int max_h) {
+  const double s = std::min({1.0, (double)max_w / ww, (double)max_h / wh});
+  return {std::clamp((int)std::lround(ww * s), 1, max_w), std::clamp((int)std::lround(wh * s), 1, max_h)};
+}
+
+void Refinement::input(const proto::Input& in, Clock::time_point now) {
+  Camera moved = applyInput(camera_, in);  // throws before anything changes
+  camera_ = moved;
+  if (in.quality) quality_ = namedQuality(*in.quality);
+  if (in.width > 0 && in.height > 0) std::tie(width_, height_) = fitWindow(in.width, in.height, max_w_, max_h_);
+  held_ = in.interacting;
+  last_input_ = now;
+  seq_ = std::max(seq_, in.seq);
+}
+
+bool Refinement::interacting(Clock::time_point now) const {
+  return held_ && msBetween(last_input_, now) < kStillAfterMs;
+}
+
+std::optional<FrameSpec> Refinement::next(Clock::time_point now) const {
+  FrameSpec s;
+  s.camera = camera_;
+  s.input_seq = seq_;
+  s.interactive = interacting(now);
+  s.full_width = width_;
+  s.full_height = height_;
+  if (s.interactive) {
+    s.reduction = reduction();
+    s.quality = interactiveQuality(quality_);
+    s.width = std::max(1, (int)std::lround(width_ / s.reduction));
+    s.height = std::max(1, (int)std::lround(height_ / s.reduction));
+  } else {
+    s.quality = quality_;
+    s.width = width_;
+    s.height = height_;
+  }
+  if (last_ && sameView(*last_, s)) return std::nullopt;
+  return s;
+}
+
+void Refinement::interactiveDone(const FrameSpec& s, double latency_ms) {
+  if (!s.interactive || s.reduction != reduction()) return;  // feedback of another rung
+  if (latency_ms > kTargetMs * 1.25 && level_ + 1 < kLevels) {
+    ++level_;
+    return;
+  }
+  // Cost follows the pixel count; step up only with room to spare, so the rungs do not flap.
+  if (level_ > 0) {
+    const double ratio = kReductions[level_] / kReductions[level_ - 1];
+    if (latency_ms * ratio * ratio < kTargetMs * 0.8) --level_;
+  }
+}
+
+}  // namespace tessera::master

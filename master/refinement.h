@@ -1,0 +1,81 @@
+// Progressive refinement of an interactive run, as ParaView's level of detail does it but
+// adaptive: while the user drags, the master issues reduced frames (fewer pixels at twice the
+// step, one rung of a ladder measured by tessera-lod-sweep), choosing the rung from how long
+// the last reduced frames took; once input stops (the button is released, or nothing moved for
+// kStillAfterMs) it issues the full frame of the final camera. Input is coalesced: a frame
+// always shows the newest camera, and a frame that would show nothing new is not issued.
+// Plain values, no sockets; time is passed in.
+#pragma once
+#include <chrono>
+#include <optional>
+
+#include "common/camera.h"
+#include "common/quality.h"
+#include "common/scene.h"
+#include "common/wire/protocol.h"
+
+namespace tessera::master {
+
+// What one issued frame shows (the credit window keeps it, to issue the frame again).
+struct FrameSpec {
+  Camera camera;
+  Quality quality;
+  int width = 0, height = 0;            // the frame rendered
+  int full_width = 0, full_height = 0;  // the full frame of this view (interactive: before reduction)
+  bool interactive = false;
+  uint64_t input_seq = 0;  // the newest Input it shows
+  double reduction = 1;    // interactive frames: the image reduction factor
+  bool operator==(const FrameSpec&) const = default;
+};
+
+// A fixed run's frame: the orbit's camera at the scene's quality and size.
+FrameSpec orbitFrame(const Scene& scene, uint64_t frame);
+
+class Refinement {
+ public:
+  using Clock = std::chrono::steady_clock;
+  // With the button held but the mouse still, this long without input shows the full frame
+  // (jupyter_rfb waits 300 ms too).
+  static constexpr double kStillAfterMs = 300;
+  // Interactive frames aim at this issue-to-display time: with input waiting on average half a
+  // frame, the median input-to-present stays near 1.5x this (the goal: 150 ms, 10 fps).
+  static constexpr double kTargetMs = 80;
+  // The ladder, cheapest last: image reduction factors, each at twice the full frame's step
+  // (the Pareto front of tessera-lod-sweep on the default scene, README "Interaction").
+  static constexpr double kReductions[] = {1, 1.5, 2, 3, 4};
+  static constexpr int kLevels = 5, kStartLevel = 2;
+
+  // `width` x `height`: the scene's image, the largest frame the farm renders.
+  Refinement(const Camera& camera, const Quality& quality, int width, int height);
+
+  // Applies a display's Input. Throws std::invalid_argument (nothing changed) for values
+  // applyInput refuses.
+  void input(const proto::Input& in, Clock::time_point now);
+  // The frame to issue now, or nothing when it would show the same as the last one issued.
+  std::optional<FrameSpec> next(Clock::time_point now) const;
+  void issued(const FrameSpec& s) { last_ = s; }
+  // A drag (or a wheel or resize burst) goes on: input within kStillAfterMs, not released.
+  bool interacting(Clock::time_point now) const;
+  // An interactive frame took `latency_ms` from issue to display: the next rung.
+  void interactiveDone(const FrameSpec& s, double latency_ms);
+  double reduction() const { return kReductions[level_]; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+  // The quality of interactive frames: the fast path (no reference precision), twice the step.
+  static Quality interactiveQuality(const Quality& full);
+  // The frame size for a window of ww x wh: the window's shape, shrunk to fit max_w x max_h.
+  static std::pair<int, int> fitWindow(int ww, int wh, int max_w, int max_h);
+
+ private:
+  Camera camera_;
+  Quality quality_;
+  int max_w_, max_h_, width_, height_;
+  bool held_ = false;
+  Clock::time_point last_input_{};
+  uint64_t seq_ = 0;
+  int level_ = kStartLevel;
+  std::optional<FrameSpec> last_;
+};
+
+}  // namespace tessera::master

@@ -1,0 +1,171 @@
+// tessera-interaction-bench: the window as a user drags in it. Runs the real farm (tessera-up
+// on compose.yaml, interactive) with its window on a private Xvfb, drags the mouse across it
+// through XTEST at 60 events a second, releases, and reads the master's metrics: frames per
+// second during the drag, input-to-present time (median, 95th percentile; the display
+// measures it from the event reaching its loop to the frame on screen), and the time from the
+// release to the sharp frame against that frame's own issue-to-display time. One run per
+// image size and frames-in-flight setting; writes interaction.csv and prints a table.
+// A benchmark, not a timed test.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <future>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/display/xvfb.h"
+#include "tests/display/xtest.h"  // last: Xlib's macros
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using tessera::display::testing::XUser;
+
+namespace {
+
+struct Result {
+  int image = 0, in_flight = 0, drag_frames = 0;
+  double fps = 0, input_median = 0, input_p95 = 0, sharp_ms = 0, full_ms = 0;
+  std::string widths;  // the interactive frames' widths (the rungs chosen)
+};
+
+std::vector<nlohmann::json> lines(const fs::path& metrics) {
+  std::vector<nlohmann::json> v;
+  std::ifstream in(metrics);
+  for (std::string l; std::getline(in, l);)
+    if (!l.empty()) v.push_back(nlohmann::json::parse(l));
+  return v;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, (size_t)(p * (double)(v.size() - 1) + 0.5))];
+}
+
+template <class F>
+bool waitUntil(F ok, std::chrono::seconds limit) {
+  for (auto end = std::chrono::steady_clock::now() + limit; std::chrono::steady_clock::now() < end;) {
+    if (ok()) return true;
+    std::this_thread::sleep_for(20ms);
+  }
+  return false;
+}
+
+Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight, double drag_s) {
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  {
+    std::ifstream in(fs::path(TESSERA_SOURCE_DIR) / "scenes" / "default.yaml");
+    std::ofstream out(dir / "scene.yaml");
+    for (std::string l; std::getline(in, l);) out << (l.rfind("image:", 0) == 0 ? fmt::format("image: [{0}, {0}]", image) : l) << "\n";
+  }
+  tessera::display::testing::Xvfb xvfb;
+  std::string err;
+  if (!xvfb.start(err)) throw std::runtime_error(err);
+  setenv("DISPLAY", xvfb.display().c_str(), 1);
+  const std::string cmd = fmt::format(
+      "{}/tessera-up {}/compose.yaml --env TESSERA_SCENE={}/scene.yaml --env TESSERA_FRAMES=0 --env TESSERA_WINDOW=on "
+      "--env TESSERA_IN_FLIGHT={} --env TESSERA_OUT={} --env TESSERA_ENDPOINTS=ipc://{}/sockets > {}/farm.log 2>&1",
+      bin.string(), TESSERA_SOURCE_DIR, dir.string(), in_flight, dir.string(), dir.string(), dir.string());
+  auto farm = std::async(std::launch::async, [&] { return std::system(cmd.c_str()); });
+  XUser user(xvfb.display());
+  std::optional<XUser::Geometry> win;
+  const fs::path metrics = dir / "metrics.jsonl";
+  if (!waitUntil([&] { return (win = user.find("Tessera")) && !lines(metrics).empty(); }, 120s))
+    throw std::runtime_error("the farm's window did not show a frame; see " + (dir / "farm.log").string());
+  const size_t before = lines(metrics).size();
+  const int steps = (int)(drag_s * 60);
+  // Back and forth across the middle of the window, 3 px an event (0.9 degree of orbit).
+  const int x0 = win->x + win->width / 4, y0 = win->y + win->height / 2;
+  user.moveTo(x0, y0);
+  user.button(1, true);
+  for (int i = 0; i < steps; ++i) {
+    const int phase = i % 200;
+    user.moveTo(x0 + 3 * (phase < 100 ? phase : 200 - phase), y0 + (i % 2));
+    std::this_thread::sleep_for(16ms);
+  }
+  user.button(1, false);
+  std::optional<nlohmann::json> sharp;
+  waitUntil([&] {
+    auto v = lines(metrics);
+    if (v.size() > before && !v.back()["interactive"].get<bool>()) sharp = v.back();
+    return sharp.has_value();
+  }, 60s);
+  std::this_thread::sleep_for(300ms);
+  user.key(XK_Escape);
+  farm.wait();
+  unsetenv("DISPLAY");
+
+  Result r;
+  r.image = image;
+  r.in_flight = in_flight;
+  std::vector<double> input, done;
+  std::vector<int> widths;
+  for (const auto& l : lines(metrics)) {
+    if (!l["interactive"].get<bool>()) continue;
+    done.push_back(l["done_ms"].get<double>());
+    if (l.contains("input_ms")) input.push_back(l["input_ms"].get<double>());
+    widths.push_back(l["width"].get<int>());
+  }
+  r.drag_frames = (int)done.size();
+  if (done.size() > 1) r.fps = (double)(done.size() - 1) * 1000 / (done.back() - done.front());
+  r.input_median = percentile(input, 0.5);
+  r.input_p95 = percentile(input, 0.95);
+  if (sharp) {
+    r.sharp_ms = sharp->value("input_ms", 0.0);
+    r.full_ms = (*sharp)["latency_ms"].get<double>();
+  }
+  std::sort(widths.begin(), widths.end());
+  widths.erase(std::unique(widths.begin(), widths.end()), widths.end());
+  for (int w : widths) r.widths += (r.widths.empty() ? "" : " ") + std::to_string(w);
+  return r;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"tessera-interaction-bench: fps and input-to-present latency while dragging in the farm's window"};
+  std::vector<int> images{512, 1024}, in_flight{1, 3};
+  double drag_s = 5;
+  std::string out = "bench-out/interaction";
+  app.add_option("--image", images, "image sizes (square)")->capture_default_str();
+  app.add_option("--in-flight", in_flight, "frames-in-flight settings")->capture_default_str();
+  app.add_option("--drag-seconds", drag_s, "length of the drag")->capture_default_str()->check(CLI::Range(0.5, 120.0));
+  app.add_option("--out", out, "folder for the runs and interaction.csv")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  if (!tessera::display::testing::onPath("Xvfb")) {
+    std::fprintf(stderr, "tessera-interaction-bench: Xvfb not installed (apt-get install xvfb)\n");
+    return 77;
+  }
+  const fs::path bin = fs::canonical("/proc/self/exe").parent_path();
+  std::vector<Result> results;
+  try {
+    for (int image : images)
+      for (int k : in_flight) {
+        std::fprintf(stderr, "image %dx%d, %d in flight: dragging for %.1f s...\n", image, image, k, drag_s);
+        results.push_back(runOne(bin, fs::absolute(out) / fmt::format("{}-{}", image, k), image, k, drag_s));
+      }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tessera-interaction-bench: %s\n", e.what());
+    return 1;
+  }
+  std::ofstream csv(fs::absolute(out) / "interaction.csv");
+  csv << "image,in_flight,drag_frames,fps,input_ms_median,input_ms_p95,release_to_sharp_ms,sharp_frame_ms,widths\n";
+  std::printf("| image | in flight | frames during drag | fps | input-to-present median ms | p95 ms | release to sharp ms "
+              "| sharp frame's own ms | ratio | interactive widths |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+  for (const Result& r : results) {
+    csv << fmt::format("{},{},{},{:.2f},{:.1f},{:.1f},{:.1f},{:.1f},{}\n", r.image, r.in_flight, r.drag_frames, r.fps,
+                       r.input_median, r.input_p95, r.sharp_ms, r.full_ms, r.widths);
+    std::printf("| %d² | %d | %d | %.1f | %.0f | %.0f | %.0f | %.0f | %.2f | %s |\n", r.image, r.in_flight, r.drag_frames,
+                r.fps, r.input_median, r.input_p95, r.sharp_ms, r.full_ms, r.full_ms > 0 ? r.sharp_ms / r.full_ms : 0,
+                r.widths.c_str());
+  }
+  return 0;
+}

@@ -1,0 +1,120 @@
+#include "master/refinement.h"
+
+#include <gtest/gtest.h>
+
+namespace tessera::master {
+namespace {
+
+using Clock = Refinement::Clock;
+using std::chrono::milliseconds;
+
+proto::Input drag(uint64_t seq, double dx) {
+  proto::Input in;
+  in.seq = seq;
+  in.orbit_dx = dx;
+  in.interacting = true;
+  return in;
+}
+
+Refinement make() { return Refinement(Camera{}, namedQuality(QualityName::Default), 1024, 768); }
+
+TEST(Refinement, FirstFrameIsFullThenNothingUntilInput) {
+  Refinement r = make();
+  const auto t0 = Clock::now();
+  auto s = r.next(t0);
+  ASSERT_TRUE(s);
+  EXPECT_FALSE(s->interactive);
+  EXPECT_EQ(s->width, 1024);
+  EXPECT_EQ(s->height, 768);
+  r.issued(*s);
+  EXPECT_FALSE(r.next(t0 + milliseconds(1000))) << "nothing changed: no frame";
+}
+
+TEST(Refinement, ADragGivesReducedFramesOfTheNewestCameraThenTheFullOneOnRelease) {
+  Refinement r = make();
+  auto t = Clock::now();
+  r.issued(*r.next(t));
+  for (uint64_t k = 1; k <= 200; ++k) r.input(drag(k, 0.5), t);  // a burst: one frame, not 200
+  auto s = r.next(t);
+  ASSERT_TRUE(s);
+  EXPECT_TRUE(s->interactive);
+  EXPECT_EQ(s->input_seq, 200u);
+  EXPECT_EQ(s->reduction, Refinement::kReductions[Refinement::kStartLevel]);
+  EXPECT_EQ(s->width, 512);
+  EXPECT_EQ(s->height, 384);
+  EXPECT_EQ(s->full_width, 1024);
+  EXPECT_EQ(s->quality.step, 2 * namedQuality(QualityName::Default).step);
+  r.issued(*s);
+  EXPECT_FALSE(r.next(t)) << "the newest camera is already issued";
+  proto::Input release;
+  release.seq = 201;
+  r.input(release, t + milliseconds(10));
+  auto sharp = r.next(t + milliseconds(10));
+  ASSERT_TRUE(sharp);
+  EXPECT_FALSE(sharp->interactive);
+  EXPECT_EQ(sharp->camera, s->camera) << "the full frame shows the final camera";
+  EXPECT_EQ(sharp->width, 1024);
+  EXPECT_EQ(sharp->quality, namedQuality(QualityName::Default));
+  EXPECT_EQ(sharp->input_seq, 201u);
+}
+
+TEST(Refinement, AHeldButStillMouseGetsTheFullFrameAfterThePause) {
+  Refinement r = make();
+  auto t = Clock::now();
+  r.input(drag(1, 3), t);
+  EXPECT_TRUE(r.interacting(t + milliseconds(100)));
+  EXPECT_FALSE(r.interacting(t + milliseconds((int)Refinement::kStillAfterMs + 1)));
+  r.issued(*r.next(t));
+  auto s = r.next(t + milliseconds((int)Refinement::kStillAfterMs + 1));
+  ASSERT_TRUE(s);
+  EXPECT_FALSE(s->interactive);
+}
+
+TEST(Refinement, TheRungFollowsTheMeasuredLatency) {
+  Refinement r = make();
+  auto t = Clock::now();
+  r.input(drag(1, 1), t);
+  auto s = *r.next(t);
+  r.interactiveDone(s, Refinement::kTargetMs * 2);  // too slow: one rung cheaper
+  EXPECT_EQ(r.reduction(), Refinement::kReductions[Refinement::kStartLevel + 1]);
+  r.interactiveDone(s, 1);  // feedback of the old rung does not count
+  EXPECT_EQ(r.reduction(), Refinement::kReductions[Refinement::kStartLevel + 1]);
+  s = *r.next(t);
+  r.interactiveDone(s, 10);  // fast: the pixel count may grow within the target
+  EXPECT_EQ(r.reduction(), Refinement::kReductions[Refinement::kStartLevel]);
+  s = *r.next(t);
+  r.interactiveDone(s, Refinement::kTargetMs);  // on target: stays
+  EXPECT_EQ(r.reduction(), Refinement::kReductions[Refinement::kStartLevel]);
+}
+
+TEST(Refinement, AResizedWindowIsRenderedAtItsShapeWithinTheScenesImage) {
+  EXPECT_EQ(Refinement::fitWindow(800, 600, 1024, 768), std::make_pair(800, 600));
+  EXPECT_EQ(Refinement::fitWindow(2048, 768, 1024, 768), std::make_pair(1024, 384));
+  EXPECT_EQ(Refinement::fitWindow(1, 5000, 1024, 768), std::make_pair(1, 768));
+  Refinement r = make();
+  auto t = Clock::now();
+  r.issued(*r.next(t));
+  proto::Input in;
+  in.width = 640;
+  in.height = 640;
+  r.input(in, t);
+  auto s = r.next(t);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->width, 640);
+  EXPECT_EQ(s->height, 640);
+}
+
+TEST(Refinement, RefusedInputChangesNothing) {
+  Refinement r = make();
+  auto t = Clock::now();
+  r.issued(*r.next(t));
+  proto::Input bad;
+  bad.zoom = -1;
+  bad.interacting = true;
+  EXPECT_THROW(r.input(bad, t), std::invalid_argument);
+  EXPECT_FALSE(r.interacting(t));
+  EXPECT_FALSE(r.next(t));
+}
+
+}  // namespace
+}  // namespace tessera::master
