@@ -20,6 +20,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "common/io/image_io.h"
 #include "tests/display/xvfb.h"
 #include "tests/display/xtest.h"  // last: Xlib's macros
 
@@ -84,12 +85,21 @@ Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight
   const int steps = (int)(drag_s * 60);
   // Back and forth across the middle of the window, 3 px an event (0.9 degree of orbit).
   const int x0 = win->x + win->width / 4, y0 = win->y + win->height / 2;
-  user.moveTo(x0, y0);
-  user.button(1, true);
+  user.press(x0, y0);
+  // What the user sees: the window's pixels during the drag and once it is sharp.
+  auto shot = [&](const std::string& name) {
+    std::string why;
+    tessera::Image8 screen = tessera::display::testing::screenshotRoot(xvfb.display(), why), w(win->width, win->height);
+    if (screen.px.empty()) return;
+    for (int y = 0; y < w.height; ++y)
+      for (int x = 0; x < w.width; ++x) std::copy_n(screen.at(win->x + x, win->y + y), 4, w.at(x, y));
+    tessera::writePng((dir / name).string(), w);
+  };
   for (int i = 0; i < steps; ++i) {
     const int phase = i % 200;
     user.moveTo(x0 + 3 * (phase < 100 ? phase : 200 - phase), y0 + (i % 2));
     std::this_thread::sleep_for(16ms);
+    if (i == steps / 2) shot("moving.png");
   }
   user.button(1, false);
   std::optional<nlohmann::json> sharp;
@@ -99,6 +109,7 @@ Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight
     return sharp.has_value();
   }, 60s);
   std::this_thread::sleep_for(300ms);
+  shot("sharp.png");
   user.key(XK_Escape);
   farm.wait();
   unsetenv("DISPLAY");
@@ -115,6 +126,7 @@ Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight
     widths.push_back(l["width"].get<int>());
   }
   r.drag_frames = (int)done.size();
+  if (done.empty()) throw std::runtime_error("no interactive frame: the drag did not reach the window; see " + (dir / "farm.log").string());
   if (done.size() > 1) r.fps = (double)(done.size() - 1) * 1000 / (done.back() - done.front());
   r.input_median = percentile(input, 0.5);
   r.input_p95 = percentile(input, 0.95);

@@ -57,10 +57,17 @@ class XUser {
     flush();
   }
   void resize(Window w, int width, int height) { XResizeWindow(dpy_, w, (unsigned)width, (unsigned)height), flush(); }
+  // The pointer into the window, a moment for the window to see it enter, then the left
+  // button down (a press that races the pointer's arrival was seen to start no drag).
+  void press(int x, int y) {
+    moveTo(x, y);
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    button(1, true);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
   // A left-button drag from (x, y) by (dx, dy) per step, `steps` steps `pause` apart.
   void drag(int x, int y, int dx, int dy, int steps, std::chrono::milliseconds pause) {
-    moveTo(x, y);
-    button(1, true);
+    press(x, y);
     for (int i = 1; i <= steps; ++i) {
       moveTo(x + i * dx, y + i * dy);
       std::this_thread::sleep_for(pause);
