@@ -41,7 +41,13 @@ case "$mode" in
   build) echo "built: $BUILD/bin" ;;
   run)
     shift || true
-    echo "running the farm on ${TESSERA_SCENE:-the built-in scene} (a window opens if DISPLAY is set)"
+    # With a display, the farm is steered from its window (TESSERA_FRAMES=-1 plays the orbit instead).
+    if [ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ] && [ -z "${TESSERA_FRAMES:-}" ]; then
+      export TESSERA_FRAMES=0
+      echo "running the farm on ${TESSERA_SCENE:-the built-in scene} in a window: drag to orbit, wheel to zoom, h for help, Esc to stop"
+    else
+      echo "running the farm on ${TESSERA_SCENE:-the built-in scene} (frames -> ${TESSERA_OUT:-out}/)"
+    fi
     case "$BUILD" in /*) bin=$BUILD/bin ;; *) bin=$REPO/$BUILD/bin ;; esac
     cd "$CALLER_DIR"
     exec "$bin/tessera-up" "$REPO/compose.yaml" "$@"
