@@ -82,20 +82,27 @@ class Master {
 
  private:
   // ---- membership -------------------------------------------------------------------
+  // Never silent: after 2 s, and every 10 s, it says whom it waits for and where.
   bool gatherMembers(const std::atomic<bool>* stop) {
-    auto start = Clock::now(), last_probe = Clock::now() - std::chrono::seconds(1);
+    auto start = Clock::now(), last_probe = start - std::chrono::seconds(1), last_note = start - std::chrono::seconds(8);
     while (!(stop && *stop)) {
+      const auto missing = fmt::format("renderers {}/{} compositors {}/{} display {}/1", members_.count(Role::Renderer),
+                                       opt_.renderers, members_.count(Role::Compositor), opt_.compositors,
+                                       members_.count(Role::Display));
       if (members_.count(Role::Renderer) >= opt_.renderers && members_.count(Role::Compositor) >= opt_.compositors &&
           members_.count(Role::Display) >= 1)
         return true;
       if (msSince(last_probe) > 100) {
-        probe();  // stages say Hello only after this reaches them, so their subscription is live
+        probe();  // stages say Hello once this reaches them: their subscription is live
         last_probe = Clock::now();
       }
+      if (msSince(last_note) > 10000) {
+        spdlog::info("waiting for stages at {}: {} (gives up after {:.0f} s)", opt_.endpoints.masterControl(), missing,
+                     opt_.start_timeout_s);
+        last_note = Clock::now();
+      }
       if (msSince(start) > opt_.start_timeout_s * 1000) {
-        spdlog::error("stages missing after {:.0f} s: renderers {}/{} compositors {}/{} display {}/1",
-                      opt_.start_timeout_s, members_.count(Role::Renderer), opt_.renderers,
-                      members_.count(Role::Compositor), opt_.compositors, members_.count(Role::Display));
+        spdlog::error("stages missing after {:.0f} s: {}", opt_.start_timeout_s, missing);
         return false;
       }
       pollControl(20);
@@ -179,12 +186,7 @@ class Master {
                  oldest->second, window_.deadlineMs(), members_.epoch(), oldest->first, who);
   }
 
-  Workers workers() const {
-    Workers w;
-    for (const Member* m : members_.alive(Role::Renderer)) w.renderers.push_back(m->rank);
-    for (const Member* m : members_.alive(Role::Compositor)) w.compositors.push_back({m->rank, m->endpoint});
-    return w;
-  }
+  Workers workers() const { return aliveWorkers(members_); }
 
   // A stage came or went: new assignment, and frames in flight are issued again under a
   // new epoch (stages drop work of older epochs), so no frame waits forever for a dead stage.

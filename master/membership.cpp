@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "common/net/stage_link.h"
+#include "master/plan.h"
 
 namespace tessera::master {
 
@@ -122,6 +123,13 @@ std::string describeWaiting(const Membership& members, const std::vector<uint32_
   for (uint32_t c : compositors) parts.push_back(name(proto::Role::Compositor, c, "strips from"));
   if (const Member* d = members.display(); display && d) parts.push_back(name(proto::Role::Display, d->rank, "FrameDone from"));
   return fmt::format("{}", fmt::join(parts, " and "));
+}
+
+Workers aliveWorkers(const Membership& members) {
+  Workers w;
+  for (const Member* m : members.alive(proto::Role::Renderer)) w.renderers.push_back(m->rank);
+  for (const Member* m : members.alive(proto::Role::Compositor)) w.compositors.push_back({m->rank, m->endpoint});
+  return w;
 }
 
 }  // namespace tessera::master

@@ -71,6 +71,10 @@ class Membership {
   uint32_t epoch_ = 0;
 };
 
+// The alive renderers and compositors, as the plans take them.
+struct Workers;
+Workers aliveWorkers(const Membership& members);
+
 // Who a frame waits for, e.g. "stats from renderer 1 (pid 1234) and strips from compositor 0
 // (pid 99)"; `culprit` gets the first of them (nullptr if none is a member).
 std::string describeWaiting(const Membership& members, const std::vector<uint32_t>& renderers,

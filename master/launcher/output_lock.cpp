@@ -2,6 +2,8 @@
 // dies however it dies, so a farm that crashed never blocks the next one.
 #include "master/launcher/output_lock.h"
 
+#include <regex>
+
 #include <fcntl.h>
 #include <sys/file.h>
 #include <unistd.h>
@@ -43,6 +45,17 @@ OutputLock::~OutputLock() {
   std::error_code ec;
   std::filesystem::remove(path_, ec);
   ::close(fd_);
+}
+
+int removeOldFrames(const std::filesystem::path& folder) {
+  static const std::regex frame(R"(frame_\d{6}\.(png|pam))");
+  int removed = 0;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(folder, ec))
+    if (e.is_regular_file(ec) && std::regex_match(e.path().filename().string(), frame) &&
+        std::filesystem::remove(e.path(), ec))
+      ++removed;
+  return removed;
 }
 
 }  // namespace tessera::launcher

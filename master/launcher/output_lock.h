@@ -6,6 +6,11 @@
 
 namespace tessera::launcher {
 
+// Removes frame_NNNNNN.png and .pam files an earlier run left in `folder` (a shorter run
+// would otherwise leave them beside its own, looking like its frames); returns how many.
+// Call it holding the folder's lock.
+int removeOldFrames(const std::filesystem::path& folder);
+
 class OutputLock {
  public:
   // Creates the folder if needed and takes the lock; throws LaunchError naming the folder

@@ -144,6 +144,8 @@ int main(int argc, char** argv) {
       return printPlan(project, tessera::launcher::planProcesses(project, launch_options, true)) ? 0 : 1;
     }
     const tessera::launcher::OutputLock out_lock(out_folder);  // one farm per output folder
+    if (const int old = tessera::launcher::removeOldFrames(out_folder); old > 0)
+      log->info("removed {} frame files of an earlier run from {}", old, out_folder.string());
     if (!folder.empty()) log->info("run {}: sockets in {}", run, folder.string());
     const int rc = tessera::launcher::launch(project, launch_options);
     std::error_code ignored;

@@ -17,5 +17,15 @@ TEST(StageWaits, ALoneRendererSaysWhichMasterItWaitsFor) {
   EXPECT_NE(r.output.find("TESSERA_ENDPOINTS=" + base), std::string::npos) << r.output;
 }
 
+// A new-user finding: a lone master said nothing about the stages it waits for.
+TEST(StageWaits, ALoneMasterSaysWhichStagesItWaitsForAndWhere) {
+  FarmDir dir("master-waits");
+  const std::string base = "ipc://" + (dir.path() / "sockets").string();
+  const auto r = runCommand("env TESSERA_ENDPOINTS=" + base + " " + bin("tessera-master") + " --renderers 2", 4);
+  EXPECT_NE(r.output.find("waiting for stages at " + base + "/master-ctl: renderers 0/2 compositors 0/1 display 0/1"),
+            std::string::npos)
+      << r.output;
+}
+
 }  // namespace
 }  // namespace tessera::test
