@@ -17,11 +17,16 @@ int main(int argc, char** argv) {
   app.add_option("--out", opt.out_dir, "folder for PNG frames (no window)")->envname("TESSERA_OUT");
   using Window = display::StageOptions::Window;
   const std::map<std::string, Window> windows{{"auto", Window::Auto}, {"on", Window::On}, {"off", Window::Off}};
-  app.add_option("--window", opt.window, "auto | on | off")->envname("TESSERA_WINDOW")
-      ->transform(CLI::CheckedTransformer(windows));
+  app.add_option("--window", opt.window, "auto (a window if a display server answers, else PNG files) | on | off")
+      ->envname("TESSERA_WINDOW")
+      ->transform(CLI::CheckedTransformer(windows))
+      ->option_text("auto|on|off [auto] (Env:TESSERA_WINDOW)");
   app.add_flag("--premultiplied", opt.premultiplied, "also write frame_NNNNNN.pam: exact premultiplied rgba8")
       ->envname("TESSERA_PREMULTIPLIED");
-  app.add_option("--background", bg, "r,g,b in [0,1]: PNGs composited over this colour")->delimiter(',')->expected(3);
+  app.add_option("--background", bg, "r,g,b in [0,1]: PNGs composited over this colour")
+      ->delimiter(',')
+      ->expected(3)
+      ->option_text("R,G,B [none: straight alpha]");
   return stageMain(app, argc, argv, args, [&](const Endpoints& endpoints, zmq::context_t& ctx, auto stop) {
     if (!bg.empty()) opt.background = std::array<double, 3>{bg[0], bg[1], bg[2]};
     // Parses the scene only (its volume is never loaded): the image size bounds what

@@ -30,6 +30,7 @@ class Stage {
 
   int run(const std::atomic<bool>* stop) {
     if (!link_.join(stop)) {
+      if (stop && *stop) return 0;  // stopped (Ctrl-C) while it waited: not a failure to join
       spdlog::error("display could not join the master at {}", opt_.endpoints.masterControl());
       return 1;
     }

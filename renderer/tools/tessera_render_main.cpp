@@ -92,7 +92,8 @@ void addOptions(CLI::App& app, Args& a) {
   app.add_option("--background", a.background, "composite over r,g,b in [0,1] instead of writing alpha")
       ->delimiter(',')
       ->expected(3)
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(CLI::Range(0.0, 1.0))
+      ->option_text("R,G,B [none: straight alpha]");
   app.add_option("--tiles", a.tiles, "mesh scenes: render as CxR tiles and assemble (bit-identical to 1x1)");
   app.add_option("--aa", a.aa, "mesh scenes: none | msaa | ssaa | fft (default: the scene's)");
   app.add_option("--aa-samples", a.aa_samples, "mesh scenes: MSAA samples (1,2,4) or SSAA factor")->check(CLI::Range(1, 8));

@@ -1,4 +1,4 @@
-// Anti-aliasing of geometry judged by run time against error (issue 4): none, MSAA 2/4,
+// Anti-aliasing of geometry judged by run time against error: none, MSAA 2/4,
 // supersampling 2x2/3x3 and the FFT low-pass post filter at several sigmas, each against a
 // 16x (4x4) supersampled render of the same view. One OSMesa context: not thread-safe.
 #pragma once

@@ -18,14 +18,14 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"tessera-dump-volume: write a built-in generated volume as a raw little-endian file"};
-  app.option_defaults()->always_capture_default();  // --help shows every default
+  // --help shows the defaults of the options; the positionals are all required, so have none.
   tessera::GeneratorSpec spec;
   std::string out_path, type = "float32";
   app.add_option("generator", spec.name, "hollow-shell | marschner-lobb | noise-cloud")->required();
   app.add_option("size", spec.size, "cube edge in voxels")->required()->check(CLI::Range(2, 4096));
   app.add_option("seed", spec.seed, "generator seed")->required();
   app.add_option("out", out_path, "output file (.raw)")->required();
-  app.add_option("--type", type, "float32 | uint16")->check(CLI::IsMember({"float32", "uint16"}));
+  app.add_option("--type", type, "float32 | uint16")->capture_default_str()->check(CLI::IsMember({"float32", "uint16"}));
   CLI11_PARSE(app, argc, argv);
   try {
     std::ofstream out(out_path, std::ios::binary);

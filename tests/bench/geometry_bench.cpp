@@ -1,4 +1,4 @@
-// tessera-geometry-bench: the sort-first geometry mode (issue 4). (a) one process: triangles
+// tessera-geometry-bench: the sort-first geometry mode. (a) one process: triangles
 // per second at 1024x1024, no AA and MSAA 4; (b) bounding-box culling against broadcasting
 // every chunk to every tile (2x2 tiles, identical bytes required); (c) the farm through
 // tessera-up on a corner-crowded scene, static against balanced tiling; (d) anti-aliasing
@@ -252,7 +252,7 @@ void antialiasing(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) try {
-  CLI::App app{"Tessera sort-first geometry benchmark (issue 4)"};
+  CLI::App app{"Tessera sort-first geometry benchmark"};
   Options o;
   app.add_flag("--smoke", o.smoke, "tiny sizes, one repeat, 4 farm frames: proves it works (ctest)");
   app.add_option("--out", o.out, "folder for farm runs and outputs");
