@@ -2,9 +2,13 @@
 // the data's value range and a histogram (text, and a PNG with --plot), what a renderer
 // needs in memory, and the scene with every default filled in.
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstring>
+#include <filesystem>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -18,6 +22,21 @@
 namespace {
 
 using namespace tessera;
+
+// Files whose header says what they hold: a scene of one line is all they need.
+bool isVolumeFile(const std::string& path) {
+  std::string p = path;
+  std::transform(p.begin(), p.end(), p.begin(), [](unsigned char c) { return (char)std::tolower(c); });
+  for (const char* ext : {".nii", ".nii.gz", ".hdr", ".nrrd", ".nhdr"})
+    if (p.size() >= std::strlen(ext) && p.compare(p.size() - std::strlen(ext), std::string::npos, ext) == 0) return true;
+  return false;
+}
+
+Scene volumeScene(const std::string& path) {
+  const std::filesystem::path abs = std::filesystem::absolute(path);
+  return parseScene("volume: {file: " + nlohmann::json(abs.filename().string()).dump() + "}\n", abs.parent_path().string(),
+                    path);
+}
 
 struct Histogram {
   double lo = 0, hi = 0;          // in the file's units
@@ -96,11 +115,12 @@ int run(int argc, char** argv) {
   app.option_defaults()->always_capture_default();  // --help shows every default
   std::string scene_path, plot;
   int bins = 16;
-  app.add_option("scene", scene_path, "scene file (default: the built-in scene)");
+  app.add_option("scene", scene_path,
+                 "scene file, or a NIfTI/NRRD volume file (read as the scene 'volume: {file: F}'); default: the built-in scene");
   app.add_option("--bins", bins, "histogram bins")->check(CLI::Range(1, 4096))->capture_default_str();
   app.add_option("--plot", plot, "also write the histogram as a PNG");
   CLI11_PARSE(app, argc, argv);
-  Scene scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
+  Scene scene = scene_path.empty() ? defaultScene() : isVolumeFile(scene_path) ? volumeScene(scene_path) : loadScene(scene_path);
   std::printf("# scene %s, every default filled in\n%s\n", scene_path.empty() ? "(built-in)" : scene_path.c_str(),
               sceneYaml(scene).c_str());
   if (!scene.has_volume) return 0;

@@ -3,6 +3,8 @@
 // is said; tessera-info reports the values exactly.
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -146,6 +148,30 @@ TEST(FirstContact, TesseraInfoReportsTheValuesAndTheirHistogramExactly) {
   EXPECT_NE(r.output.find("camera:"), std::string::npos) << r.output;
   const Image8 plot = readPng(png);
   EXPECT_EQ(plot.width, 16);
+
+  // The same voxels as a NIfTI-1 file, given to tessera-info alone (its header says the rest).
+  std::vector<char> nii(352, 0);
+  auto put = [&](size_t at, auto value) { std::memcpy(nii.data() + at, &value, sizeof value); };
+  put(0, int32_t{348});
+  for (int i = 0; i < 8; ++i) put(40 + 2 * i, int16_t(i == 0 ? 3 : i <= 3 ? 8 : 1));  // dim
+  put(70, int16_t{2});                                                                 // uint8
+  put(72, int16_t{8});
+  for (int i = 0; i < 8; ++i) put(76 + 4 * i, 1.0f);  // pixdim
+  put(108, 352.0f);                                   // vox_offset
+  std::memcpy(nii.data() + 344, "n+1", 4);
+  nii.insert(nii.end(), v.begin(), v.end());
+  std::ofstream(dir.path() / "k.nii", std::ios::binary).write(nii.data(), (std::streamsize)nii.size());
+  const auto n = runCommand(bin("tessera-info") + " " + (dir.path() / "k.nii").string() + " --bins 4", 60);
+  ASSERT_EQ(n.exit_code, 0) << n.output;
+  EXPECT_NE(n.output.find("volume: 8 x 8 x 8 voxels, uint8"), std::string::npos) << n.output;
+  std::vector<unsigned long long> from_nifti;
+  std::istringstream nin(n.output);
+  for (std::string l; std::getline(nin, l);) {
+    double a, b;
+    unsigned long long c;
+    if (std::sscanf(l.c_str(), " %lf .. %lf %llu", &a, &b, &c) == 3) from_nifti.push_back(c);
+  }
+  EXPECT_EQ(from_nifti, counts) << n.output;
 }
 
 }  // namespace
