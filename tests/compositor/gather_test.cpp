@@ -72,6 +72,27 @@ TEST(Gather, RejectsDuplicatesStrangersAndStaleEpochs) {
   EXPECT_FALSE(g.pop());
 }
 
+TEST(Gather, CancelledFramesAreGivenUpAndTheirLatePartsQuietlyDiscarded) {
+  Gather g(0);
+  g.addParams(params(0, 2));
+  g.addParams(params(1, 2));
+  EXPECT_EQ(g.addPiece(piece(0, 0)), "");
+  FrameParams moved = params(2, 2);
+  moved.first_wanted = 2;  // the camera moved: frames 0 and 1 are stale
+  EXPECT_EQ(g.addParams(moved), "");
+  EXPECT_EQ(g.pending(), 1u) << "the cancelled frames are still held";
+  EXPECT_EQ(g.addPiece(piece(0, 1)), "") << "a late part of a cancelled frame is not a fault";
+  EXPECT_EQ(g.addPiece(piece(1, 0)), "");
+  EXPECT_FALSE(g.pop()) << "a cancelled frame was completed";
+  EXPECT_EQ(g.addPiece(piece(2, 0)), "");
+  EXPECT_EQ(g.addPiece(piece(2, 1)), "");
+  auto r = g.pop();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->params.frame, 2u);
+  EXPECT_TRUE(g.takeLateDrops().empty());
+  EXPECT_NE(g.addPiece(piece(2, 1)), "") << "a part of a finished frame is still a fault";
+}
+
 TEST(Gather, NewEpochReissuesFramesInFlight) {
   Gather g(0);
   g.addParams(params(0, 2, 0));

@@ -61,5 +61,24 @@ TEST(CreditWindow, WaitingNamesRenderersThenCompositorsThenTheDisplay) {
   EXPECT_DOUBLE_EQ(w.oldest(t0 + 3s)->second, 2000);
 }
 
+TEST(CreditWindow, CancelledFramesLeaveAtOnceAndOnlyFullFramesSetTheDeadline) {
+  CreditWindow w(3, {30.0, 0.001, 1.0});
+  FrameSpec full, quick;
+  quick.interactive = true;
+  w.issue(0, full, {0}, {0}, t0);
+  w.issue(1, full, {0}, {0}, t0);
+  w.issue(2, quick, {0}, {0}, t0);
+  EXPECT_FALSE(w.hasRoom());
+  EXPECT_FALSE(w.hasRoom(5));
+  EXPECT_EQ(w.cancelBelow(2), 2u);
+  EXPECT_TRUE(w.hasRoom());
+  EXPECT_FALSE(w.hasRoom(1)) << "interactive frames keep one in flight";
+  EXPECT_FALSE(w.done(0, t0)) << "a cancelled frame is not in flight";
+  auto d = w.done(2, t0 + std::chrono::milliseconds(10));
+  ASSERT_TRUE(d);
+  EXPECT_TRUE(d->first.interactive);
+  EXPECT_EQ(w.deadlineMs(), 30000) << "an interactive frame set the deadline";
+}
+
 }  // namespace
 }  // namespace tessera::master
