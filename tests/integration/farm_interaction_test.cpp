@@ -114,6 +114,9 @@ TEST_F(FarmInteraction, ADragShowsReducedFramesThenTheSharpFrameOfTheFinalCamera
       EXPECT_GT(l["input_ms"].get<double>(), 0) << "it shows new input";
     }
   EXPECT_GE(interactive, 1) << "no reduced frame while the mouse moved";
+  std::ifstream doc_in(std::string(TESSERA_SOURCE_DIR) + "/docs/metrics.md");  // every field explained
+  const std::string doc(std::istreambuf_iterator<char>(doc_in), {});
+  for (const auto& [key, value] : lines.back().items()) EXPECT_NE(doc.find("`" + key + "`"), std::string::npos) << key;
   EXPECT_EQ(sharp->at("width").get<int>(), kW);
   EXPECT_NE(sharp->at("camera"), first["camera"]) << "the drag did not move the camera";
   EXPECT_GE(sharp->at("frame").get<uint64_t>(), last_before);

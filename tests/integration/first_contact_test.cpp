@@ -116,6 +116,24 @@ TEST(FirstContact, AStaticViewIsRenderedOnceAndTheOtherFramesSaySo) {
     EXPECT_FALSE(j.contains("overlap_factor")) << "a sort-first field in a sort-last frame\n" << j.dump();
   }
   EXPECT_NE(r.output.find("(3 of 4 frames reused the image: the view did not change)"), std::string::npos) << r.output;
+  // Every field a line carries is explained in docs/metrics.md.
+  std::ifstream doc_in(std::string(TESSERA_SOURCE_DIR) + "/docs/metrics.md");
+  const std::string doc(std::istreambuf_iterator<char>(doc_in), {});
+  for (const auto& j : lines)
+    for (const auto& [key, value] : j.items()) EXPECT_NE(doc.find("`" + key + "`"), std::string::npos) << key;
+}
+
+// An interactive run without a window renders its first frame and says how to steer or stop it.
+TEST(FirstContact, AnInteractiveRunWithoutAWindowSaysHowToSteerAndStopIt) {
+  FarmDir dir("interactive-nowindow");
+  const auto scene =
+      writeSceneFile(dir, "still.yaml", "volume: {generator: {name: hollow-shell, size: 24}}\nimage: [48, 32]\n");
+  const auto r = dir.runFarm(scene, 1, 1, 0, 8);  // runs until stopped: timeout ends it
+  EXPECT_NE(r.output.find("without a window only the first frame is rendered. Ctrl-C or closing the window stops it"),
+            std::string::npos)
+      << r.output;
+  EXPECT_TRUE(fs::exists(dir.frame(0))) << r.output;
+  EXPECT_FALSE(fs::exists(dir.frame(1))) << "a frame without input";
 }
 
 TEST(FirstContact, TesseraInfoReportsTheValuesAndTheirHistogramExactly) {
