@@ -83,11 +83,21 @@ std::optional<FrameSpec> Refinement::next(Clock::time_point now) const {
 
 void Refinement::interactiveDone(const FrameSpec& s, double latency_ms) {
   if (!s.interactive || s.reduction != reduction()) return;  // feedback of another rung
-  if (latency_ms > kTargetMs * 1.25 && level_ + 1 < kLevels) {
+  double& here = seen_ms_[level_];
+  here = here > 0 ? (here + latency_ms) / 2 : latency_ms;
+  const double cheaper = level_ + 1 < kLevels ? seen_ms_[level_ + 1] : 0, dearer = level_ > 0 ? seen_ms_[level_ - 1] : 0;
+  // The cheaper rung saved nothing against the dearer one (a frame whose cost is not in its
+  // pixels, e.g. a mesh's triangles): back to the dearer one.
+  if (dearer > 0 && dearer <= 1.15 * latency_ms) {
+    --level_;
+    return;
+  }
+  // Too slow: one rung cheaper, unless it was tried and saved little.
+  if (latency_ms > kTargetMs * 1.25 && level_ + 1 < kLevels && (cheaper == 0 || cheaper < 0.8 * latency_ms)) {
     ++level_;
     return;
   }
-  // Cost follows the pixel count; step up only with room to spare, so the rungs do not flap.
+  // Cost follows the pixel count: one rung dearer with room to spare, so the rungs do not flap.
   if (level_ > 0) {
     const double ratio = kReductions[level_] / kReductions[level_ - 1];
     if (latency_ms * ratio * ratio < kTargetMs * 0.8) --level_;

@@ -77,6 +77,7 @@ class Refinement {
   Clock::time_point last_input_{};
   uint64_t seq_ = 0;
   int level_ = kStartLevel;
+  double seen_ms_[kLevels] = {};  // recent interactive frame times per rung (0: not seen)
   std::optional<FrameSpec> last_;
 };
 

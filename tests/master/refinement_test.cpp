@@ -87,6 +87,20 @@ TEST(Refinement, TheRungFollowsTheMeasuredLatency) {
   EXPECT_EQ(r.reduction(), Refinement::kReductions[Refinement::kStartLevel]);
 }
 
+TEST(Refinement, ARungThatSavesNothingIsNotKept) {
+  // A mesh: its cost is in its triangles, not its pixels; fewer pixels save nothing.
+  Refinement r = make();
+  auto t = Clock::now();
+  r.input(drag(1, 1), t);
+  const double slow = Refinement::kTargetMs * 2;
+  r.interactiveDone(*r.next(t), slow);
+  EXPECT_EQ(r.reduction(), Refinement::kReductions[Refinement::kStartLevel + 1]) << "too slow: one rung cheaper";
+  r.interactiveDone(*r.next(t), slow);
+  EXPECT_EQ(r.reduction(), Refinement::kReductions[Refinement::kStartLevel]) << "no faster: back to the dearer rung";
+  for (int i = 0; i < 5; ++i) r.interactiveDone(*r.next(t), slow);
+  EXPECT_EQ(r.reduction(), Refinement::kReductions[Refinement::kStartLevel]) << "and it stays there";
+}
+
 TEST(Refinement, AResizedWindowIsRenderedAtItsShapeWithinTheScenesImage) {
   EXPECT_EQ(Refinement::fitWindow(800, 600, 1024, 768), std::make_pair(800, 600));
   EXPECT_EQ(Refinement::fitWindow(2048, 768, 1024, 768), std::make_pair(1024, 384));
