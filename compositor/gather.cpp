@@ -109,8 +109,7 @@ std::string Gather::addParams(proto::FrameParams p) {
     if (p.frame < next_expected_) next_expected_ = p.frame;  // frames in flight are issued again
   }
   if (p.first_wanted > next_expected_ && p.epoch == epoch_) {  // an interaction cancelled the frames before it
-    cancelled_lo_ = next_expected_;
-    cancelled_hi_ = p.first_wanted;
+    cancelled_.add(next_expected_, p.first_wanted);
     frames_.erase(frames_.begin(), frames_.lower_bound(p.first_wanted));
     next_expected_ = p.first_wanted;
   }
@@ -143,7 +142,7 @@ std::string Gather::addParams(proto::FrameParams p) {
 template <class Part>
 std::string Gather::add(Part part, uint32_t key, std::map<uint32_t, Part> Frame::*parts, const char* what) {
   if (part.epoch < epoch_) return std::string(what) + " of an older epoch";
-  if (part.frame >= cancelled_lo_ && part.frame < cancelled_hi_) return "";  // cancelled: discarded
+  if (cancelled_.contains(part.frame)) return "";  // cancelled: discarded
   if (part.frame < next_expected_ && part.epoch == epoch_) return std::string(what) + " for a finished frame";
   auto it = frames_.find(part.frame);
   if (it != frames_.end() && (it->second.*parts).count(key)) return std::string("duplicate ") + what + " " + std::to_string(key);

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "common/wire/cancelled_frames.h"
 #include "common/wire/protocol.h"
 
 namespace tessera::compositor {
@@ -87,7 +88,7 @@ class Gather {
   uint64_t next_expected_ = 0;  // frames below this are finished
   // The frames the latest cancel (FrameParams::first_wanted) gave up: their late parts are
   // expected, not faults, and are discarded without a word.
-  uint64_t cancelled_lo_ = 0, cancelled_hi_ = 0;
+  CancelledFrames cancelled_;
   std::map<uint64_t, Frame> frames_;
 };
 

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <deque>
 #include <map>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -13,6 +14,7 @@
 #include "common/net/stage_link.h"
 #include "common/wire/strips.h"
 #include "common/net/transport.h"
+#include "common/wire/cancelled_frames.h"
 #include "display/sink.h"
 
 namespace tessera::display {
@@ -39,8 +41,9 @@ class Stage {
                                {link_.control().handle(), 0, ZMQ_POLLIN, 0},
                                {inbox_.socket().handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
-      // With a window, input is read every 4 ms: its wait counts in the input-to-present time.
-      pollFor(items, 3, std::chrono::milliseconds(sink_ ? 4 : 20));
+      // A window that takes input is read every 4 ms. SDL stamps an event when it reads it, so
+      // the wait for that read (<= 4 ms) is not in the input-to-present time.
+      pollFor(items, 3, std::chrono::milliseconds(sink_ && sink_->interactive() ? 4 : 20));
       if (items[0].revents & ZMQ_POLLIN) readParams();
       if (link_.masterLost()) return 1;
       // The roster before the strips: a new compositor's first strips may wait for it.
@@ -93,8 +96,8 @@ class Stage {
   // their strips, still on their way, are expected rather than faults.
   void cancelBelow(uint64_t first_wanted) {
     frames_.erase(frames_.begin(), frames_.lower_bound(first_wanted));
-    cancelled_lo_ = next_;
-    next_ = cancelled_hi_ = first_wanted;
+    cancelled_.add(next_, first_wanted);
+    next_ = first_wanted;
   }
 
   static std::string checkMember(const proto::FrameParams& p, const proto::Strips& s) {
@@ -150,7 +153,7 @@ class Stage {
         continue;
       }
       if (s->epoch < epoch_) continue;  // stale, not malformed
-      if (s->frame >= cancelled_lo_ && s->frame < cancelled_hi_) continue;  // cancelled, not malformed
+      if (cancelled_.contains(s->frame)) continue;  // cancelled, not malformed
       if (s->frame < next_) {
         drops_.drop(s->compositor, "strips for a frame already shown");
         continue;
@@ -215,11 +218,12 @@ class Stage {
                                      params.frame, params.interactive ? fmt::format("moving: {}x{}", params.width, params.height)
                                                                       : std::string("sharp"),
                                      fps, msSince(p.first_seen), render_ms, composite_ms, last_display_ms_);
-    if (input_ms_ > 0) status += fmt::format("  input {:.0f} ms", input_ms_);
+    const auto input_at = inputShown(params);
+    if (input_at) status += fmt::format("  input {:.0f} ms", msSince(*input_at));  // up to now, before presenting
     if (sink_->interactive()) status += "  h: help";
     sink_->present(image_, params.frame, status);
     last_display_ms_ = msSince(t0);
-    const double input_ms = inputShown(params.input_seq);
+    const double input_ms = input_at ? msSince(*input_at) : 0;
     ++presented_;
     if (msSince(last_status_) > 1000) {
       spdlog::info("{}", status);
@@ -236,17 +240,15 @@ class Stage {
     link_.report(proto::encode(d, 0));
   }
 
-  // A frame showing input `seq` is on screen: the time since the oldest input it is the
-  // first to show reached the display (0: it shows no new input).
-  double inputShown(uint64_t seq) {
-    if (seq <= shown_input_) return 0;
-    shown_input_ = seq;
-    auto first = input_at_.begin();
-    if (first == input_at_.end() || first->first > seq) return 0;
-    const double ms = msSince(first->second);
-    input_at_.erase(input_at_.begin(), input_at_.upper_bound(seq));
-    input_ms_ = ms;
-    return ms;
+  // When a frame is the first to show input: the time the first input it answers (the first
+  // that changed the view after the frame before it was issued) reached the display.
+  std::optional<Clock::time_point> inputShown(const proto::FrameParams& p) {
+    if (p.input_seq <= shown_input_) return {};
+    shown_input_ = p.input_seq;
+    std::optional<Clock::time_point> at;
+    if (auto it = input_at_.find(p.input_first); p.input_first && it != input_at_.end()) at = it->second;
+    input_at_.erase(input_at_.begin(), input_at_.upper_bound(p.input_seq));
+    return at;
   }
 
   void openSink(const proto::FrameParams& p) {
@@ -302,10 +304,9 @@ class Stage {
   static constexpr size_t kWaitingFrames = 8;
   std::optional<proto::FrameParams> newest_;
   uint64_t next_ = 0, presented_ = 0, rejected_ = 0;
-  uint64_t cancelled_lo_ = 0, cancelled_hi_ = 0;  // the frames the latest cancel gave up
+  CancelledFrames cancelled_;  // the frames the latest cancels gave up
   uint64_t input_seq_ = 0, shown_input_ = 0;      // inputs sent; the newest one shown
   std::map<uint64_t, Clock::time_point> input_at_;  // inputs not shown yet: when they arrived
-  double input_ms_ = 0;                            // the latest input-to-present time
   uint32_t epoch_ = 0;
   bool shutdown_ = false;
   Image8 image_;

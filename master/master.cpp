@@ -33,10 +33,9 @@ class Master {
       : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router, kMaxControlMessage)),
         window_(opt.in_flight, opt.deadline), refinement_(opt.scene.camera, opt.scene.quality, opt.scene.width, opt.scene.height),
         metrics_(opt.metrics_path, opt.frames < 0 ? opt.scene.orbit.frames : opt.frames) {
-    // No receive bound on the control socket: with makeSocket's 64, libzmq lost messages of
-    // a peer that sent faster than the master read (a third of 300 junk messages, never
-    // seen, so never counted; a member's Stats could be lost the same way). The master
-    // drains this socket every loop (<= 50 ms), and FarmFuzz bounds its peak memory.
+    // No receive bound on the control socket: with makeSocket's 64, libzmq lost messages of a
+    // peer that sent faster than the master read (a third of 300 junk messages, never counted;
+    // Stats could be lost too). It is drained every loop (<= 50 ms); FarmFuzz bounds its memory.
     ctl_.set(zmq::sockopt::rcvhwm, 0);
     bindTo(pub_, opt_.endpoints.bind(opt_.endpoints.masterPub()));
     bindTo(ctl_, opt_.endpoints.bind(opt_.endpoints.masterControl()));
@@ -228,7 +227,7 @@ class Master {
       // Interactive: the newest view, or nothing when it would show nothing new.
       auto spec = refinement_.next(Clock::now());
       if (!spec) return;
-      if (spec->interactive) cancelStale();
+      if (spec->interactive) spec->after_cancel = cancelStale();
       if (!window_.hasRoom(spec->interactive ? kInteractiveInFlight : window_.inFlight())) return;
       publish(next_frame_, *spec, w);
       refinement_.issued(*spec);
@@ -238,13 +237,13 @@ class Master {
 
   // Once the camera moves, full frames in flight show a view that is gone: cancel them (they
   // leave the credit window now; stages skip or drop their work) rather than show them.
-  void cancelStale() {
+  bool cancelStale() {
     bool stale = false;
     for (const auto& [frame, f] : window_.frames()) stale = stale || !f.spec.interactive;
-    if (!stale) return;
+    if (!stale) return false;
     for (const auto& [frame, f] : window_.frames()) metrics_.cancelled(frame);
-    first_wanted_ = next_frame_;
-    window_.cancelBelow(first_wanted_);
+    window_.cancelBelow(first_wanted_ = next_frame_);
+    return true;
   }
 
   void publish(uint64_t frame, const FrameSpec& spec, const Workers& w) {
@@ -259,6 +258,7 @@ class Master {
     p.format = opt_.format;
     p.first_wanted = first_wanted_;
     p.input_seq = spec.input_seq;
+    p.input_first = spec.input_first;
     p.interactive = spec.interactive;
     plan_->fill(p, w);
     p.display_endpoint = opt_.endpoints.display();

@@ -48,12 +48,15 @@ std::pair<int, int> Refinement::fitWindow(int ww, int wh, int max_w, int max_h) 
 
 void Refinement::input(const proto::Input& in, Clock::time_point now) {
   Camera moved = applyInput(camera_, in);  // throws before anything changes
+  if (in.interacting && !interacting(now)) std::fill(std::begin(seen_ms_), std::end(seen_ms_), 0.0);
   camera_ = moved;
   if (in.quality) quality_ = namedQuality(*in.quality);
   if (in.width > 0 && in.height > 0) std::tie(width_, height_) = fitWindow(in.width, in.height, max_w_, max_h_);
   held_ = in.interacting;
   last_input_ = now;
   seq_ = std::max(seq_, in.seq);
+  // The input-to-present time runs from the first input that changes what the next frame shows.
+  if (first_change_ == 0 && next(now)) first_change_ = in.seq;
 }
 
 bool Refinement::interacting(Clock::time_point now) const {
@@ -64,6 +67,7 @@ std::optional<FrameSpec> Refinement::next(Clock::time_point now) const {
   FrameSpec s;
   s.camera = camera_;
   s.input_seq = seq_;
+  s.input_first = first_change_;
   s.interactive = interacting(now);
   s.full_width = width_;
   s.full_height = height_;
@@ -82,7 +86,7 @@ std::optional<FrameSpec> Refinement::next(Clock::time_point now) const {
 }
 
 void Refinement::interactiveDone(const FrameSpec& s, double latency_ms) {
-  if (!s.interactive || s.reduction != reduction()) return;  // feedback of another rung
+  if (!s.interactive || s.after_cancel || s.reduction != reduction()) return;  // feedback of another rung
   double& here = seen_ms_[level_];
   here = here > 0 ? (here + latency_ms) / 2 : latency_ms;
   const double cheaper = level_ + 1 < kLevels ? seen_ms_[level_ + 1] : 0, dearer = level_ > 0 ? seen_ms_[level_ - 1] : 0;

@@ -23,7 +23,9 @@ struct FrameSpec {
   int width = 0, height = 0;            // the frame rendered
   int full_width = 0, full_height = 0;  // the full frame of this view (interactive: before reduction)
   bool interactive = false;
-  uint64_t input_seq = 0;  // the newest Input it shows
+  uint64_t input_seq = 0;    // the newest Input it shows
+  uint64_t input_first = 0;  // the first Input since the last issued frame that changed the view (0: none)
+  bool after_cancel = false;  // issued behind a cancelled full frame: its time says nothing of its rung
   double reduction = 1;    // interactive frames: the image reduction factor
   bool operator==(const FrameSpec&) const = default;
 };
@@ -51,11 +53,14 @@ class Refinement {
   Refinement(const Camera& camera, const Quality& quality, int width, int height);
 
   // Applies a display's Input. Throws std::invalid_argument (nothing changed) for values
-  // applyInput refuses.
+  // applyInput refuses. A drag that starts forgets what the rungs cost in the last one.
   void input(const proto::Input& in, Clock::time_point now);
   // The frame to issue now, or nothing when it would show the same as the last one issued.
   std::optional<FrameSpec> next(Clock::time_point now) const;
-  void issued(const FrameSpec& s) { last_ = s; }
+  void issued(const FrameSpec& s) {
+    last_ = s;
+    first_change_ = 0;
+  }
   // A drag (or a wheel or resize burst) goes on: input within kStillAfterMs, not released.
   bool interacting(Clock::time_point now) const;
   // An interactive frame took `latency_ms` from issue to display: the next rung.
@@ -75,7 +80,7 @@ class Refinement {
   int max_w_, max_h_, width_, height_;
   bool held_ = false;
   Clock::time_point last_input_{};
-  uint64_t seq_ = 0;
+  uint64_t seq_ = 0, first_change_ = 0;
   int level_ = kStartLevel;
   double seen_ms_[kLevels] = {};  // recent interactive frame times per rung (0: not seen)
   std::optional<FrameSpec> last_;

@@ -150,6 +150,7 @@ struct CompositorRegion {
 //   format                     u8       1     1..PixelFormat::Last
 //   first_wanted               u64      8     <= frame
 //   input_seq                  u64      8
+//   input_first                u64      8     <= input_seq
 //   interactive                bool     1
 //   regions                    u32      4     count <= 65536, then per region (>= 24 bytes):
 //   regions.compositor         u32      4
@@ -194,6 +195,9 @@ struct FrameParams {                                                       // ma
   // drop their parts without counting them as faults, and the display never waits for them.
   uint64_t first_wanted = 0;
   uint64_t input_seq = 0;                    // the newest display Input this frame shows (0: none)
+  // The first Input that changed the view since the frame issued before this one (0: none,
+  // the frame is not a response to input): the display measures input-to-present from it.
+  uint64_t input_first = 0;
   bool interactive = false;                  // a reduced frame while the camera moves (level of detail)
   std::variant<SortLastWork, SortFirstWork> work;  // the mode: each stage dispatches on it once
   FrameMode mode() const { return work.index() == 0 ? FrameMode::SortLast : FrameMode::SortFirst; }
@@ -292,8 +296,8 @@ struct StageStats {                            // renderer/compositor -> master,
 struct FrameDone {                             // display -> master
   uint64_t frame = 0;
   double display_ms = 0, route_ms = 0;
-  // From the oldest input this frame is the first to show (its event reaching the display)
-  // to the frame on screen; 0 when the frame shows no new input.
+  // From FrameParams::input_first (its event reaching the display) to the frame on screen;
+  // 0 when the frame answers no input.
   double input_ms = 0;
   uint64_t bytes_encoded = 0, strips_rejected = 0, dropped = 0;
   bool operator==(const FrameDone&) const = default;

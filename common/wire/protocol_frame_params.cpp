@@ -155,6 +155,7 @@ std::vector<std::byte> encode(const FrameParams& m, uint32_t sender) {
     w.u8(static_cast<uint8_t>(m.format));
     w.u64(m.first_wanted);
     w.u64(m.input_seq);
+    w.u64(m.input_first);
     w.boolean(m.interactive);
     w.u32(static_cast<uint32_t>(m.regions.size()));
     for (const CompositorRegion& c : m.regions) {
@@ -217,6 +218,9 @@ Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
         if (r.ok() && m.first_wanted > m.frame)
           r.fail("first_wanted " + std::to_string(m.first_wanted) + " after the frame itself (" + std::to_string(m.frame) + ")");
         m.input_seq = r.u64("input_seq");
+        m.input_first = r.u64("input_first");
+        if (r.ok() && m.input_first > m.input_seq)
+          r.fail("input_first " + std::to_string(m.input_first) + " after input_seq " + std::to_string(m.input_seq));
         m.interactive = r.boolean("interactive");
         readRegions(r, m);
         m.display_endpoint = r.str("display_endpoint");

@@ -25,6 +25,7 @@ inline FrameParams sampleParams() {
   p.display_endpoint = "ipc:///tmp/display";
   p.first_wanted = 40;
   p.input_seq = 77;
+  p.input_first = 70;
   p.interactive = true;
   p.work = SortLastWork{{{0, {{0, 0, 0}, {128, 256, 256}}}, {1, {{128, 0, 0}, {256, 256, 256}}}, {1, {{0, 0, 0}, {1, 1, 1}}}},
                         {2, 0, 1}};

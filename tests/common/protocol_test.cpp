@@ -275,6 +275,11 @@ TEST(Protocol, InteractionFieldsOutOfRangeAreRefusedByName) {
   auto f = decodeFrameParams(encode(p, 1));
   ASSERT_FALSE(f);
   EXPECT_NE(f.error().find("first_wanted 43 after the frame itself (42)"), std::string::npos) << f.error();
+  p = sampleParams();
+  p.input_first = p.input_seq + 1;  // the first input a frame answers is not after its newest
+  f = decodeFrameParams(encode(p, 1));
+  ASSERT_FALSE(f);
+  EXPECT_NE(f.error().find("input_first 78 after input_seq 77"), std::string::npos) << f.error();
   for (auto [w, h] : {std::pair{0, 5}, std::pair{-1, -1}, std::pair{16385, 10}}) {
     Input in;
     in.width = w;

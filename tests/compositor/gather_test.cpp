@@ -93,6 +93,25 @@ TEST(Gather, CancelledFramesAreGivenUpAndTheirLatePartsQuietlyDiscarded) {
   EXPECT_NE(g.addPiece(piece(2, 1)), "") << "a part of a finished frame is still a fault";
 }
 
+// A fast drag cancels again before the parts of the last cancel have all arrived.
+TEST(Gather, PartsOfAnEarlierCancelAreStillDiscardedQuietlyAfterANewerOne) {
+  Gather g(0);
+  g.addParams(params(0, 2));
+  for (uint64_t f = 1; f <= 2; ++f) {
+    FrameParams moved = params(f, 2);
+    moved.first_wanted = f;  // each cancels the frame before it
+    EXPECT_EQ(g.addParams(moved), "");
+  }
+  EXPECT_EQ(g.addPiece(piece(0, 0)), "") << "a part of the first cancelled frame";
+  EXPECT_EQ(g.addPiece(piece(1, 1)), "") << "a part of the second";
+  EXPECT_TRUE(g.takeLateDrops().empty());
+  EXPECT_EQ(g.addPiece(piece(2, 0)), "");
+  EXPECT_EQ(g.addPiece(piece(2, 1)), "");
+  auto r = g.pop();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->params.frame, 2u);
+}
+
 TEST(Gather, NewEpochReissuesFramesInFlight) {
   Gather g(0);
   g.addParams(params(0, 2, 0));

@@ -101,6 +101,57 @@ TEST(Refinement, ARungThatSavesNothingIsNotKept) {
   EXPECT_EQ(r.reduction(), Refinement::kReductions[Refinement::kStartLevel]) << "and it stays there";
 }
 
+TEST(Refinement, ANewDragForgetsWhatTheRungsCostInTheLastOne) {
+  // The scene or the window may have changed between drags: a rung once useless is tried again.
+  Refinement r = make();
+  auto t = Clock::now();
+  r.input(drag(1, 1), t);
+  const double slow = Refinement::kTargetMs * 2;
+  r.interactiveDone(*r.next(t), slow);
+  r.interactiveDone(*r.next(t), slow);
+  ASSERT_EQ(r.reduction(), Refinement::kReductions[Refinement::kStartLevel]) << "back on the dearer rung";
+  proto::Input release;
+  release.seq = 2;
+  r.input(release, t);
+  t += milliseconds(2000);
+  r.input(drag(3, 1), t);
+  r.interactiveDone(*r.next(t), slow);
+  EXPECT_EQ(r.reduction(), Refinement::kReductions[Refinement::kStartLevel + 1]) << "the cheaper rung is tried again";
+}
+
+TEST(Refinement, AFrameIssuedBehindACancelledFullFrameDoesNotMoveTheRung) {
+  // Its time includes the wait for the renderers to finish the cancelled frame.
+  Refinement r = make();
+  auto t = Clock::now();
+  r.input(drag(1, 1), t);
+  auto s = *r.next(t);
+  s.after_cancel = true;
+  r.interactiveDone(s, Refinement::kTargetMs * 4);
+  EXPECT_EQ(r.reduction(), Refinement::kReductions[Refinement::kStartLevel]);
+}
+
+TEST(Refinement, InputToPresentStartsAtTheFirstInputThatChangesTheView) {
+  Refinement r = make();
+  auto t = Clock::now();
+  r.issued(*r.next(t));
+  proto::Input still;  // no motion, no drag: the view stays
+  still.seq = 1;
+  r.input(still, t);
+  EXPECT_FALSE(r.next(t));
+  r.input(drag(2, 1), t);
+  r.input(drag(3, 1), t);
+  auto s = r.next(t);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->input_first, 2u) << "input 1 changed nothing";
+  EXPECT_EQ(s->input_seq, 3u);
+  r.issued(*s);
+  EXPECT_FALSE(r.next(t)) << "the answer to input 2 is not a new view";
+  r.input(drag(4, 1), t);
+  s = r.next(t);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->input_first, 4u) << "the next frame answers the inputs after the last frame issued";
+}
+
 TEST(Refinement, AResizedWindowIsRenderedAtItsShapeWithinTheScenesImage) {
   EXPECT_EQ(Refinement::fitWindow(800, 600, 1024, 768), std::make_pair(800, 600));
   EXPECT_EQ(Refinement::fitWindow(2048, 768, 1024, 768), std::make_pair(1024, 384));
