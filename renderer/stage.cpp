@@ -180,13 +180,11 @@ class Stage {
     RenderOptions ro;
     ro.quality = p.quality;
     ro.threads = opt_.threads;
-    RenderStats rs;
     Cached c{key, {}, {}};
     Brick local = brick;  // in the held window's voxel indices
     for (int a = 0; a < 3; ++a) local.lo[a] -= volume_->origin[a], local.hi[a] -= volume_->origin[a];
-    c.image = caster_->render(p.camera, p.width, p.height, local, ro, &rs, &c.active);
-    spdlog::debug("frame={} brick={},{},{} samples={} skipped={} ms={:.1f}", p.frame, brick.lo[0], brick.lo[1],
-                  brick.lo[2], rs.samples, rs.samples_skipped, rs.ms);
+    // No RenderStats: the farm needs no sample counts, and counting skipped samples costs.
+    c.image = caster_->render(p.camera, p.width, p.height, local, ro, nullptr, &c.active);
     if (cache_.size() >= 2) cache_.pop_front();  // a renderer may own two bricks after a failure
     cache_.push_back(std::move(c));
     return cache_.back();

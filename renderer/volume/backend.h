@@ -36,7 +36,8 @@ class VolumeBackend {
   virtual ~VolumeBackend() = default;
   // Renders `brick` as seen by `cam` into a width x height premultiplied image. Pixels
   // outside the brick's screen footprint stay transparent; `active` receives the bounding
-  // rectangle of pixels with alpha > 0.
+  // rectangle of pixels with alpha > 0. Counting every skipped sample has a cost: without
+  // `stats` a backend may leave it out.
   virtual ImageF render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
                         RenderStats* stats = nullptr, Rect* active = nullptr) const = 0;
 };

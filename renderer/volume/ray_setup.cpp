@@ -66,11 +66,12 @@ bool boxInterval(const VolumeGeometry& g, const Ray& r, const BrickBox& b, doubl
 }
 
 namespace {
-// Whole-volume entry (t0) and the brick's k range; false if the brick has no samples.
-[[gnu::always_inline]] inline bool brickRange(const VolumeGeometry& g, const PreparedRay& r, const BrickBox& brick, double step, RaySpan& span,
-                double& w_out) {
+// Whole-volume entry (t0) and the brick's ray parameters [b_in, b_out) within the volume;
+// false if the ray misses the brick.
+[[gnu::always_inline]] inline bool brickInterval(const VolumeGeometry& g, const PreparedRay& r, const BrickBox& brick,
+                                                 RaySpan& span, double& b_in, double& b_out) {
   const BrickBox whole = g.wholeBox();
-  double w_in, b_in, b_out;
+  double w_in, w_out;
   if (!interval(g, r, whole, w_in, w_out)) return false;
   if (!(w_out > 0)) return false;
   if (brick == whole) {
@@ -82,11 +83,7 @@ namespace {
   span.t0 = std::max(w_in, 0.0);
   b_in = std::max(b_in, span.t0);
   b_out = std::min(b_out, w_out);
-  if (!(b_in < b_out)) return false;
-  const double inv_step = 1.0 / step;
-  span.k_first = firstAtOrAfter(span.t0, b_in, step, inv_step);
-  span.k_end = firstAtOrAfter(span.t0, b_out, step, inv_step);
-  return span.k_end > span.k_first;
+  return b_in < b_out;
 }
 
 void samplePositions(const VolumeGeometry& g, const Ray& r, double step, RaySpan& span) {
@@ -101,50 +98,46 @@ void samplePositions(const VolumeGeometry& g, const Ray& r, double step, RaySpan
 }  // namespace
 
 bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, const BrickBox& clip, double step,
-                    RaySpan& span, int64_t& before, int64_t& after) {
-  before = after = 0;
-  double w_out;
+                    RaySpan& span, int64_t* before, int64_t* after, double t_lo, double t_hi) {
+  if (before) *before = *after = 0;
   const PreparedRay pr(r);
-  if (!brickRange(g, pr, brick, step, span, w_out)) return false;
-  const int64_t k_first = span.k_first, k_end = span.k_end;
-  before = k_end - k_first;
+  double b_in, b_out;
+  if (!brickInterval(g, pr, brick, span, b_in, b_out)) return false;
+  // One cut of the parameters, then one search per end: firstAtOrAfter is monotone in t, so
+  // this is the brick's range cut to the clip's and to [t_lo, t_hi), with 2 searches, not 6.
+  double c_in = std::max(b_in, t_lo), c_out = std::min(b_out, t_hi);
   if (clip != brick) {
-    double c_in, c_out;
-    if (!interval(g, pr, clip, c_in, c_out)) return false;
-    c_in = std::max(c_in, span.t0);
-    c_out = std::min(c_out, w_out);
-    if (!(c_in < c_out)) return false;
-    const double inv_step = 1.0 / step;
-    span.k_first = std::max(span.k_first, firstAtOrAfter(span.t0, c_in, step, inv_step));
-    span.k_end = std::min(span.k_end, firstAtOrAfter(span.t0, c_out, step, inv_step));
-    if (span.k_end <= span.k_first) return false;
+    double i_in, i_out;
+    if (!interval(g, pr, clip, i_in, i_out)) c_out = c_in;
+    c_in = std::max(c_in, i_in), c_out = std::min(c_out, i_out);
   }
-  before = span.k_first - k_first;
-  after = k_end - span.k_end;
-  samplePositions(g, r, step, span);
-  return true;
+  const double inv_step = 1.0 / step;
+  bool hit = c_in < c_out;
+  if (hit) {
+    span.k_first = firstAtOrAfter(span.t0, c_in, step, inv_step);
+    span.k_end = firstAtOrAfter(span.t0, c_out, step, inv_step);
+    hit = span.k_end > span.k_first;
+  }
+  if (before) {
+    const int64_t k_first = firstAtOrAfter(span.t0, b_in, step, inv_step), k_end = firstAtOrAfter(span.t0, b_out, step, inv_step);
+    *before = hit ? span.k_first - k_first : std::max<int64_t>(0, k_end - k_first);
+    *after = hit ? k_end - span.k_end : 0;
+  }
+  if (hit) samplePositions(g, r, step, span);
+  return hit;
 }
 
 int64_t spanSamples(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step) {
   RaySpan span;
-  double w_out;
-  return brickRange(g, PreparedRay(r), brick, step, span, w_out) ? span.k_end - span.k_first : 0;
-}
-
-bool narrowSpan(double t_lo, double t_hi, double step, RaySpan& span, int64_t& before, int64_t& after) {
+  double b_in, b_out;
+  if (!brickInterval(g, PreparedRay(r), brick, span, b_in, b_out)) return 0;
   const double inv_step = 1.0 / step;
-  const int64_t k_first = span.k_first, k_end = span.k_end;
-  span.k_first = std::min(k_end, std::max(k_first, firstAtOrAfter(span.t0, t_lo, step, inv_step)));
-  span.k_end = std::max(span.k_first, std::min(k_end, firstAtOrAfter(span.t0, t_hi, step, inv_step)));
-  before = span.k_first - k_first;
-  after = k_end - span.k_end;
-  return span.k_end > span.k_first;
+  return std::max<int64_t>(0, firstAtOrAfter(span.t0, b_out, step, inv_step) - firstAtOrAfter(span.t0, b_in, step, inv_step));
 }
 
 // One code path (one compiled copy of the grid arithmetic) for every span.
 bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span) {
-  int64_t before, after;
-  return raySpanClipped(g, r, brick, brick, step, span, before, after);
+  return raySpanClipped(g, r, brick, brick, step, span);
 }
 
 Rect brickFootprint(const RayGenerator& gen, const VolumeGeometry& g, const BrickBox& b, int w, int h) {

@@ -3,6 +3,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <limits>
 
 #include "common/bricks.h"
 #include "common/camera.h"
@@ -51,19 +52,18 @@ bool boxInterval(const VolumeGeometry& g, const Ray& r, const BrickBox& b, doubl
 bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span);
 
 // The same span cut to `clip` (a box inside `brick`, e.g. the part of the volume that can
-// be non-empty): the sample grid is unchanged, only k_first/k_end narrow. `before` and
-// `after` receive how many of the brick's samples lie before / after the clipped span
-// (all of them in `before` if it is empty).
+// be non-empty) and to the ray parameters [t_lo, t_hi) (e.g. the depths of non-empty
+// nodes): the sample grid is unchanged, only k_first/k_end narrow. With `before` and
+// `after`, they receive how many of the brick's samples lie before / after the cut span
+// (all of them in `before` if it is empty); without, the brick's own range is not computed.
 bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, const BrickBox& clip, double step,
-                    RaySpan& span, int64_t& before, int64_t& after);
+                    RaySpan& span, int64_t* before = nullptr, int64_t* after = nullptr,
+                    double t_lo = -std::numeric_limits<double>::infinity(),
+                    double t_hi = std::numeric_limits<double>::infinity());
 
 // How many samples of the global grid of `step` lie in `brick` (raySpan's k_end - k_first,
 // without the sample positions).
 int64_t spanSamples(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step);
-
-// Narrows `span` to its samples with t_lo <= t_k < t_hi (the grid is unchanged); `before`
-// and `after` receive how many samples were cut on each side. False if none remain.
-bool narrowSpan(double t_lo, double t_hi, double step, RaySpan& span, int64_t& before, int64_t& after);
 
 // Pixels whose centre ray can hit the brick, shared by both volume backends so they touch
 // the same pixels: the bounding box of its projected corners plus one pixel; the whole

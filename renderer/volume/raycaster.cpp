@@ -159,6 +159,7 @@ struct FrameRays {
   const FastContext& fast;
   const ShadeParams* shade;  // null: unlit
   ImageF& img;
+  bool count;  // count the samples skipped outside the rays cast (stats were asked for)
 };
 
 // One worker thread: casts the rays of the tiles it pulls, counts samples, and tracks the
@@ -198,24 +199,22 @@ class TileWorker {
     int64_t after;
   };
 
-  // The samples of pixel (px, py) to cast; false if there are none (those skipped are counted).
+  // The samples of pixel (px, py) to cast; false if there are none (with f_.count, those
+  // skipped are counted: exact, but it costs a brick's renderer 6% in a farm, which needs no counts).
   bool spanOf(int px, int py, RaySpan& span, int64_t& after) {
     const double step = f_.q.step;
     if (!f_.clipping) return raySpan(f_.geom, f_.gen.pixelRay(px, py), f_.brick, step, span);
     const DepthBounds* depth = f_.depth;
     const size_t ci = depth ? (size_t)(py / DepthBounds::kCell) * depth->cols + px / DepthBounds::kCell : 0;
-    if (depth && !(depth->lo[ci] <= depth->hi[ci])) {  // no non-empty node here: count only
-      counts.skipped += (uint64_t)spanSamples(f_.geom, f_.gen.pixelRay(px, py), f_.brick, step);
+    if (depth && !(depth->lo[ci] <= depth->hi[ci])) {  // no non-empty node here
+      if (f_.count) counts.skipped += (uint64_t)spanSamples(f_.geom, f_.gen.pixelRay(px, py), f_.brick, step);
       return false;
     }
+    constexpr double kInf = std::numeric_limits<double>::infinity();
     int64_t before = 0;
-    bool hit = raySpanClipped(f_.geom, f_.gen.pixelRay(px, py), f_.brick, f_.clip, step, span, before, after);
-    if (hit && depth) {
-      int64_t cut_before, cut_after;
-      hit = narrowSpan(depth->lo[ci], depth->hi[ci], step, span, cut_before, cut_after);
-      before += cut_before;
-      after += cut_after;
-    }
+    const bool hit = raySpanClipped(f_.geom, f_.gen.pixelRay(px, py), f_.brick, f_.clip, step, span,
+                                    f_.count ? &before : nullptr, f_.count ? &after : nullptr,
+                                    depth ? depth->lo[ci] : -kInf, depth ? depth->hi[ci] : kInf);
     counts.skipped += (uint64_t)before;
     if (!hit) counts.skipped += (uint64_t)after;
     return hit;
@@ -304,7 +303,7 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   Rect act;
 
   const FrameRays rays{v, impl_->tf, q, gen, geom, brick, clip, clipping, depth ? &*depth : nullptr, fast,
-                        shade ? &*shade : nullptr, img};
+                        shade ? &*shade : nullptr, img, stats != nullptr};
   auto worker = [&] {
     TileWorker w(rays);
     try {

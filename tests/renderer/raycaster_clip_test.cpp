@@ -79,7 +79,7 @@ TEST(NonEmptyBox, ClippedSpanKeepsTheGlobalGrid) {
     RaySpan full, c, only;
     int64_t before = -1, after = -1;
     const bool hit = raySpan(g, r, brick, 0.011, full);
-    const bool chit = raySpanClipped(g, r, brick, clip, 0.011, c, before, after);
+    const bool chit = raySpanClipped(g, r, brick, clip, 0.011, c, &before, &after);
     const bool ohit = raySpan(g, r, clip, 0.011, only);
     const int64_t total = hit ? full.k_end - full.k_first : 0;
     ASSERT_EQ(chit, hit && ohit) << "ray " << i;
@@ -96,6 +96,25 @@ TEST(NonEmptyBox, ClippedSpanKeepsTheGlobalGrid) {
     EXPECT_EQ(c.k_end, std::min(full.k_end, only.k_end)) << "ray " << i;
     EXPECT_EQ(before, c.k_first - full.k_first);
     EXPECT_EQ(after, full.k_end - c.k_end);
+    // Cut to ray parameters [t_lo, t_hi) too: exactly the clipped samples with t_k inside.
+    const double t_lo = c.t0 + rnd() * 2, t_hi = t_lo + rnd() * 2;
+    RaySpan d;
+    int64_t d_before = -1, d_after = -1;
+    const bool dhit = raySpanClipped(g, r, brick, clip, 0.011, d, &d_before, &d_after, t_lo, t_hi);
+    int64_t lo = -1, hi = -1;
+    for (int64_t k = c.k_first; k < c.k_end; ++k) {
+      const double t = c.t0 + ((double)k + 0.5) * 0.011;
+      if (t >= t_lo && t < t_hi) hi = k + 1, lo = lo < 0 ? k : lo;
+    }
+    ASSERT_EQ(dhit, lo >= 0) << "ray " << i;
+    if (dhit) {
+      EXPECT_EQ(d.k_first, lo) << "ray " << i;
+      EXPECT_EQ(d.k_end, hi) << "ray " << i;
+      EXPECT_EQ(d.u0, c.u0);
+      EXPECT_EQ(d_before + (d.k_end - d.k_first) + d_after, total);
+    } else {
+      EXPECT_EQ(d_before + d_after, total);
+    }
   }
   EXPECT_GT(clipped_hits, 500);  // the test exercised real clips
 }
