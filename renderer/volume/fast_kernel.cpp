@@ -216,6 +216,34 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4]
 
 namespace {
 
+// The constants every ray of a frame shares (the ray's own are set by RayState).
+Consts frameConsts(const FastContext& ctx) {
+  const Volume& v = *ctx.volume;
+  Consts c{};
+  for (int a = 0; a < 3; ++a) {
+    c.umax[a] = (float)(v.dims[a] - 1);
+    c.imax[a] = std::max(0, v.dims[a] - 2);
+  }
+  c.nb_x = ctx.accel->nb[0];
+  c.nb_xy = ctx.accel->nb[0] * ctx.accel->nb[1];
+  c.vol = ctx.accel->bricked.data();
+  c.rgba = ctx.table->rgba();
+  c.nonzero = ctx.table->nonzero();
+  c.first_nz = ctx.table->firstNonzero();
+  c.last_nz = ctx.table->lastNonzero();
+  c.grad = nullptr;
+  if (!ctx.shade) return c;
+  const ShadeParams& p = *ctx.shade;
+  c.grad = ctx.gradients->q.data();
+  c.gdims[0] = v.dims[0], c.gdims[1] = v.dims[1];
+  c.gstride[0] = v.dims[0] > 1 ? 4 : 0;
+  c.gstride[1] = v.dims[1] > 1 ? 4 * v.dims[0] : 0;
+  c.gstride[2] = v.dims[2] > 1 ? 4 * v.dims[0] * v.dims[1] : 0;
+  c.ka = (float)p.ambient, c.kd = (float)p.diffuse, c.ks = (float)p.specular;
+  c.highlight = ctx.highlight->values.data();
+  return c;
+}
+
 // One ray in flight: its constants, leaper, position and the runs of the current batch.
 // Two phases per batch: the leaper (branchy, scalar) lists the runs to sample, then the
 // packets run over that list; keeping them apart lets each loop stay tight and predictable.
@@ -235,44 +263,23 @@ struct RayState {
   int n = 0;
   uint64_t batch_skipped = 0;
 
-  RayState(const FastContext& ctx, const RaySpan& span) {
-    const Volume& v = *ctx.volume;
+  // `base`: frameConsts(ctx), set up once for many rays.
+  RayState(const FastContext& ctx, const Consts& base, const RaySpan& span) : c(base) {
     if (span.k_end >= kMaxSamples)
       throw std::invalid_argument("castFast: more than 2^24 samples on one ray (step too small)");
     for (int a = 0; a < 3; ++a) {
       c.u0[a] = (float)span.u0[a];
       c.du[a] = (float)span.du[a];
-      c.umax[a] = (float)(v.dims[a] - 1);
-      c.imax[a] = std::max(0, v.dims[a] - 2);
     }
-    c.nb_x = ctx.accel->nb[0];
-    c.nb_xy = ctx.accel->nb[0] * ctx.accel->nb[1];
-    c.vol = ctx.accel->bricked.data();
-    c.rgba = ctx.table->rgba();
-    c.nonzero = ctx.table->nonzero();
-    c.first_nz = ctx.table->firstNonzero();
-    c.last_nz = ctx.table->lastNonzero();
-    c.grad = nullptr;
-    if (ctx.shade) setShading(ctx, span);
+    if (ctx.shade) {
+      const RayLight r = rayLight(*ctx.shade, span.du);
+      for (int a = 0; a < 3; ++a)
+        c.inv_cell[a] = (float)r.inv_cell[a], c.light[a] = (float)r.l[a], c.half[a] = (float)r.h[a];
+    }
     skip = ctx.skip && ctx.emptiness;
-    if (skip) leaper = Leaper(span, v, ctx.accel->hierarchy, *ctx.emptiness);
+    if (skip) leaper = Leaper(span, *ctx.volume, ctx.accel->hierarchy, *ctx.emptiness);
     k = span.k_first;
     k_end = span.k_end;
-  }
-
-  void setShading(const FastContext& ctx, const RaySpan& span) {
-    const Volume& v = *ctx.volume;
-    const ShadeParams& p = *ctx.shade;
-    c.grad = ctx.gradients->q.data();
-    c.gdims[0] = v.dims[0], c.gdims[1] = v.dims[1];
-    c.gstride[0] = v.dims[0] > 1 ? 4 : 0;
-    c.gstride[1] = v.dims[1] > 1 ? 4 * v.dims[0] : 0;
-    c.gstride[2] = v.dims[2] > 1 ? 4 * v.dims[0] * v.dims[1] : 0;
-    c.ka = (float)p.ambient, c.kd = (float)p.diffuse, c.ks = (float)p.specular;
-    c.highlight = ctx.highlight->values.data();
-    const RayLight r = rayLight(p, span.du);
-    for (int a = 0; a < 3; ++a)
-      c.inv_cell[a] = (float)r.inv_cell[a], c.light[a] = (float)r.l[a], c.half[a] = (float)r.h[a];
   }
 
   bool active() const { return k < k_end; }
@@ -347,8 +354,10 @@ struct RayState {
 
 }  // namespace
 
-bool castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleCounts& counts) {
-  RayState s(ctx, span);
+namespace {
+
+bool castOne(const FastContext& ctx, const Consts& base, const RaySpan& span, float out[4], SampleCounts& counts) {
+  RayState s(ctx, base, span);
   while (s.active()) {
     while (s.planning()) s.plan();
     s.sample(ctx.early_termination, counts);
@@ -357,8 +366,9 @@ bool castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleC
   return s.terminated;
 }
 
-void castFastPair(const FastContext& ctx, const RaySpan* spans, float* out[2], SampleCounts& counts, bool terminated[2]) {
-  RayState a(ctx, spans[0]), b(ctx, spans[1]);
+void castPair(const FastContext& ctx, const Consts& base, const RaySpan* spans, float* const* out, SampleCounts& counts,
+              bool* terminated) {
+  RayState a(ctx, base, spans[0]), b(ctx, base, spans[1]);
   while (a.active() || b.active()) {
     // The two rays' decisions are independent chains: interleaved, they overlap.
     for (;;) {
@@ -374,6 +384,20 @@ void castFastPair(const FastContext& ctx, const RaySpan* spans, float* out[2], S
   b.store(out[1]);
   terminated[0] = a.terminated;
   terminated[1] = b.terminated;
+}
+
+}  // namespace
+
+bool castFast(const FastContext& ctx, const RaySpan& span, float out[4], SampleCounts& counts) {
+  return castOne(ctx, frameConsts(ctx), span, out, counts);
+}
+
+void castFastBatch(const FastContext& ctx, const RaySpan* spans, float* const* out, int n, SampleCounts& counts,
+                   bool* terminated) {
+  const Consts base = frameConsts(ctx);
+  int i = 0;
+  for (; i + 1 < n; i += 2) castPair(ctx, base, spans + i, out + i, counts, terminated + i);
+  if (i < n) terminated[i] = castOne(ctx, base, spans[i], out[i], counts);
 }
 
 }  // namespace tessera::renderer::TESSERA_KERNEL_ISA

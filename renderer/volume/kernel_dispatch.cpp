@@ -8,8 +8,8 @@
 #define TESSERA_DECLARE_KERNEL(isa)                                                                   \
   namespace tessera::renderer::isa {                                                                  \
   bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);       \
-  void castFastPair(const FastContext& c, const RaySpan* spans, float* out[2], SampleCounts& counts, \
-                    bool terminated[2]);                                                              \
+  void castFastBatch(const FastContext& c, const RaySpan* spans, float* const* out, int n,           \
+                     SampleCounts& counts, bool* terminated);                                         \
   }
 TESSERA_DECLARE_KERNEL(scalar)
 #if TESSERA_X86_KERNELS
@@ -22,7 +22,7 @@ namespace {
 
 struct Kernel {
   decltype(&scalar::castFast) single;
-  decltype(&scalar::castFastPair) pair;
+  decltype(&scalar::castFastBatch) batch;
 };
 
 const Kernel& kernel() {
@@ -31,10 +31,10 @@ const Kernel& kernel() {
     spdlog::debug("ray casting kernel: {}", isaName(isa));
     switch (isa) {
 #if TESSERA_X86_KERNELS
-      case Isa::Avx512: return Kernel{avx512::castFast, avx512::castFastPair};
-      case Isa::Avx2: return Kernel{avx2::castFast, avx2::castFastPair};
+      case Isa::Avx512: return Kernel{avx512::castFast, avx512::castFastBatch};
+      case Isa::Avx2: return Kernel{avx2::castFast, avx2::castFastBatch};
 #endif
-      default: return Kernel{scalar::castFast, scalar::castFastPair};
+      default: return Kernel{scalar::castFast, scalar::castFastBatch};
     }
   }();
   return k;
@@ -46,8 +46,9 @@ bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCou
   return kernel().single(c, span, out, counts);
 }
 
-void castFastPair(const FastContext& c, const RaySpan* spans, float* out[2], SampleCounts& counts, bool terminated[2]) {
-  kernel().pair(c, spans, out, counts, terminated);
+void castFastBatch(const FastContext& c, const RaySpan* spans, float* const* out, int n, SampleCounts& counts,
+                   bool* terminated) {
+  kernel().batch(c, spans, out, n, counts, terminated);
 }
 
 }  // namespace tessera::renderer

@@ -33,9 +33,11 @@ struct FastContext {
 // Samples span.k_first..k_end-1; out receives premultiplied RGBA. Returns true if the ray
 // was terminated early (its opacity reached early_termination).
 bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);
-// Two rays at once, bit-identical to two castFast calls: their empty-space decisions are
-// interleaved so the two dependency chains overlap in the CPU.
-void castFastPair(const FastContext& c, const RaySpan* spans, float* out[2], SampleCounts& counts, bool terminated[2]);
+// n rays, bit-identical to n castFast calls: the frame's constants are set up once, and the
+// rays go two at a time, their empty-space decisions interleaved so the two dependency
+// chains overlap in the CPU. terminated[i]: castFast's result for ray i.
+void castFastBatch(const FastContext& c, const RaySpan* spans, float* const* out, int n, SampleCounts& counts,
+                   bool* terminated);
 
 // Double precision, exact transfer function, no skipping, no early termination; `shade`
 // (null: unlit) lights each sample with its exact gradient (sampleGradient).

@@ -171,9 +171,10 @@ TEST(NonEmptyBox, DepthBoundsKeepImagesWithTheEyeAnywhere) {
     }
 }
 
-TEST(CastFastPair, BitIdenticalToTwoSingleRays) {
-  // Rays of different lengths, some terminating early, with and without skipping: the
-  // interleaved pair must give exactly the colours and counts of two separate casts.
+TEST(CastFastBatch, BitIdenticalToSingleRays) {
+  // Rays of different lengths, some terminating early, with and without skipping: a batch of
+  // three (one interleaved pair, one alone) must give exactly the colours and counts of three
+  // separate casts.
   const auto vol = generatedBall();
   const VolumeAccel accel(*vol);
   const TransferFunction tf = ballTf();
@@ -185,20 +186,20 @@ TEST(CastFastPair, BitIdenticalToTwoSingleRays) {
   int terminated_rays = 0;
   for (int i = 0; i < 400; ++i) {
     FastContext c{vol.get(), &accel, &table, &emptiness, i % 3 != 0, i % 2 ? 0.9f : 2.0f};
-    RaySpan spans[2];
+    RaySpan spans[3];
     int found = 0;
-    while (found < 2) {
+    while (found < 3) {
       const Vec3 o{rnd() * 3 - 1.5, rnd() * 3 - 1.5, 1.6}, p{0.1 * rnd() + 0.15, 0.1 * rnd() - 0.3, rnd() * 0.4 - 0.2};
       if (raySpan(g, Ray{o, normalize(p - o)}, wholeVolume(*vol), 1.0 / 40, spans[found])) ++found;
     }
-    float single[2][4], pair[2][4];
+    float single[3][4], batch[3][4];
     SampleCounts cs, cp;
-    bool ts[2], tp[2];
-    for (int r = 0; r < 2; ++r) ts[r] = castFast(c, spans[r], single[r], cs);
-    float* outs[2] = {pair[0], pair[1]};
-    castFastPair(c, spans, outs, cp, tp);
-    for (int r = 0; r < 2; ++r) {
-      for (int ch = 0; ch < 4; ++ch) ASSERT_EQ(pair[r][ch], single[r][ch]) << "ray pair " << i;
+    bool ts[3], tp[3];
+    for (int r = 0; r < 3; ++r) ts[r] = castFast(c, spans[r], single[r], cs);
+    float* outs[3] = {batch[0], batch[1], batch[2]};
+    castFastBatch(c, spans, outs, 3, cp, tp);
+    for (int r = 0; r < 3; ++r) {
+      for (int ch = 0; ch < 4; ++ch) ASSERT_EQ(batch[r][ch], single[r][ch]) << "batch " << i << " ray " << r;
       ASSERT_EQ(tp[r], ts[r]);
       terminated_rays += ts[r];
     }
