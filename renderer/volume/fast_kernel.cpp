@@ -259,8 +259,15 @@ struct RayState {
 #else
   float acc[4] = {0, 0, 0, 0};
 #endif
+  // Samples planned ahead of sampling, at most: an opaque ray ends a few samples into its
+  // first non-empty block, and planning the rest of it (the leaper walked on through the
+  // non-empty blocks, merging them into one run) was wasted.
+  // 32 against 64: opaque Marschner-Lobb 3% faster, the hollow shell 1% slower; against
+  // 128: 7% and 2%; growing it with every batch gained nothing (AMD EPYC, AVX-512, 2 threads).
+  static constexpr int64_t kPlanAhead = 32;
   Run runs[kBatch];
   int n = 0;
+  int64_t planned = 0;  // samples in the batch's runs
   uint64_t batch_skipped = 0;
 
   // `base`: frameConsts(ctx), set up once for many rays.
@@ -283,7 +290,7 @@ struct RayState {
   }
 
   bool active() const { return k < k_end; }
-  bool planning() const { return k < k_end && n < kBatch; }
+  bool planning() const { return k < k_end && n < kBatch && planned < kPlanAhead; }
 
   // One leaper decision: leaps over empty samples or appends a run.
   void plan() {
@@ -309,6 +316,7 @@ struct RayState {
     } else {
       runs[n++] = Run{k, run_end, batch_skipped};
     }
+    planned += run_end - k;
     k = run_end;
   }
 
@@ -340,6 +348,7 @@ struct RayState {
       }
     }
     n = 0;
+    planned = 0;
     batch_skipped = 0;
   }
 
