@@ -178,6 +178,24 @@ struct Lattice {
   float at(int i, int j, int k) const { return val[i + (size_t)(c + 1) * (j + (size_t)(c + 1) * k)]; }
 };
 
+// Trilinear-smoothstep value of lattice L at p (coordinates in [0, 1]).
+double latticeAt(const Lattice& L, const double p[3]) {
+  int i[3];
+  double f[3];
+  for (int a = 0; a < 3; ++a) {
+    double q = p[a] * L.c;
+    i[a] = std::min((int)q, L.c - 1);
+    double t = q - i[a];
+    f[a] = t * t * (3 - 2 * t);
+  }
+  auto lerp = [](double a, double b, double t) { return a + t * (b - a); };
+  double c00 = lerp(L.at(i[0], i[1], i[2]), L.at(i[0] + 1, i[1], i[2]), f[0]);
+  double c10 = lerp(L.at(i[0], i[1] + 1, i[2]), L.at(i[0] + 1, i[1] + 1, i[2]), f[0]);
+  double c01 = lerp(L.at(i[0], i[1], i[2] + 1), L.at(i[0] + 1, i[1], i[2] + 1), f[0]);
+  double c11 = lerp(L.at(i[0], i[1] + 1, i[2] + 1), L.at(i[0] + 1, i[1] + 1, i[2] + 1), f[0]);
+  return lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2]);
+}
+
 void noiseCloud(Volume& v, uint32_t seed) {
   const int n = v.wholeDims()[0];
   constexpr int kOctaves = 4;
@@ -187,20 +205,7 @@ void noiseCloud(Volume& v, uint32_t seed) {
     double p[3] = {(x + 0.5) / n, (y + 0.5) / n, (z + 0.5) / n};
     double sum = 0, amp = 0.5;
     for (const Lattice& L : oct) {
-      int i[3];
-      double f[3];
-      for (int a = 0; a < 3; ++a) {
-        double q = p[a] * L.c;
-        i[a] = std::min((int)q, L.c - 1);
-        double t = q - i[a];
-        f[a] = t * t * (3 - 2 * t);
-      }
-      auto lerp = [](double a, double b, double t) { return a + t * (b - a); };
-      double c00 = lerp(L.at(i[0], i[1], i[2]), L.at(i[0] + 1, i[1], i[2]), f[0]);
-      double c10 = lerp(L.at(i[0], i[1] + 1, i[2]), L.at(i[0] + 1, i[1] + 1, i[2]), f[0]);
-      double c01 = lerp(L.at(i[0], i[1], i[2] + 1), L.at(i[0] + 1, i[1], i[2] + 1), f[0]);
-      double c11 = lerp(L.at(i[0], i[1] + 1, i[2] + 1), L.at(i[0] + 1, i[1] + 1, i[2] + 1), f[0]);
-      sum += amp * lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2]);
+      sum += amp * latticeAt(L, p);
       amp *= 0.5;
     }
     // Fade towards the box faces so the cloud floats in empty space; threshold gives exact zeros.
@@ -208,6 +213,33 @@ void noiseCloud(Volume& v, uint32_t seed) {
     double env = bump(std::sqrt(u * u + w * w + t * t), 0.45, 1.0);
     double s = (sum / 0.9375) * env;  // fBm of 4 octaves spans [0, 0.9375]
     value = (float)std::clamp((s - 0.33) / 0.4, 0.0, 1.0);
+  });
+}
+
+// A head-like phantom: opaque, scan-like data whose rays end in a thin layer. Air (0)
+// outside, soft tissue (0.3) under the skin, a thin skull (0.9) whose thickness ripples, a
+// textured brain (about 0.42) with two ventricles (0.15); all well inside the box, as a
+// scan's head is, so the box's faces never cut the data.
+void headPhantom(Volume& v, uint32_t seed) {
+  const int n = v.wholeDims()[0];
+  const Lattice tex(24, splitmix64(seed)), bumps(6, splitmix64(seed + 1));
+  forEachVoxel(v, [&](int x, int y, int z, float& value) {
+    const double p[3] = {(x + 0.5) / n, (y + 0.5) / n, (z + 0.5) / n};
+    const double u = 2 * p[0] - 1, w = 2 * p[1] - 1, t = 2 * p[2] - 1;
+    auto radius = [](double a, double b, double c, double ra, double rb, double rc) {
+      return std::sqrt(a * a / (ra * ra) + b * b / (rb * rb) + c * c / (rc * rc));
+    };
+    const double r = radius(u, w, t, 0.72, 0.86, 0.80);  // 1 on the skin
+    double s = 0.3 * bump(r, 0.97, 1.0);
+    const double ripple = 0.04 * (latticeAt(bumps, p) - 0.5);
+    s = std::max(s, 0.9 * bump(r - 0.88 - ripple, 0.025, 0.045));
+    const double brain = bump(r, 0.80, 0.845);
+    s = s * (1 - brain) + brain * (0.42 + 0.16 * (latticeAt(tex, p) - 0.5));
+    for (double side : {-1.0, 1.0}) {
+      const double vent = bump(radius(u - side * 0.11, w - 0.08, t, 0.06, 0.22, 0.09), 0.7, 1.0);
+      s = s * (1 - vent) + 0.15 * vent;
+    }
+    value = (float)std::clamp(s, 0.0, 1.0);
   });
 }
 
@@ -233,7 +265,8 @@ Volume generateVolume(const GeneratorSpec& spec, const VoxelBox& box) {
   if (spec.name == "hollow-shell") hollowShell(v);
   else if (spec.name == "marschner-lobb") marschnerLobb(v);
   else if (spec.name == "noise-cloud") noiseCloud(v, spec.seed);
-  else throw std::invalid_argument("unknown generator '" + spec.name + "' (hollow-shell | marschner-lobb | noise-cloud)");
+  else if (spec.name == "head") headPhantom(v, spec.seed);
+  else throw std::invalid_argument("unknown generator '" + spec.name + "' (hollow-shell | marschner-lobb | noise-cloud | head)");
   const auto [mn, mx] = std::minmax_element(v.values.begin(), v.values.end());
   v.data_range = {*mn, *mx};  // of the window: a generator's values are normalised already
   v.mapped_range = {0, 1};

@@ -63,7 +63,7 @@ struct RawVolumeSpec {
 };
 
 struct GeneratorSpec {
-  std::string name;  // hollow-shell | marschner-lobb | noise-cloud
+  std::string name;  // hollow-shell | marschner-lobb | noise-cloud | head
   int size = 64;     // cube edge in voxels
   uint32_t seed = 1;
   std::array<double, 3> spacing{1, 1, 1};

@@ -290,7 +290,7 @@ def main():
     p.add_argument("--image", dest="size", type=int, default=1024, help="image edge in pixels (N: NxN)")
     p.add_argument("--scene", help="a scene file with a cubic volume generator (default: the built-in scene)")
     p.add_argument("--no-shading", action="store_true", help="leave out the scene's shading")
-    p.add_argument("--generator", default="hollow-shell", help="without --scene: hollow-shell | marschner-lobb | noise-cloud")
+    p.add_argument("--generator", default="hollow-shell", help="without --scene: hollow-shell | marschner-lobb | noise-cloud | head")
     p.add_argument("--volume-size", dest="volume_size_given", type=int, help="volume edge (default: the scene's, 256)")
     p.add_argument("--out-dir", default=os.path.join(REPO, "docs"), help="where the two PNGs go")
     p.add_argument("--prefix", default="vtk-compare", help="PNG names: <prefix>-vtk.png, <prefix>-tessera.png")

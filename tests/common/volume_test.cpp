@@ -122,7 +122,7 @@ TEST(Volume, ErrorsAreSpecific) {
 }
 
 TEST(Volume, GeneratorsAreDeterministicAndNormalised) {
-  for (const char* name : {"hollow-shell", "marschner-lobb", "noise-cloud"}) {
+  for (const char* name : {"hollow-shell", "marschner-lobb", "noise-cloud", "head"}) {
     GeneratorSpec g{name, 24, 3, {1, 1, 1}};
     Volume a = generateVolume(g), b = generateVolume(g);
     ASSERT_EQ(a.voxelCount(), 24u * 24 * 24) << name;

@@ -99,7 +99,7 @@ TEST(Shading, FastPathWithin40dBOfReference) {
   Shading sh;
   sh.on = true;
   sh.specular = 0.4;
-  for (const char* gen : {"marschner-lobb", "hollow-shell"}) {
+  for (const char* gen : {"marschner-lobb", "hollow-shell", "head"}) {
     auto vol = test::generated(gen, 48, {1, 1.25, 1});
     const Raycaster lit(vol, test::defaultTf(), sh), unlit(vol, test::defaultTf());
     const Camera cam = Orbit{8, {0.3, 1, 0}}.at(test::defaultCamera(), 1);
