@@ -157,8 +157,8 @@ std::variant<RawVolumeSpec, GeneratorSpec> Parser::volume(const YAML::Node& n) c
     checkKeys(g, "volume.generator", {"name", "size", "seed"});
     GeneratorSpec s;
     s.name = string(require(g, "volume.generator", "name"), "volume.generator.name");
-    if (s.name != "hollow-shell" && s.name != "marschner-lobb" && s.name != "noise-cloud" && s.name != "head")
-      fail("volume.generator.name", "unknown generator '" + s.name + "' (hollow-shell | marschner-lobb | noise-cloud | head)");
+    if (!isGeneratorName(s.name))
+      fail("volume.generator.name", "unknown generator '" + s.name + "' (" + generatorNames() + ")");
     s.size = g["size"] ? (int)integer(g["size"], "volume.generator.size", 2, 2048) : 256;
     s.seed = g["seed"] ? (uint32_t)integer(g["seed"], "volume.generator.seed", 0, 0xffffffffll) : 1;
     if (n["spacing"]) s.spacing = spacing(n["spacing"], "volume.spacing");

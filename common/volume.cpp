@@ -243,7 +243,22 @@ void headPhantom(Volume& v, uint32_t seed) {
   });
 }
 
+constexpr const char* kGenerators[] = {"hollow-shell", "marschner-lobb", "noise-cloud", "head"};
+
 }  // namespace
+
+const std::string& generatorNames() {
+  static const std::string names = [] {
+    std::string s;
+    for (const char* g : kGenerators) s += (s.empty() ? "" : " | ") + std::string(g);
+    return s;
+  }();
+  return names;
+}
+
+bool isGeneratorName(const std::string& name) {
+  return std::find(std::begin(kGenerators), std::end(kGenerators), name) != std::end(kGenerators);
+}
 
 Volume generateVolume(const GeneratorSpec& spec) {
   return generateVolume(spec, VoxelBox{{0, 0, 0}, {spec.size, spec.size, spec.size}});
@@ -266,7 +281,7 @@ Volume generateVolume(const GeneratorSpec& spec, const VoxelBox& box) {
   else if (spec.name == "marschner-lobb") marschnerLobb(v);
   else if (spec.name == "noise-cloud") noiseCloud(v, spec.seed);
   else if (spec.name == "head") headPhantom(v, spec.seed);
-  else throw std::invalid_argument("unknown generator '" + spec.name + "' (hollow-shell | marschner-lobb | noise-cloud | head)");
+  else throw std::invalid_argument("unknown generator '" + spec.name + "' (" + generatorNames() + ")");
   const auto [mn, mx] = std::minmax_element(v.values.begin(), v.values.end());
   v.data_range = {*mn, *mx};  // of the window: a generator's values are normalised already
   v.mapped_range = {0, 1};

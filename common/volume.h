@@ -63,7 +63,7 @@ struct RawVolumeSpec {
 };
 
 struct GeneratorSpec {
-  std::string name;  // hollow-shell | marschner-lobb | noise-cloud | head
+  std::string name;  // one of generatorNames()
   int size = 64;     // cube edge in voxels
   uint32_t seed = 1;
   std::array<double, 3> spacing{1, 1, 1};
@@ -105,6 +105,10 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box);
 // Throws std::invalid_argument for an unknown name or size < 2. A box gives a window:
 // each voxel is computed from its position in the whole volume, so windows equal the
 // matching part of the whole.
+// The generators' names as messages list them ("hollow-shell | marschner-lobb | ..."), and
+// whether `name` is one of them.
+const std::string& generatorNames();
+bool isGeneratorName(const std::string& name);
 Volume generateVolume(const GeneratorSpec& spec);
 Volume generateVolume(const GeneratorSpec& spec, const VoxelBox& box);
 // "" if box is a non-empty box inside a volume of `whole` dims, else what is wrong.

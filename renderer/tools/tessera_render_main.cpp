@@ -110,8 +110,9 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   auto vol = std::make_shared<const Volume>(loadVolume(scene));
   if (std::string why = rangeProblem(*vol); !why.empty()) std::fprintf(stderr, "tessera-render: warning: %s\n", why.c_str());
   auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, scene.tf, scene.shading, scene.light);
-  // Split once, outside the timed renders: the farm's master splits once per run.
-  const BrickTree tree = splitBricks(*vol, std::max(1, a.bricks), &scene.tf);
+  // Split once, outside the timed renders, as the farm's master does once per run (no tree:
+  // the whole volume, and no classification of every voxel for it).
+  const BrickTree tree = a.bricks > 1 ? splitBricks(*vol, a.bricks, &scene.tf) : BrickTree{};
   ImageF img;
   renderer::RenderStats stats;
   double best_ms = 1e300, best_cpu_ms = 1e300;

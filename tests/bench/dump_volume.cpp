@@ -21,7 +21,7 @@ int main(int argc, char** argv) {
   // --help shows the defaults of the options; the positionals are all required, so have none.
   tessera::GeneratorSpec spec;
   std::string out_path, type = "float32";
-  app.add_option("generator", spec.name, "hollow-shell | marschner-lobb | noise-cloud | head")->required();
+  app.add_option("generator", spec.name, tessera::generatorNames())->required();
   app.add_option("size", spec.size, "cube edge in voxels")->required()->check(CLI::Range(2, 4096));
   app.add_option("seed", spec.seed, "generator seed")->required();
   app.add_option("out", out_path, "output file (.raw)")->required();
