@@ -20,8 +20,10 @@ PKGS=(
   libgtest-dev libgmock-dev libbenchmark-dev libteem-dev libxtst-dev
 )
 # optional: python3-vtk9 python3-yaml for tests/bench/vtk_compare.py
-# Tests, fuzzing, benchmarks' plots, the window test under Xvfb, compose validation.
-[ "${TESSERA_MINIMAL:-0}" = 1 ] || PKGS+=(gnuplot-nox xvfb x11-apps imagemagick clang docker-compose procps iproute2)
+# Tests, fuzzing, benchmarks' plots, the window test under Xvfb, compose validation, the
+# one-host Slurm cluster of the Slurm tests.
+[ "${TESSERA_MINIMAL:-0}" = 1 ] || PKGS+=(gnuplot-nox xvfb x11-apps imagemagick clang docker-compose procps iproute2
+  slurmctld slurmd slurm-client munge)
 missing=()
 for p in "${PKGS[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
 if [ ${#missing[@]} -gt 0 ]; then

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -38,6 +39,13 @@ struct LaunchOptions {
   // emulated cluster's per-host wrapper): argv becomes launch_with + [executable, args...].
   // The wrapper sees TESSERA_SERVICE/TESSERA_REPLICA, so it can pick the host per process.
   std::vector<std::string> launch_with;
+  // Start only this replica of this service, under this label (a Slurm task runs one).
+  struct Only {
+    std::string service;
+    int replica = 1;
+    std::string label;
+  };
+  std::optional<Only> only;
 };
 
 // One child process to start.

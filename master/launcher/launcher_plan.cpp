@@ -78,10 +78,12 @@ std::vector<PlannedProcess> planProcesses(const ComposeProject& project, const L
       }
     }
     for (int r = 1; r <= s.replicas; ++r) {
+      if (options.only && (options.only->service != s.name || options.only->replica != r)) continue;
       PlannedProcess p;
       p.service = s.name;
       p.replica = r;
       p.label = s.replicas > 1 ? s.name + "-" + std::to_string(r) : s.name;
+      if (options.only) p.label = options.only->label;
       p.exit_leader = s.exit_leader;
       p.restart = s.restart;
       p.executable = exe;

@@ -1,5 +1,5 @@
 // tessera-up: runs compose.yaml as local processes, no container engine needed.
-//   tessera-up [FILE] [--env KEY=VALUE]... [--dry-run] [--launch-with CMD]
+//   tessera-up [FILE] [--env KEY=VALUE]... [--dry-run] [--launch-with CMD] [--slurm]
 #include <CLI/CLI.hpp>
 
 #include <unistd.h>
@@ -19,6 +19,7 @@
 #include "master/launcher/launcher.h"
 #include "master/launcher/output_lock.h"
 #include "master/launcher/settings.h"
+#include "master/launcher/slurm.h"
 
 extern char** environ;
 
@@ -117,7 +118,23 @@ int main(int argc, char** argv) {
   app.add_option("--launch-with", launch_with,
                  "Start every process through this command (e.g. \"srun -N1 -n1\"); it gets the "
                  "stage's command line and TESSERA_SERVICE/TESSERA_REPLICA in its environment");
+  bool slurm = false;
+  app.add_flag("--slurm", slurm, "Run the farm as one Slurm job step (srun --multi-prog) inside this "
+                                 "allocation; with --dry-run print the step's configuration");
+  std::string task_service, run_dir;
+  int offset = 0;
+  auto* task = app.add_option("--slurm-task", task_service, "(used by --slurm) run this service's task")->group("");
+  app.add_option("--offset", offset, "(with --slurm-task) replica - 1")->group("");
+  app.add_option("--run-dir", run_dir, "(with --slurm-task) the step's run folder")->group("");
   CLI11_PARSE(app, argc, argv);
+  if (*task) {
+    try {
+      return tessera::launcher::runSlurmTask(file, run_dir, task_service, offset + 1);
+    } catch (const std::exception& e) {
+      log->error("{} task: {}", task_service, e.what());
+      return 2;
+    }
+  }
 
   try {
     tessera::launcher::ComposeOptions options;
@@ -127,6 +144,14 @@ int main(int argc, char** argv) {
       options.overrides[kv.substr(0, eq)] = kv.substr(eq + 1);
     }
     const std::filesystem::path out_folder = checkUserSettings(file, options, log);
+    if (slurm) {
+      std::optional<tessera::launcher::OutputLock> out_lock;  // one farm per output folder
+      if (!dry_run) {
+        out_lock.emplace(out_folder);
+        tessera::launcher::removeOldFrames(out_folder);
+      }
+      return tessera::launcher::runSlurm(file, options, dry_run);
+    }
     // One identity per run: stages say it in their Hello and a master refuses another run's;
     // compose.yaml's default endpoints are a folder named after it, so two farms never meet.
     if (!options.overrides.count("TESSERA_RUN") && !std::getenv("TESSERA_RUN"))
