@@ -18,14 +18,17 @@ PKGS=(
   libosmesa6-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev
   libpng-dev libsdl2-dev nlohmann-json3-dev libfftw3-dev zlib1g-dev libnifti2-dev
   libgtest-dev libgmock-dev libbenchmark-dev libteem-dev libxtst-dev
+  libcivetweb-dev libturbojpeg0-dev
 )
 # optional: python3-vtk9 python3-yaml for tests/bench/vtk_compare.py
 # Tests, fuzzing, benchmarks' plots, the window test under Xvfb, compose validation, the
 # one-host Slurm cluster of the Slurm tests.
 [ "${TESSERA_MINIMAL:-0}" = 1 ] || PKGS+=(gnuplot-nox xvfb x11-apps imagemagick clang docker-compose procps iproute2
-  slurmctld slurmd slurm-client munge)
+  slurmctld slurmd slurm-client munge chromium curl)
 missing=()
 for p in "${PKGS[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
+# Node.js drives chromium in the web view's tests: Debian's, unless one is installed already.
+if [ "${TESSERA_MINIMAL:-0}" != 1 ] && ! command -v npm >/dev/null; then missing+=(nodejs npm); fi
 if [ ${#missing[@]} -gt 0 ]; then
   $SUDO apt-get update -q
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
@@ -62,6 +65,9 @@ case "$mode" in
     else
       echo "docker stack config not available: Swarm check of compose.yaml skipped"
     fi
+    # puppeteer-core for the web view's tests, pinned by tests/web/package-lock.json (it
+    # drives Debian's chromium; no browser is downloaded).
+    (cd tests/web && PUPPETEER_SKIP_DOWNLOAD=1 npm ci --no-audit --no-fund --loglevel=error)
     tests/fuzz/run.sh "${TESSERA_FUZZ_SECONDS:-15}"
     ctest --test-dir "$BUILD" --output-on-failure -j2 --timeout 600
     tests/sanitizers/run.sh

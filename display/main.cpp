@@ -5,6 +5,7 @@
 #include "common/net/log.h"
 #include "common/net/stage_main.h"
 #include "display/stage.h"
+#include "display/web_server.h"
 
 int main(int argc, char** argv) {
   using namespace tessera;
@@ -23,7 +24,12 @@ int main(int argc, char** argv) {
       ->option_text("auto|on|off [auto] (Env:TESSERA_WINDOW)");
   app.add_flag("--premultiplied", opt.premultiplied, "also write frame_NNNNNN.pam: exact premultiplied rgba8")
       ->envname("TESSERA_PREMULTIPLIED");
-  app.add_option("--background", bg, "r,g,b in [0,1]: PNGs composited over this colour")
+  app.add_option("--web", opt.web,
+                 "HOST:PORT: also serve the web view there (a page and a WebSocket; the log gives the URL "
+                 "with the token, TESSERA_WEB_TOKEN or a new one)")
+      ->envname("TESSERA_WEB");
+  app.add_option("--background", bg, "r,g,b in [0,1]: PNGs (and the web view) composited over this colour")
+      ->envname("TESSERA_BACKGROUND")
       ->delimiter(',')
       ->expected(3)
       ->option_text("R,G,B [none: straight alpha]");
@@ -35,6 +41,7 @@ int main(int argc, char** argv) {
     opt.width = parsed.width;
     opt.height = parsed.height;
     opt.endpoints = endpoints;
+    opt.web_token = display::webToken();
     return display::runStage(opt, ctx, stop);
   });
 }

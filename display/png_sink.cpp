@@ -21,7 +21,7 @@ class PngSink final : public Sink {
   }
 
   // The status line is not burnt into files: they stay comparable with reference images.
-  void present(const Image8& frame, uint64_t id, const std::string& /*status*/) override {
+  void present(const Image8& frame, uint64_t id, const std::string& /*status*/, bool /*moving*/) override {
     char name[40];
     std::snprintf(name, sizeof name, "frame_%06llu", (unsigned long long)id);
     const std::filesystem::path stem = std::filesystem::path(dir_) / name;

@@ -14,6 +14,11 @@
 
 namespace tessera::display {
 
+// Input as the window and the web view read it: drag sensitivity, and what one wheel notch
+// ("in", away from the user) does to the eye distance.
+constexpr double kDegreesPerPixel = 0.3;
+constexpr double kZoomPerNotch = 0.9;
+
 struct InputEvent {
   double orbit_dx = 0, orbit_dy = 0;  // degrees (drag)
   double zoom = 1;                    // multiply eye distance (wheel)
@@ -27,10 +32,11 @@ struct InputEvent {
 class Sink {
  public:
   virtual ~Sink() = default;
-  // Shows or writes frame `id`; `status` is the fps/latency/per-stage line drawn on screen.
+  // Shows or writes frame `id`; `status` is the fps/latency/per-stage line drawn on screen;
+  // `moving`: a reduced frame while the camera moves (the web view sends it lossy).
   // A window scales the frame to fit it (bilinear, centred, the same shape); files keep its size.
-  virtual void present(const Image8& frame, uint64_t id, const std::string& status) = 0;
-  // Input since the last call (windows only).
+  virtual void present(const Image8& frame, uint64_t id, const std::string& status, bool moving) = 0;
+  // Input since the last call (windows and the web view).
   virtual std::vector<InputEvent> poll() { return {}; }
   virtual bool interactive() const { return false; }  // a window: it takes input
 };
@@ -44,5 +50,14 @@ std::unique_ptr<Sink> makePngSink(const std::string& dir,
 // Wayland server answers. Trying is the only probe: a separate probe's connection, once closed,
 // can make an X server reset under the window that follows.
 std::unique_ptr<Sink> makeWindowSink(int width, int height, const std::string& title);
+
+// The web view: serves the page and a WebSocket on `address` (HOST:PORT) for viewers that
+// present `token`; frames are shown over `background` (the PNG sink's, so that the page's
+// still frame is the PNG file's pixels). Throws std::runtime_error if it cannot listen.
+std::unique_ptr<Sink> makeWebSink(const std::string& address, const std::string& token,
+                                  const std::array<double, 3>& background);
+// Every frame to each sink in turn, the input of all of them (a window or PNG files, and the
+// web view beside them).
+std::unique_ptr<Sink> makeTeeSink(std::vector<std::unique_ptr<Sink>> sinks);
 
 }  // namespace tessera::display

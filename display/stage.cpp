@@ -28,6 +28,8 @@ class Stage {
         waiting_budget_(kWaitingFrames * 4 * size_t(opt.width + kStripHeaderPixels) * size_t(opt.height)),
         inbox_(ctx, proto::Role::Compositor, maxPixelMessageBytes(opt.width, opt.height), waiting_budget_) {
     inbox_.bind(opt_.endpoints.bind(opt_.endpoints.display()));
+    // Listening from the start: a viewer may connect before the first frame.
+    if (!opt_.web.empty()) web_ = makeWebSink(opt_.web, opt_.web_token, opt_.background.value_or(kWebBackground));
   }
 
   int run(const std::atomic<bool>* stop) {
@@ -221,7 +223,7 @@ class Stage {
     const auto input_at = inputShown(params);
     if (input_at) status += fmt::format("  input {:.0f} ms", msSince(*input_at));  // up to now, before presenting
     if (sink_->interactive()) status += "  h: help";
-    sink_->present(image_, params.frame, status);
+    sink_->present(image_, params.frame, status, params.interactive);
     last_display_ms_ = msSince(t0);
     const double input_ms = input_at ? msSince(*input_at) : 0;
     ++presented_;
@@ -268,6 +270,12 @@ class Stage {
       sink_ = makePngSink(opt_.out_dir, opt_.background, opt_.premultiplied);
       spdlog::info("display writing PNG frames to {}/", opt_.out_dir);
     }
+    if (web_) {
+      std::vector<std::unique_ptr<Sink>> both;
+      both.push_back(std::move(sink_));
+      both.push_back(std::move(web_));
+      sink_ = makeTeeSink(std::move(both));
+    }
   }
 
   // True when the user quit.
@@ -295,6 +303,9 @@ class Stage {
   size_t waiting_budget_;
   DataInbox inbox_;
   std::unique_ptr<Sink> sink_;
+  std::unique_ptr<Sink> web_;  // the web view until the first frame joins it to sink_
+  // The web view's background without --background: the window's dark grey.
+  static constexpr std::array<double, 3> kWebBackground{32 / 255.0, 32 / 255.0, 36 / 255.0};
   // Frames with FrameParams are bounded by the master's window; strips by their regions.
   std::map<uint64_t, Pending> frames_;
   // The master's --in-flight is at most 64 frames in flight: no real strips are further ahead.

@@ -22,6 +22,8 @@ struct StageOptions {
   // The scene's image size (every process loads the same scene): bounds what peers may send.
   int width = 512, height = 512;
   bool premultiplied = false;  // also write frame_NNNNNN.pam (exact premultiplied rgba8)
+  std::string web{};      // HOST:PORT of the web view, beside the window or PNG files ("": none)
+  std::string web_token{};  // what its viewers must present
 };
 
 int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);

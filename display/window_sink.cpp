@@ -18,8 +18,6 @@
 namespace tessera::display {
 namespace {
 
-constexpr double kDegreesPerPixel = 0.3;  // drag sensitivity
-constexpr double kZoomPerNotch = 0.9;     // wheel "in" shrinks the eye distance
 constexpr uint8_t kBackground[3] = {32, 32, 36};  // a window has no alpha: show over dark grey
 constexpr uint8_t kStripDim = 96;  // strip pixels keep 96/256 of their colour behind the text
 constexpr std::array<uint8_t, 4> kTextColor = {230, 230, 230, 255};
@@ -101,7 +99,7 @@ class WindowSink final : public Sink {
   WindowSink(const WindowSink&) = delete;
   WindowSink& operator=(const WindowSink&) = delete;
 
-  void present(const Image8& frame, uint64_t /*id*/, const std::string& status) override {
+  void present(const Image8& frame, uint64_t /*id*/, const std::string& status, bool /*moving*/) override {
     if (frame.width <= 0 || frame.height <= 0) return;
     if (frame.px.size() != (size_t)frame.width * frame.height * 4)
       throw std::invalid_argument("display window: frame pixel buffer has the wrong size");

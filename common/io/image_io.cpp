@@ -57,21 +57,27 @@ std::vector<uint8_t> toStraight(int w, int h, Get get, const std::optional<std::
   return out;
 }
 
-void writeRows(const std::string& path, int w, int h, const std::vector<uint8_t>& rgba) {
-  if (w <= 0 || h <= 0) fail(path, "cannot write an empty image as PNG");
-  FilePtr f(std::fopen(path.c_str(), "wb"));
-  if (!f) fail(path, std::string("cannot open for writing: ") + std::strerror(errno));
+// PNG bytes of 8-bit RGBA rows, in memory: the file writer and the web view send the same.
+std::vector<uint8_t> encodeRows(const std::string& what, int w, int h, const std::vector<uint8_t>& rgba) {
+  if (w <= 0 || h <= 0) fail(what, "cannot write an empty image as PNG");
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!info) {
     png_destroy_write_struct(&png, nullptr);
-    fail(path, "libpng init failed");
+    fail(what, "libpng init failed");
   }
+  std::vector<uint8_t> out;
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
-    fail(path, "libpng write error");
+    fail(what, "libpng write error");
   }
-  png_init_io(png, f.get());
+  png_set_write_fn(
+      png, &out,
+      [](png_structp p, png_bytep data, png_size_t n) {
+        auto* bytes = static_cast<std::vector<uint8_t>*>(png_get_io_ptr(p));
+        bytes->insert(bytes->end(), data, data + n);
+      },
+      nullptr);
   png_set_IHDR(png, info, w, h, 8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                PNG_FILTER_TYPE_DEFAULT);
   // The headless display writes every frame: speed over size. One filter (Up) instead of
@@ -85,6 +91,15 @@ void writeRows(const std::string& path, int w, int h, const std::vector<uint8_t>
   for (int y = 0; y < h; ++y) png_write_row(png, rgba.data() + (size_t)y * w * 4);
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
+  return out;
+}
+
+void writeRows(const std::string& path, int w, int h, const std::vector<uint8_t>& rgba) {
+  const std::vector<uint8_t> bytes = encodeRows(path, w, h, rgba);
+  FilePtr f(std::fopen(path.c_str(), "wb"));
+  if (!f) fail(path, std::string("cannot open for writing: ") + std::strerror(errno));
+  if (std::fwrite(bytes.data(), 1, bytes.size(), f.get()) != bytes.size() || std::fflush(f.get()) != 0)
+    fail(path, std::string("cannot write: ") + std::strerror(errno));
 }
 
 }  // namespace
@@ -111,10 +126,17 @@ static std::vector<uint8_t> unpremultiply8(const Image8& img) {
   return out;
 }
 
+std::vector<uint8_t> pngPixels(const Image8& img, std::optional<std::array<double, 3>> background) {
+  return background ? toStraight(img.width, img.height, [&](size_t i) { return img.px[i] / 255.0; }, background)
+                    : unpremultiply8(img);
+}
+
 void writePng(const std::string& path, const Image8& img, std::optional<std::array<double, 3>> background) {
-  auto rgba = background ? toStraight(img.width, img.height, [&](size_t i) { return img.px[i] / 255.0; }, background)
-                         : unpremultiply8(img);
-  writeRows(path, img.width, img.height, rgba);
+  writeRows(path, img.width, img.height, pngPixels(img, background));
+}
+
+std::vector<uint8_t> encodePng(const Image8& img, std::optional<std::array<double, 3>> background) {
+  return encodeRows("PNG in memory", img.width, img.height, pngPixels(img, background));
 }
 
 void writePng(const std::string& path, const ImageF& img, std::optional<std::array<double, 3>> background) {

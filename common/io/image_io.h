@@ -5,6 +5,7 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "common/image.h"
 
@@ -13,6 +14,10 @@ namespace tessera {
 // Un-premultiplies with rounding; with a background, composites over it instead (opaque).
 void writePng(const std::string& path, const Image8& img,
               std::optional<std::array<double, 3>> background = std::nullopt);
+// The rgba8 rows writePng writes for `img` (straight alpha, or opaque over the background).
+std::vector<uint8_t> pngPixels(const Image8& img, std::optional<std::array<double, 3>> background);
+// The bytes writePng writes, in memory (the web view sends the PNG sink's file).
+std::vector<uint8_t> encodePng(const Image8& img, std::optional<std::array<double, 3>> background = std::nullopt);
 void writePng(const std::string& path, const ImageF& img,
               std::optional<std::array<double, 3>> background = std::nullopt);
 // Reads an RGBA PNG back into premultiplied rgba8 (for tests and tools).

@@ -48,6 +48,9 @@ const Setting kSettings[] = {
     {"TESSERA_DISPLAY_HOST", Kind::Free},
     {"TESSERA_BIND_HOST", Kind::Free},
     {"TESSERA_ADVERTISE_HOST", Kind::Free},
+    {"TESSERA_WEB", Kind::Free},        // the display's web view, HOST:PORT
+    {"TESSERA_WEB_TOKEN", Kind::Free},
+    {"TESSERA_BACKGROUND", Kind::Free},  // the display's --background R,G,B
     {"TESSERA_SERVICE", Kind::Free},  // set by tessera-up for its children
     {"TESSERA_REPLICA", Kind::Free},
     {"TESSERA_MINIMAL", Kind::Free},  // setup.sh

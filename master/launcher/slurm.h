@@ -12,6 +12,7 @@
 //   multi-prog.conf the task ranks of each service (multi-prog-<group>.conf per component)
 //   master.endpoint tcp://ADDRESS:PORT, written by the master's task when it starts
 //   display.host    ADDRESS, written by the display's task
+//   finished        written by the display's task when the display finished (success)
 // ADDRESS is the node's NodeAddr as Slurm knows it; PORT is derived from the job id and the
 // farm number and moved on by 100 while ports are taken on the master's node.
 #pragma once

@@ -49,7 +49,7 @@ std::string nodeAddress(const std::string& node) {
   return host;
 }
 
-// Whether a TCP port can be bound on `addr` now (IPv4 literal; a name is taken as free).
+// Whether a TCP port can be bound on `addr` now (an IPv4 literal; otherwise any address).
 bool portFree(const std::string& addr, int port) {
   sockaddr_in sa{};
   sa.sin_family = AF_INET;
@@ -63,10 +63,11 @@ bool portFree(const std::string& addr, int port) {
 }
 
 // The master's base port: the first candidate whose ports (base..base+2, base+10+rank) are
-// free on this node, so that two farms on one node never meet on a port.
+// free on this node now (the display's and compositors' nodes are not asked: a port taken
+// there is an error that names it).
 int chooseBasePort(const std::string& addr, int first, int compositors) {
   for (int k = 0; k < 20; ++k) {
-    const int base = 20000 + (first - 20000 + 100 * k) % 40000;
+    const int base = 10000 + (first - 10000 + 100 * k) % 22000;
     bool free = portFree(addr, base) && portFree(addr, base + 1) && portFree(addr, base + 2);
     for (int r = 0; free && r < compositors; ++r) free = portFree(addr, base + 10 + r);
     if (free) return base;
@@ -89,7 +90,8 @@ std::string awaitFile(const std::filesystem::path& file, const std::string& who)
     if (in >> value && !value.empty()) return value;
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  throw LaunchError("no " + file.string() + " after 60 s: the " + who + "'s task did not start (see its output)");
+  throw LaunchError("no " + file.string() + " after " + std::to_string(kRendezvousWait.count()) + " s: the " + who +
+                    "'s task did not start (see its output)");
 }
 
 std::map<std::string, std::string> readSettings(const std::filesystem::path& run_dir) {
@@ -123,7 +125,8 @@ int runSlurmTask(const std::filesystem::path& compose_file, const std::filesyste
   }
   if (display) publish(run_dir / "display.host", addr);
   options.overrides["TESSERA_ENDPOINTS"] = awaitFile(run_dir / "master.endpoint", "master");
-  options.overrides["TESSERA_DISPLAY_HOST"] = awaitFile(run_dir / "display.host", "display");
+  // Renderers only talk to the master and to compositors (whose addresses it sends them).
+  if (service != "renderer") options.overrides["TESSERA_DISPLAY_HOST"] = awaitFile(run_dir / "display.host", "display");
   options.overrides["TESSERA_BIND_HOST"] = addr;
   options.overrides["TESSERA_ADVERTISE_HOST"] = addr;
   const ComposeProject project = loadCompose(compose_file, options);
@@ -133,9 +136,16 @@ int runSlurmTask(const std::filesystem::path& compose_file, const std::filesyste
   label += " (task " + task + " on " + node + ")";
   launch_options.only = LaunchOptions::Only{service, replica, label};
   const int rc = launch(project, launch_options);
-  // Non-zero ends the step (srun --kill-on-bad-exit): the farm cannot go on without the
-  // master or the display; 128+signal: the step is being stopped anyway (scancel).
-  if (rc == 0 || master || display || rc >= 128) return rc;
+  // The farm's success is the display's (its exit leader), whatever srun says of lost tasks.
+  if (display && rc == 0) publish(run_dir / "finished", "display");
+  if (rc == 0 || rc >= 128) return rc;  // 128+signal: the step is being stopped (scancel)
+  if (master || display) {
+    // The farm cannot go on without it: end the step (srun then ends non-zero).
+    const std::string step = envOr("SLURM_JOB_ID", "") + "." + envOr("SLURM_STEP_ID", "");
+    std::cout << "tessera-up | " << label << " is lost: cancelling the farm's job step " << step << std::endl;
+    if (std::system(("scancel --quiet '" + step + "'").c_str()) != 0) std::cout << "tessera-up | scancel failed" << std::endl;
+    return rc;
+  }
   std::cout << "tessera-up | " << label << " is lost; the farm goes on without it" << std::endl;
   return 0;
 }

@@ -101,6 +101,30 @@ std::filesystem::path runFolder(const tessera::launcher::ComposeProject& project
   return {};
 }
 
+// tessera-up --slurm: one farm per output folder, as locally.
+int slurmFarm(const std::string& file, const tessera::launcher::ComposeOptions& options,
+              const std::filesystem::path& out_folder, bool dry_run) {
+  std::optional<tessera::launcher::OutputLock> out_lock;
+  if (!dry_run) {
+    out_lock.emplace(out_folder);
+    tessera::launcher::removeOldFrames(out_folder);
+  }
+  return tessera::launcher::runSlurm(file, options, dry_run);
+}
+
+// tessera-up --slurm-task: errors before the stage starts name the task and the node.
+int slurmTask(const std::string& file, const std::string& run_dir, const std::string& service, int replica,
+              const std::shared_ptr<spdlog::logger>& log) {
+  try {
+    return tessera::launcher::runSlurmTask(file, run_dir, service, replica);
+  } catch (const std::exception& e) {
+    const char* task = std::getenv("SLURM_PROCID");
+    const char* node = std::getenv("SLURMD_NODENAME");
+    log->error("{} (task {} on {}): {}", service, task ? task : "?", node ? node : "?", e.what());
+    return 2;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -127,14 +151,7 @@ int main(int argc, char** argv) {
   app.add_option("--offset", offset, "(with --slurm-task) replica - 1")->group("");
   app.add_option("--run-dir", run_dir, "(with --slurm-task) the step's run folder")->group("");
   CLI11_PARSE(app, argc, argv);
-  if (*task) {
-    try {
-      return tessera::launcher::runSlurmTask(file, run_dir, task_service, offset + 1);
-    } catch (const std::exception& e) {
-      log->error("{} task: {}", task_service, e.what());
-      return 2;
-    }
-  }
+  if (*task) return slurmTask(file, run_dir, task_service, offset + 1, log);
 
   try {
     tessera::launcher::ComposeOptions options;
@@ -144,14 +161,7 @@ int main(int argc, char** argv) {
       options.overrides[kv.substr(0, eq)] = kv.substr(eq + 1);
     }
     const std::filesystem::path out_folder = checkUserSettings(file, options, log);
-    if (slurm) {
-      std::optional<tessera::launcher::OutputLock> out_lock;  // one farm per output folder
-      if (!dry_run) {
-        out_lock.emplace(out_folder);
-        tessera::launcher::removeOldFrames(out_folder);
-      }
-      return tessera::launcher::runSlurm(file, options, dry_run);
-    }
+    if (slurm) return slurmFarm(file, options, out_folder, dry_run);
     // One identity per run: stages say it in their Hello and a master refuses another run's;
     // compose.yaml's default endpoints are a folder named after it, so two farms never meet.
     if (!options.overrides.count("TESSERA_RUN") && !std::getenv("TESSERA_RUN"))

@@ -87,12 +87,30 @@ TEST(SlurmPlan, AHeterogeneousJobRunsTheDisplayInComponentZeroAndTheRestInOne) {
 TEST(SlurmPlan, PortsDifferBetweenFarmsOfOneJobAndNeighbouringJobs) {
   for (int job = 1; job < 2000; ++job) {
     const int p = slurmFirstPort(std::to_string(job), 1);
-    ASSERT_GE(p, 20000);
-    ASSERT_LE(p + 100, 65435);  // the last compositor's port still parses
+    ASSERT_GE(p, 10000);
+    ASSERT_LE(p + 100, 32768);  // below Linux's ephemeral ports
     ASSERT_EQ(p % 100, 0);
     EXPECT_NE(p, slurmFirstPort(std::to_string(job), 2));
     EXPECT_NE(p, slurmFirstPort(std::to_string(job + 1), 1));
   }
+}
+
+TEST(SlurmPlan, AFarmWithoutOneMasterAndOneDisplayIsRefusedAtOnce) {
+  ComposeOptions options;
+  options.process_env = [](const std::string&) { return std::nullopt; };
+  const auto no_display = parseCompose("services:\n  master: {command: m}\n", "/tmp", options, "compose.yaml");
+  try {
+    slurmSteps(no_display, 0);
+    ADD_FAILURE() << "no error";
+  } catch (const LaunchError& e) {
+    EXPECT_EQ(std::string(e.what()), "tessera-up --slurm needs exactly one 'display' service (none in the compose file)");
+  }
+}
+
+TEST(SlurmPlan, SettingsSurviveTheRunFolderWhateverTheirCharacters) {
+  const std::map<std::string, std::string> settings{
+      {"TESSERA_OUT", "/data/it's \"here\"\\x"}, {"TESSERA_SCENE", "a b\tc\nd"}, {"TESSERA_RUN", "slurm-1-1"}};
+  EXPECT_EQ(parseDotEnv(settingsText(settings), "settings.env"), settings);
 }
 
 class SlurmCli : public ::testing::Test {

@@ -36,12 +36,27 @@ farm_pids() {
   true
 }
 
-# Kills (SIGKILL) the oldest process named $2 (its 15-character comm) working in folder $1.
+# Kills (SIGKILL) the first process (in /proc order) named $2 (its 15-character comm)
+# working in folder $1.
 kill_stage() {
   local p
   for p in $(farm_pids "$1"); do
     if [ "$(cat /proc/$p/comm 2>/dev/null)" = "$2" ]; then kill -KILL "$p" && echo "killed $2 $p"; return 0; fi
   done
   echo "kill_stage: no $2 in $1" >&2
+  return 1
+}
+
+# Kills (SIGKILL) the task of service $2 in folder $1: the tessera-up --slurm-task process
+# itself (its stage then gets SIGTERM from the kernel: PR_SET_PDEATHSIG).
+kill_task() {
+  local p
+  for p in $(farm_pids "$1"); do
+    if tr '\0' ' ' <"/proc/$p/cmdline" 2>/dev/null | grep -q -- "--slurm-task $2 "; then
+      kill -KILL "$p" && echo "killed the $2 task $p"
+      return 0
+    fi
+  done
+  echo "kill_task: no $2 task in $1" >&2
   return 1
 }

@@ -17,9 +17,10 @@ while [ $# -gt 0 ]; do
   esac
 done
 [ $# -gt 0 ] || { echo "one_host_slurm.sh: no command" >&2; exit 2; }
+# Exit 77 (the tests skip) only without root; as root a missing package is a failure.
 [ "$(id -u)" = 0 ] || { echo "one_host_slurm.sh: needs root (SlurmUser=root)" >&2; exit 77; }
 for b in munged slurmctld slurmd sbatch srun; do
-  command -v "$b" >/dev/null || { echo "one_host_slurm.sh: $b is not installed (./setup.sh deps)" >&2; exit 77; }
+  command -v "$b" >/dev/null || { echo "one_host_slurm.sh: $b is not installed (./setup.sh deps)" >&2; exit 1; }
 done
 own_dir=0
 [ -n "$dir" ] || { dir=$(mktemp -d /tmp/tessera-slurm.XXXXXX); own_dir=1; }
@@ -58,6 +59,10 @@ cleanup() {
     sleep 0.1
   done
   for p in "${pids[@]}"; do kill -KILL "$p" 2>/dev/null || true; done
+  # Anything a job of this cluster left (its environment names this slurm.conf).
+  for p in $(grep -lsz "^SLURM_CONF=$dir/slurm.conf\$" /proc/[0-9]*/environ 2>/dev/null | cut -d/ -f3); do
+    [ "$p" != $$ ] && kill -KILL "$p" 2>/dev/null || true
+  done
   [ "$own_dir" = 1 ] && rm -rf "$dir"
   true
 }

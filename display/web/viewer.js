@@ -1,0 +1,129 @@
+// Tessera web view: shows the farm's frames from the display's WebSocket and sends input
+// back through it. Frames: [u32 LE header length][JSON header][PNG or JPEG of the active
+// region]. Each drawn frame is acknowledged; the display sends at most 2 unacknowledged.
+'use strict';
+(() => {
+  const canvas = document.getElementById('frame');
+  const ctx = canvas.getContext('2d', { alpha: false });
+  const kindEl = document.getElementById('kind');
+  const statusEl = document.getElementById('status');
+  const helpEl = document.getElementById('help');
+  const token = decodeURIComponent(location.hash.slice(1));
+  const state = { shown: -1, kind: 'none', frames: 0, connects: 0, inputAt: 0, latencies: [] };
+  let ws = null;
+  let retry = 250;
+
+  function setKind(text, cls) {
+    kindEl.textContent = text;
+    kindEl.className = cls;
+  }
+
+  async function onFrame(buf) {
+    const view = new DataView(buf);
+    const n = view.getUint32(0, true);
+    const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buf, 4, n)));
+    let bitmap = null;
+    if (header.kind === 'png' || header.kind === 'jpeg') {
+      const blob = new Blob([new Uint8Array(buf, 4 + n)], { type: 'image/' + header.kind });
+      bitmap = await createImageBitmap(blob, { premultiplyAlpha: 'none', colorSpaceConversion: 'none' });
+    }
+    // Decoding is asynchronous: a frame finished after a newer one is never shown.
+    if (header.id > state.shown) {
+      if (canvas.width !== header.fw || canvas.height !== header.fh) {
+        canvas.width = header.fw;
+        canvas.height = header.fh;
+      }
+      ctx.fillStyle = `rgb(${header.bg[0]}, ${header.bg[1]}, ${header.bg[2]})`;
+      ctx.fillRect(0, 0, canvas.width, canvas.height);
+      if (bitmap) ctx.drawImage(bitmap, header.x, header.y);
+      state.shown = header.id;
+      state.kind = header.kind === 'jpeg' ? 'moving' : 'lossless';
+      state.frames++;
+      if (state.inputAt) {  // input-to-present: the first input since the last frame shown
+        state.latencies.push(performance.now() - state.inputAt);
+        if (state.latencies.length > 10000) state.latencies.shift();
+        state.inputAt = 0;
+      }
+      setKind(state.kind === 'moving' ? 'moving (JPEG)' : 'lossless', state.kind);
+      statusEl.textContent = header.status;
+    }
+    if (bitmap) bitmap.close();
+    if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify({ t: 'ack', id: header.id }));
+  }
+
+  function connect() {
+    if (!token) {  // the display logs the whole URL: the part after # is the token
+      setKind('no token', 'offline');
+      statusEl.textContent = 'open the URL the display logged, with its #token';
+      return;
+    }
+    ws = new WebSocket(`ws://${location.host}/ws?token=${encodeURIComponent(token)}`);
+    ws.binaryType = 'arraybuffer';
+    ws.onopen = () => {
+      retry = 250;
+      state.connects++;
+      setKind('connected', 'lossless');
+    };
+    ws.onmessage = (e) => { if (e.data instanceof ArrayBuffer) onFrame(e.data).catch((err) => console.error(err)); };
+    ws.onclose = () => {  // a reload, a restart of the display or a lost link: try again
+      setKind('reconnecting', 'offline');
+      setTimeout(connect, retry);
+      retry = Math.min(2000, retry * 2);
+    };
+  }
+
+  // Input: drags are summed and sent once per animation frame, like the window's.
+  let drag = null;
+  let pending = { dx: 0, dy: 0 };
+  function send(msg) {
+    if (!state.inputAt) state.inputAt = performance.now();
+    if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg));
+  }
+  function flushDrag() {
+    if (pending.dx || pending.dy) send({ t: 'drag', dx: pending.dx, dy: pending.dy });
+    pending = { dx: 0, dy: 0 };
+    if (drag) requestAnimationFrame(flushDrag);
+  }
+  canvas.addEventListener('pointerdown', (e) => {
+    if (e.button !== 0) return;
+    drag = { x: e.clientX, y: e.clientY };
+    canvas.setPointerCapture(e.pointerId);
+    canvas.classList.add('dragging');
+    requestAnimationFrame(flushDrag);
+  });
+  canvas.addEventListener('pointermove', (e) => {
+    if (!drag) return;
+    pending.dx += e.clientX - drag.x;
+    pending.dy += e.clientY - drag.y;
+    drag = { x: e.clientX, y: e.clientY };
+  });
+  const release = () => {
+    if (!drag) return;
+    drag = null;
+    canvas.classList.remove('dragging');
+    flushDrag();
+    send({ t: 'release' });
+  };
+  canvas.addEventListener('pointerup', release);
+  canvas.addEventListener('pointercancel', release);
+  canvas.addEventListener('wheel', (e) => {
+    e.preventDefault();
+    if (e.deltaY) send({ t: 'wheel', notches: e.deltaY < 0 ? 1 : -1 });
+  }, { passive: false });
+  window.addEventListener('keydown', (e) => {
+    if (e.key === 'h') helpEl.style.display = helpEl.style.display === 'block' ? 'none' : 'block';
+    else if (e.key === '1' || e.key === '2' || e.key === '3') send({ t: 'key', key: e.key });
+  });
+
+  // For tests and benchmarks: what is shown, and the canvas's pixels (RGBA, base64).
+  window.tessera = {
+    state,
+    pixels() {
+      const data = ctx.getImageData(0, 0, canvas.width, canvas.height).data;
+      let s = '';
+      for (let i = 0; i < data.length; i += 0x8000) s += String.fromCharCode.apply(null, data.subarray(i, i + 0x8000));
+      return { id: state.shown, kind: state.kind, width: canvas.width, height: canvas.height, rgba: btoa(s) };
+    },
+  };
+  connect();
+})();

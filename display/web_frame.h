@@ -1,0 +1,30 @@
+// A frame as the web view sends it: one binary WebSocket message, [u32 little-endian length
+// of the header][header: JSON][image bytes]. The header says the frame's id, its kind
+// ("png": lossless, the PNG sink's pixels; "jpeg": a lossy frame while the camera moves;
+// "empty": nothing but background), the active region (x, y, w, h) inside the full frame
+// (fw, fh), the colour of the pixels outside it (bg: the background the frame is shown over,
+// as the PNG sink composites it), and the status line. Only the active region travels.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/image.h"
+
+namespace tessera::display {
+
+struct WebFrame {
+  uint64_t id = 0;
+  bool lossless = false;
+  std::vector<uint8_t> message;  // header + image: what goes on the wire
+  size_t image_bytes = 0;        // of which the encoded image
+};
+
+// Encodes premultiplied `frame` over `background` (r, g, b in [0, 1]): losslessly as PNG (the
+// bytes the PNG sink writes for this region with this background), or as JPEG of
+// `jpeg_quality` (4:2:0) while the camera moves.
+WebFrame encodeWebFrame(const Image8& frame, uint64_t id, bool lossless, const std::string& status,
+                        const std::array<double, 3>& background, int jpeg_quality);
+
+}  // namespace tessera::display

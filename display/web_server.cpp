@@ -1,0 +1,264 @@
+// civetweb handlers of the web view. See web_server.h.
+#include "display/web_server.h"
+
+#include <civetweb.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <condition_variable>
+#include <cstring>
+#include <stdexcept>
+#include <thread>
+
+#include <spdlog/spdlog.h>
+
+#include "display/web_assets.h"
+
+namespace tessera::display {
+
+struct WebServer::Viewer {
+  mg_connection* conn = nullptr;
+  std::mutex m;
+  std::condition_variable cv;
+  std::shared_ptr<const WebFrame> pending;  // the newest frame not yet sent
+  int unacked = 0;
+  bool closing = false;
+  std::thread sender;
+};
+
+namespace {
+
+constexpr size_t kMaxQueuedInput = 1024;  // input messages between two display polls
+
+bool sameToken(const std::string& a, const std::string& b) {
+  unsigned diff = a.size() != b.size();
+  for (size_t i = 0; i < std::min(a.size(), b.size()); ++i) diff |= (unsigned)(a[i] ^ b[i]);
+  return diff == 0;  // time independent of where they differ
+}
+
+std::string queryValue(const char* query, const std::string& key) {
+  if (!query) return {};
+  char value[256];
+  const int n = mg_get_var(query, std::strlen(query), key.c_str(), value, sizeof value);
+  return n >= 0 ? std::string(value, (size_t)n) : std::string();
+}
+
+// Why a viewer's input message is unusable ("" when it is fine): numbers finite and bounded.
+std::string badInput(const nlohmann::json& msg, const std::string& type) {
+  auto number = [&](const char* key, double limit) {
+    return msg.contains(key) && msg[key].is_number() && std::abs(msg[key].get<double>()) <= limit;
+  };
+  if (type == "drag" && !(number("dx", 1e4) && number("dy", 1e4))) return "a drag without numbers dx, dy within 10000";
+  if (type == "wheel" && !number("notches", 100)) return "a wheel without a number of notches within 100";
+  if (type == "key" && !(msg.contains("key") && msg["key"].is_string())) return "a key without a key";
+  return "";
+}
+
+WebServer* self(const mg_connection* conn) {
+  return static_cast<WebServer*>(mg_get_user_data(mg_get_context(conn)));
+}
+
+// One viewer's sending thread: the newest frame, when fewer than kMaxUnacked are unacknowledged.
+void sendLoop(WebServer::Viewer& v, std::atomic<uint64_t>& sent) {
+  std::unique_lock lock(v.m);
+  while (true) {
+    v.cv.wait(lock, [&] { return v.closing || (v.pending && v.unacked < WebServer::kMaxUnacked); });
+    if (v.closing) return;
+    auto frame = std::move(v.pending);
+    v.pending.reset();
+    ++v.unacked;
+    lock.unlock();
+    mg_lock_connection(v.conn);
+    const int n = mg_websocket_write(v.conn, MG_WEBSOCKET_OPCODE_BINARY, reinterpret_cast<const char*>(frame->message.data()),
+                                     frame->message.size());
+    mg_unlock_connection(v.conn);
+    lock.lock();
+    if (n <= 0) return;  // the connection is gone; its close handler ends this viewer
+    sent.fetch_add(1);
+  }
+}
+
+}  // namespace
+
+std::string webToken() {
+  if (const char* t = std::getenv("TESSERA_WEB_TOKEN"); t && *t) return t;
+  std::random_device rd;
+  std::string token;
+  for (int i = 0; i < 4; ++i) {
+    char part[9];
+    std::snprintf(part, sizeof part, "%08x", (unsigned)rd());
+    token += part;
+  }
+  return token;
+}
+
+WebServer::WebServer(const std::string& address, std::string token) : token_(std::move(token)) {
+  const size_t colon = address.rfind(':');
+  if (colon == std::string::npos) throw std::runtime_error("--web " + address + ": expected HOST:PORT");
+  host_ = address.substr(0, colon);
+  mg_init_library(0);
+  mg_callbacks callbacks{};
+  callbacks.http_error = &WebServer::onHttpError;
+  // A WebSocket holds a worker thread while it is open: the viewers, plus some for pages.
+  const std::string threads = std::to_string(kMaxViewers + 8);
+  const char* options[] = {"listening_ports", address.c_str(), "num_threads", threads.c_str(),
+                           "request_timeout_ms", "10000", "enable_keep_alive", "no", nullptr};
+  ctx_ = mg_start(&callbacks, this, options);
+  if (!ctx_) throw std::runtime_error("--web " + address + ": cannot listen there (in use, or not this host's address?)");
+  mg_server_port ports[4];
+  if (mg_get_server_ports(ctx_, 4, ports) >= 1) port_ = ports[0].port;
+  mg_set_request_handler(ctx_, "/", &WebServer::onRequest, this);
+  mg_set_websocket_handler(ctx_, "/ws", &WebServer::onConnect, &WebServer::onReady, &WebServer::onData,
+                           &WebServer::onClose, this);
+}
+
+WebServer::~WebServer() {
+  mg_stop(ctx_);  // closes every connection; each close handler ends its viewer's thread
+}
+
+std::string WebServer::url() const { return "http://" + host_ + ":" + std::to_string(port_) + "/#" + token_; }
+
+void WebServer::publish(std::shared_ptr<const WebFrame> frame) {
+  std::lock_guard lock(mutex_);
+  latest_ = frame;
+  for (auto& v : viewers_) {
+    std::lock_guard vl(v->m);
+    if (v->pending) ++counters_.frames_replaced;
+    v->pending = frame;
+    v->cv.notify_one();
+  }
+}
+
+std::vector<nlohmann::json> WebServer::takeInput() {
+  std::lock_guard lock(mutex_);
+  return std::exchange(input_, {});
+}
+
+WebCounters WebServer::counters() const {
+  std::lock_guard lock(mutex_);
+  WebCounters c = counters_;
+  c.viewers = viewers_.size();
+  c.frames_sent = sent_.load();
+  return c;
+}
+
+void WebServer::badMessage(const std::string& why) {  // with mutex_ held
+  ++counters_.bad_messages;
+  if (std::find(logged_.begin(), logged_.end(), why) != logged_.end()) return;
+  logged_.push_back(why);
+  spdlog::warn("web view: refused a viewer message: {} (counted; logged once)", why);
+}
+
+int WebServer::onConnect(const mg_connection* conn, void*) {
+  WebServer& s = *self(conn);
+  const std::string token = queryValue(mg_get_request_info(conn)->query_string, "token");
+  std::lock_guard lock(s.mutex_);
+  std::string why;
+  if (!sameToken(token, s.token_)) why = token.empty() ? "a connection without the token" : "a wrong token";
+  else if ((int)s.viewers_.size() >= kMaxViewers) why = "more than " + std::to_string(kMaxViewers) + " viewers";
+  if (why.empty()) return 0;
+  ++s.counters_.refused;
+  if (std::find(s.logged_.begin(), s.logged_.end(), why) == s.logged_.end()) {
+    s.logged_.push_back(why);
+    spdlog::warn("web view: refused {} (counted; logged once)", why);
+  }
+  return 1;
+}
+
+void WebServer::onReady(mg_connection* conn, void*) {
+  WebServer& s = *self(conn);
+  auto v = std::make_shared<Viewer>();
+  v->conn = conn;
+  std::lock_guard lock(s.mutex_);
+  v->pending = s.latest_;  // a viewer that (re)connects sees the current frame at once
+  mg_set_user_connection_data(conn, v.get());
+  v->sender = std::thread(sendLoop, std::ref(*v), std::ref(s.sent_));
+  s.viewers_.push_back(v);
+  ++s.counters_.connections;
+}
+
+int WebServer::onData(mg_connection* conn, int bits, char* data, size_t size, void*) {
+  WebServer& s = *self(conn);
+  const int opcode = bits & 0x0f;
+  if (opcode == MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE) return 0;
+  if (opcode == MG_WEBSOCKET_OPCODE_PING || opcode == MG_WEBSOCKET_OPCODE_PONG) return 1;
+  auto* v = static_cast<Viewer*>(mg_get_user_connection_data(conn));
+  std::lock_guard lock(s.mutex_);
+  if (size > kMaxMessage) {
+    s.badMessage("a message larger than " + std::to_string(kMaxMessage) + " bytes (connection closed)");
+    return 0;
+  }
+  if (opcode != MG_WEBSOCKET_OPCODE_TEXT) {
+    s.badMessage("a binary or continued message");
+    return 1;
+  }
+  const auto msg = nlohmann::json::parse(data, data + size, nullptr, false);
+  const std::string type = msg.is_object() && msg.contains("t") && msg["t"].is_string() ? msg["t"].get<std::string>() : "";
+  if (msg.is_discarded()) {
+    s.badMessage("a message that is not JSON");
+  } else if (type == "ack") {
+    if (v) {
+      std::lock_guard vl(v->m);
+      v->unacked = std::max(0, v->unacked - 1);
+      v->cv.notify_one();
+    }
+  } else if (type == "drag" || type == "release" || type == "wheel" || type == "key") {
+    if (const std::string why = badInput(msg, type); !why.empty()) s.badMessage(why);
+    else if (s.input_.size() < kMaxQueuedInput) s.input_.push_back(msg);
+    else s.badMessage("input beyond " + std::to_string(kMaxQueuedInput) + " messages between two frames");
+  } else {
+    s.badMessage("an unknown message type '" + type.substr(0, 32) + "'");
+  }
+  return 1;
+}
+
+void WebServer::onClose(const mg_connection* conn, void*) {
+  WebServer& s = *self(conn);
+  auto* raw = static_cast<Viewer*>(mg_get_user_connection_data(conn));
+  std::shared_ptr<Viewer> v;
+  {
+    std::lock_guard lock(s.mutex_);
+    auto it = std::find_if(s.viewers_.begin(), s.viewers_.end(), [&](auto& p) { return p.get() == raw; });
+    if (it == s.viewers_.end()) return;
+    v = *it;
+    s.viewers_.erase(it);
+  }
+  {
+    std::lock_guard vl(v->m);
+    v->closing = true;
+    v->cv.notify_one();
+  }
+  if (v->sender.joinable()) v->sender.join();
+}
+
+int WebServer::onRequest(mg_connection* conn, void*) {
+  const mg_request_info* ri = mg_get_request_info(conn);
+  const std::string path = ri->local_uri ? ri->local_uri : "";
+  const WebAsset* asset = nullptr;
+  for (const WebAsset& a : webAssets())
+    if (path == a.path || (path == "/" && std::string(a.path) == "/index.html")) asset = &a;
+  if (!asset || std::strcmp(ri->request_method, "GET") != 0) {
+    mg_send_http_error(conn, 404, "%s", "not found: the web view serves / and its script only");
+    return 404;
+  }
+  mg_send_http_ok(conn, asset->mime, (long long)asset->size);
+  mg_write(conn, asset->data, asset->size);
+  return 200;
+}
+
+int WebServer::onHttpError(mg_connection* conn, int status, const char*) {
+  WebServer& s = *self(conn);
+  std::lock_guard lock(s.mutex_);
+  ++s.counters_.bad_requests;
+  const std::string why = "HTTP " + std::to_string(status);
+  if (std::find(s.logged_.begin(), s.logged_.end(), why) == s.logged_.end()) {
+    s.logged_.push_back(why);
+    spdlog::warn("web view: a request ended in {} (unknown path or not HTTP; counted; logged once)", why);
+  }
+  return 1;  // civetweb's own error page
+}
+
+}  // namespace tessera::display

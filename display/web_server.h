@@ -1,0 +1,81 @@
+// The web view's server (civetweb: HTTP and WebSocket): serves the page and its script,
+// which are compiled into the program, and one WebSocket per viewer (/ws?token=...).
+// Per viewer, at most 2 frames are unacknowledged and a newer frame replaces one not yet
+// sent, so a slow or stalled viewer holds one frame and never slows the farm or the other
+// viewers: each viewer has its own sending thread. Every refused connection and bad message
+// is counted and logged once per kind.
+#pragma once
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "display/web_frame.h"
+
+struct mg_context;
+struct mg_connection;
+
+namespace tessera::display {
+
+// TESSERA_WEB_TOKEN, or 128 random bits in hex (a new token per start).
+std::string webToken();
+
+struct WebCounters {
+  uint64_t viewers = 0;          // connected now
+  uint64_t connections = 0;      // accepted since the start
+  uint64_t refused = 0;          // WebSocket connections without the token, or over the limit
+  uint64_t bad_messages = 0;     // malformed, oversized, binary or unknown viewer messages
+  uint64_t bad_requests = 0;     // HTTP errors: unknown paths, garbage on the port
+  uint64_t frames_sent = 0;
+  uint64_t frames_replaced = 0;  // replaced by a newer one before a viewer could take it
+};
+
+class WebServer {
+ public:
+  static constexpr int kMaxViewers = 16;
+  static constexpr int kMaxUnacked = 2;
+  static constexpr size_t kMaxMessage = 4096;  // bytes of one viewer message
+
+  // Listens on `address` (HOST:PORT; port 0 = any free port); throws std::runtime_error naming
+  // the address when it cannot. `token`: what every WebSocket must present.
+  WebServer(const std::string& address, std::string token);
+  ~WebServer();
+  WebServer(const WebServer&) = delete;
+  WebServer& operator=(const WebServer&) = delete;
+
+  std::string url() const;  // http://HOST:PORT/#TOKEN: what to open
+  int port() const { return port_; }
+  // The newest frame for every viewer (and for viewers that connect later).
+  void publish(std::shared_ptr<const WebFrame> frame);
+  // The viewers' input messages since the last call ({"t": "drag", ...}), oldest first.
+  std::vector<nlohmann::json> takeInput();
+  WebCounters counters() const;
+
+  struct Viewer;  // internal
+
+ private:
+  static int onConnect(const mg_connection* conn, void* self);
+  static void onReady(mg_connection* conn, void* self);
+  static int onData(mg_connection* conn, int bits, char* data, size_t size, void* self);
+  static void onClose(const mg_connection* conn, void* self);
+  static int onRequest(mg_connection* conn, void* self);
+  static int onHttpError(mg_connection* conn, int status, const char* msg);
+  void badMessage(const std::string& why);
+
+  std::string host_, token_;
+  int port_ = 0;
+  mg_context* ctx_ = nullptr;
+  mutable std::mutex mutex_;
+  std::vector<std::shared_ptr<Viewer>> viewers_;
+  std::shared_ptr<const WebFrame> latest_;
+  std::vector<nlohmann::json> input_;
+  WebCounters counters_;
+  std::atomic<uint64_t> sent_{0};
+  std::vector<std::string> logged_;  // kinds of bad input already logged
+};
+
+}  // namespace tessera::display

@@ -1,0 +1,124 @@
+// The web view as a display sink: frames are encoded on the sink's own thread (the newest
+// wins, so encoding never holds the display loop up) and handed to the server; viewers'
+// input becomes the same InputEvents the window makes.
+#include <cmath>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+#include <spdlog/spdlog.h>
+
+#include "display/sink.h"
+#include "display/web_server.h"
+
+namespace tessera::display {
+namespace {
+
+// JPEG quality of the frames while the camera moves (see the README's web view figures).
+constexpr int kJpegQuality = 80;
+
+class WebSink final : public Sink {
+ public:
+  WebSink(const std::string& address, const std::string& token, const std::array<double, 3>& background)
+      : server_(address, token), background_(background) {
+    spdlog::info("web view: open {}", server_.url());
+    encoder_ = std::thread([this] { encodeLoop(); });
+  }
+
+  ~WebSink() override {
+    {
+      std::lock_guard lock(m_);
+      quit_ = true;
+    }
+    cv_.notify_one();
+    encoder_.join();
+    const WebCounters c = server_.counters();
+    spdlog::info("web view: {} connections, {} frames sent, {} replaced before sending, {} refused, "
+                 "{} bad messages, {} bad requests",
+                 c.connections, c.frames_sent, c.frames_replaced, c.refused, c.bad_messages, c.bad_requests);
+  }
+
+  void present(const Image8& frame, uint64_t id, const std::string& status, bool moving) override {
+    {
+      std::lock_guard lock(m_);
+      next_ = Next{frame, id, status, moving};
+    }
+    cv_.notify_one();
+  }
+
+  std::vector<InputEvent> poll() override {
+    std::vector<InputEvent> out;
+    for (const auto& msg : server_.takeInput()) {
+      InputEvent ev;
+      ev.at = std::chrono::steady_clock::now();
+      if (!translate(msg, ev)) continue;
+      out.push_back(ev);
+    }
+    return out;
+  }
+
+  bool interactive() const override { return true; }
+
+ private:
+  struct Next {
+    Image8 frame;
+    uint64_t id;
+    std::string status;
+    bool moving;
+  };
+
+  void encodeLoop() {
+    std::unique_lock lock(m_);
+    while (true) {
+      cv_.wait(lock, [&] { return quit_ || next_; });
+      if (quit_) return;
+      Next n = std::move(*next_);
+      next_.reset();
+      lock.unlock();
+      try {
+        server_.publish(std::make_shared<const WebFrame>(
+            encodeWebFrame(n.frame, n.id, !n.moving, n.status, background_, kJpegQuality)));
+      } catch (const std::exception& e) {
+        spdlog::warn("web view: frame {} not sent: {}", n.id, e.what());
+      }
+      lock.lock();
+    }
+  }
+
+  // A viewer's message (checked by the server) as the window's input; false if it is none.
+  static bool translate(const nlohmann::json& msg, InputEvent& ev) {
+    const std::string t = msg["t"].get<std::string>();
+    if (t == "drag") {
+      ev.orbit_dx = msg["dx"].get<double>() * kDegreesPerPixel;
+      ev.orbit_dy = msg["dy"].get<double>() * kDegreesPerPixel;
+      ev.interacting = true;
+    } else if (t == "wheel") {
+      ev.zoom = std::pow(kZoomPerNotch, msg["notches"].get<double>());
+      ev.interacting = true;
+    } else if (t == "key") {
+      const std::string key = msg["key"].get<std::string>();
+      if (key == "1") ev.quality = QualityName::Reference;
+      else if (key == "2") ev.quality = QualityName::Default;
+      else if (key == "3") ev.quality = QualityName::Fast;
+      else return false;
+    }  // "release": interacting = false, the full frame now
+    return true;
+  }
+
+  WebServer server_;
+  std::array<double, 3> background_;
+  std::mutex m_;
+  std::condition_variable cv_;
+  std::optional<Next> next_;
+  bool quit_ = false;
+  std::thread encoder_;
+};
+
+}  // namespace
+
+std::unique_ptr<Sink> makeWebSink(const std::string& address, const std::string& token,
+                                  const std::array<double, 3>& background) {
+  return std::make_unique<WebSink>(address, token, background);
+}
+
+}  // namespace tessera::display

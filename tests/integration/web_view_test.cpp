@@ -1,0 +1,221 @@
+// The display's web view in a real browser: Debian's chromium, headless, driven by
+// tests/web/view.mjs (puppeteer-core; `npm ci` in tests/web, which ./setup.sh test runs).
+// The farm runs interactively with the web view on loopback; the page's canvas is read back
+// and must be the PNG sink's frame exactly (both composited over the same background).
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <future>
+#include <regex>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "common/io/image_io.h"
+#include "tests/integration/farm_util.h"
+
+namespace tessera::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr const char* kToken = "0123456789abcdef-web-test";
+constexpr const char* kBackground = "0.125,0.125,0.14";
+const std::array<double, 3> kBg{0.125, 0.125, 0.14};
+
+bool haveBrowser() {
+  return fs::exists("/usr/bin/chromium") && fs::exists(TESSERA_SOURCE_DIR "/tests/web/node_modules/puppeteer-core");
+}
+
+int freePort() {
+  const auto r = runCommand("bash -c 'for i in $(seq 100); do p=$((20000 + RANDOM % 20000)); "
+                            "ss -Htln \"sport = :$p\" | grep -q . || { echo $p; exit; }; done'", 10);
+  return std::atoi(r.output.c_str());
+}
+
+std::vector<nlohmann::json> metricsLines(const FarmDir& dir) {
+  std::vector<nlohmann::json> lines;
+  std::ifstream in(dir.path() / "out" / "metrics.jsonl");
+  for (std::string l; std::getline(in, l);) {
+    auto j = nlohmann::json::parse(l, nullptr, false);
+    if (!j.is_discarded()) lines.push_back(j);
+  }
+  return lines;
+}
+
+template <class F>
+bool waitUntil(F ready, std::chrono::milliseconds limit) {
+  for (auto end = std::chrono::steady_clock::now() + limit; std::chrono::steady_clock::now() < end;
+       std::this_thread::sleep_for(50ms))
+    if (ready()) return true;
+  return false;
+}
+
+// An interactive farm (it renders on input, until stopped) with the web view on a free port.
+class WebView : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(haveBrowser()) << "chromium or tests/web/node_modules missing: ./setup.sh test installs them";
+    port_ = freePort();
+    ASSERT_GT(port_, 0);
+    scene_ = dir_.path() / "cloud.yaml";  // not symmetric: turning it changes the picture
+    std::ofstream(scene_) << "volume:\n  generator: {name: noise-cloud, size: 48, seed: 7}\n"
+                          << "transfer_function:\n  - [0.00, 0.6, 0.7, 0.9, 0.0]\n  - [0.03, 0.6, 0.7, 0.9, 0.0]\n"
+                          << "  - [0.10, 0.6, 0.7, 0.9, 0.05]\n  - [0.40, 0.9, 0.9, 1.0, 0.2]\n  - [1.00, 1.0, 1.0, 1.0, 0.6]\n"
+                          << "camera: {eye: [1.6, 0.8, 1.6], target: [0, 0, 0], up: [0, 1, 0], fov: 30}\n"
+                          << "image: [160, 120]\nquality: default\n";
+    const std::string env = "--env TESSERA_WEB=127.0.0.1:" + std::to_string(port_) + " --env TESSERA_WEB_TOKEN=" + kToken +
+                            " --env TESSERA_BACKGROUND=" + kBackground;
+    farm_ = std::async(std::launch::async, [this, env] { return dir_.runFarm(scene_, 2, 1, 0, 200, env); });
+    ASSERT_TRUE(waitUntil([&] { return !metricsLines(dir_).empty(); }, 90s)) << dir_.farmLog();
+  }
+  void TearDown() override {
+    if (!farm_.valid()) return;
+    // Ctrl-C to this farm's tessera-up (its command line names this test's folder).
+    runCommand("pkill -INT -f 'tessera-up .*" + dir_.path().string() + "'", 10);
+    if (farm_.wait_for(60s) != std::future_status::ready) ADD_FAILURE() << "the farm did not stop";
+    else log_ = farm_.get().output;
+  }
+  std::string url(bool token = true) const {
+    return "http://127.0.0.1:" + std::to_string(port_) + "/" + (token ? std::string("#") + kToken : "");
+  }
+  // Runs view.mjs; its JSON lines.
+  std::vector<nlohmann::json> browse(const std::string& actions, const std::string& page_url = "") {
+    const auto r = runCommand("node " TESSERA_SOURCE_DIR "/tests/web/view.mjs '" + (page_url.empty() ? url() : page_url) +
+                                  "' " + dir_.path().string() + " " + actions,
+                              120);
+    std::vector<nlohmann::json> out;
+    std::istringstream in(r.output);
+    for (std::string l; std::getline(in, l);) {
+      auto j = nlohmann::json::parse(l, nullptr, false);
+      if (j.is_discarded()) continue;
+      if (j.contains("action")) out.push_back(j);
+      else if (j.contains("error")) ADD_FAILURE() << "browser: " << l << "\n" << dir_.farmLog();
+      else std::cout << "browser " << l << "\n";  // the page's console errors
+    }
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return out;
+  }
+  // The canvas as the browser read it back (opaque RGBA).
+  Image8 pagePixels(const std::string& name, const nlohmann::json& meta) const {
+    Image8 img(meta["width"].get<int>(), meta["height"].get<int>());
+    std::ifstream in(dir_.path() / (name + ".rgba"), std::ios::binary);
+    in.read(reinterpret_cast<char*>(img.px.data()), (std::streamsize)img.px.size());
+    return img;
+  }
+  // The PNG sink's frame `id` (composited over the background: opaque).
+  Image8 pngFrame(uint64_t id) const {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%06llu.png", (unsigned long long)id);
+    return readPng((dir_.path() / "out" / name).string());
+  }
+
+  FarmDir dir_{"web"};
+  int port_ = 0;
+  fs::path scene_;
+  std::future<CommandResult> farm_;
+  std::string log_;
+};
+
+TEST_F(WebView, TheLosslessFrameOnThePageIsThePngSinksFrameExactly) {
+  const auto out = browse("wait-lossless:0 pixels:first shot:web-view");
+  ASSERT_EQ(out.size(), 3u);
+  const auto& meta = out[1];
+  EXPECT_EQ(meta["kind"], "lossless");
+  const uint64_t id = meta["id"].get<uint64_t>();
+  const Image8 page = pagePixels("first", meta);
+  const Image8 png = pngFrame(id);
+  EXPECT_TRUE(dir_.matches(page, png, 0, "page_vs_png_sink"));
+  // And the PNG sink's frame is the farm's: within 1/255 of tessera-render, composited alike.
+  Image8 ref = dir_.reference(scene_, 0);
+  const std::vector<uint8_t> over = pngPixels(ref, kBg);
+  std::copy(over.begin(), over.end(), ref.px.begin());
+  EXPECT_TRUE(dir_.matches(page, ref, 1, "page_vs_tessera_render"));
+  EXPECT_TRUE(fs::exists(dir_.path() / "web-view.png"));
+}
+
+TEST_F(WebView, ADragChangesThePictureAndEndsOnTheLosslessFrameOfTheFinalCamera) {
+  const auto out = browse("wait-lossless:0 pixels:before drag:30 wait-lossless:1 sleep:600 pixels:after");
+  ASSERT_EQ(out.size(), 6u);
+  const Image8 before = pagePixels("before", out[1]);
+  const Image8 after = pagePixels("after", out[5]);
+  EXPECT_EQ(out[5]["kind"], "lossless");
+  EXPECT_GT(maxAbsDiff(before, after), 16) << "the drag did not change the picture";
+  const uint64_t id = out[5]["id"].get<uint64_t>();
+  const auto lines = metricsLines(dir_);
+  int moving = 0;
+  nlohmann::json shown;
+  for (const auto& l : lines) {
+    moving += l["interactive"].get<bool>();
+    if (l["frame"].get<uint64_t>() == id) shown = l;
+  }
+  EXPECT_GE(moving, 1) << "no frame while the camera moved";
+  ASSERT_FALSE(shown.is_null()) << "no metrics for frame " << id;
+  EXPECT_FALSE(shown["interactive"].get<bool>());
+  EXPECT_EQ(id, lines.back()["frame"].get<uint64_t>()) << "the page must end on the newest frame";
+  EXPECT_TRUE(dir_.matches(after, pngFrame(id), 0, "final_page_vs_png_sink"));
+}
+
+TEST_F(WebView, AReloadShowsTheCurrentFrameWithinASecond) {
+  const auto out = browse("wait-lossless:0 reload reload");
+  ASSERT_EQ(out.size(), 3u);
+  for (int k : {1, 2}) {
+    EXPECT_LT(out[k]["ms"].get<int>(), 1000) << out[k].dump();
+    EXPECT_EQ(out[k]["state"]["kind"], "lossless");
+  }
+}
+
+TEST_F(WebView, WithoutTheTokenThePageGetsNoFrameAndTheRefusalIsCounted) {
+  // A page opened without the token says so and does not try; any other client is refused.
+  auto out = browse("sleep:500", url(false));
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0]["state"]["frames"], 0);
+  const auto r = runCommand("curl -s -o /dev/null -w '%{http_code}' -H 'Connection: Upgrade' -H 'Upgrade: websocket' "
+                            "-H 'Sec-WebSocket-Version: 13' -H 'Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==' "
+                            "http://127.0.0.1:" + std::to_string(port_) + "/ws",
+                            10);
+  EXPECT_NE(r.output, "101") << "a WebSocket without the token was accepted";
+  out = browse("sleep:1500", "http://127.0.0.1:" + std::to_string(port_) + "/#wrong-token");
+  EXPECT_EQ(out[0]["state"]["frames"], 0);
+  out = browse("wait-lossless:0");  // the farm still serves a viewer with the token
+  EXPECT_EQ(out[0]["state"]["kind"], "lossless");
+  TearDown();
+  farm_ = {};
+  EXPECT_NE(log_.find("web view: refused a connection without the token"), std::string::npos) << log_;
+  EXPECT_NE(log_.find("web view: refused a wrong token"), std::string::npos) << log_;
+  EXPECT_TRUE(std::regex_search(log_, std::regex("[1-9][0-9]* refused"))) << log_;
+}
+
+}  // namespace
+}  // namespace tessera::test
+
+namespace tessera::test {
+namespace {
+
+TEST_F(WebView, BadInputIsRefusedCountedAndEveryOtherViewerKeepsItsFrames) {
+  const std::string base = "http://127.0.0.1:" + std::to_string(port_);
+  // Paths outside the page's folder (dot segments inside it resolve, as URLs do), a POST,
+  // and random bytes on the port.
+  for (const char* path : {"/../../etc/passwd", "/%2e%2e/%2e%2e/etc/passwd", "/..%2f..%2fetc/passwd", "/etc/passwd"}) {
+    const auto r = runCommand("curl -s --path-as-is -o /dev/null -w '%{http_code}' '" + base + path + "'", 10);
+    EXPECT_NE(r.output, "200") << path;
+  }
+  EXPECT_EQ(runCommand("curl -s -o /dev/null -w '%{http_code}' -X POST -d x " + base + "/", 10).output, "404");
+  runCommand("bash -c 'head -c 4096 /dev/urandom > /dev/tcp/127.0.0.1/" + std::to_string(port_) + "'", 10);
+  const auto out = browse("wait-lossless:0 bad-ws wait-lossless:0 drag:10 wait-lossless:1");
+  ASSERT_EQ(out.size(), 5u);
+  EXPECT_TRUE(out[1]["closed_by_display"].get<bool>()) << "the oversized message must close its connection";
+  EXPECT_EQ(out[4]["state"]["kind"], "lossless") << "the viewer still steers the farm";
+  TearDown();
+  farm_ = {};
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(log_, m, std::regex("([0-9]+) bad messages, ([0-9]+) bad requests"))) << log_;
+  EXPECT_GE(std::stoi(m[1]), 5) << "not JSON, unknown type, bad values, binary, oversized";
+  EXPECT_GE(std::stoi(m[2]), 5) << "four paths, a POST (random bytes may count as well)";
+  EXPECT_NE(log_.find("refused a viewer message: a message that is not JSON"), std::string::npos) << log_;
+  EXPECT_NE(log_.find("an unknown message type 'launch-missiles'"), std::string::npos) << log_;
+}
+
+}  // namespace
+}  // namespace tessera::test
