@@ -29,7 +29,7 @@ std::vector<uint8_t> encodeJpeg(const Image8& region, const std::array<double, 3
   if (!tj) throw std::runtime_error("libturbojpeg: cannot start a compressor");
   unsigned char* jpeg = nullptr;
   unsigned long size = 0;
-  if (tjCompress2(tj.get(), rgba.data(), region.width, 0, region.height, TJPF_RGBA, &jpeg, &size, TJSAMP_420, quality,
+  if (tjCompress2(tj.get(), rgba.data(), region.width, 0, region.height, TJPF_RGBA, &jpeg, &size, TJSAMP_444, quality,
                   TJFLAG_FASTDCT) != 0) {
     const std::string why = tjGetErrorStr2(tj.get());
     tjFree(jpeg);

@@ -23,7 +23,7 @@ struct WebFrame {
 
 // Encodes premultiplied `frame` over `background` (r, g, b in [0, 1]): losslessly as PNG (the
 // bytes the PNG sink writes for this region with this background), or as JPEG of
-// `jpeg_quality` (4:2:0) while the camera moves.
+// `jpeg_quality` (4:4:4: on these small frames it beats 4:2:0 at equal bytes) while the camera moves.
 WebFrame encodeWebFrame(const Image8& frame, uint64_t id, bool lossless, const std::string& status,
                         const std::array<double, 3>& background, int jpeg_quality);
 

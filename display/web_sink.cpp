@@ -15,7 +15,7 @@ namespace tessera::display {
 namespace {
 
 // JPEG quality of the frames while the camera moves (see the README's web view figures).
-constexpr int kJpegQuality = 80;
+constexpr int kJpegQuality = 90;
 
 class WebSink final : public Sink {
  public:

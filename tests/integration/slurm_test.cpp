@@ -154,11 +154,15 @@ TEST(Slurm, KilledRendererTasksAndProcessesAreSurvivedWithEveryFrame) {
   }
 }
 
-TEST(Slurm, AKilledMasterEndsTheStepWithinFiveSecondsNamingItsTaskAndNode) {
-  FarmDir dir("slurm-master");
+// The master or the display: the farm cannot go on without either.
+class SlurmLoss : public ::testing::TestWithParam<std::pair<const char*, const char*>> {};
+
+TEST_P(SlurmLoss, EndsTheStepWithinFiveSecondsNamingItsTaskAndNode) {
+  const auto [service, comm] = GetParam();
+  FarmDir dir(std::string("slurm-") + service);
   const fs::path farm = farmFolder(dir, "farm", 3);
   const auto r = inCluster(dir, submitInteractive(farm) +
-                                    "start=$(date +%s.%N); kill_stage " + farm.string() + " tessera-master\n"
+                                    "start=$(date +%s.%N); kill_stage " + farm.string() + " " + comm + "\n"
                                     "state=$(wait_job $job 30); end=$(date +%s.%N)\n"
                                     "echo \"state $state after $(awk \"BEGIN{print $end - $start}\") s\"\n");
   SKIP_WITHOUT_SLURM(r);
@@ -166,13 +170,20 @@ TEST(Slurm, AKilledMasterEndsTheStepWithinFiveSecondsNamingItsTaskAndNode) {
   std::smatch m;
   const std::string out = r.output;
   ASSERT_TRUE(std::regex_search(out, m, std::regex("state ([A-Z]+) ([0-9:]+) after ([0-9.]+) s"))) << out;
-  EXPECT_NE(m[1], "COMPLETED") << "a farm without its master must not look successful";
+  EXPECT_NE(m[1], "COMPLETED") << "a farm without its " << service << " must not look successful";
   EXPECT_NE(m[2], "0:0");
-  EXPECT_LE(std::stod(m[3]), 5.0) << "the step must end within 5 s of losing the master";
-  std::cout << "the job ended " << m[3] << " s after the master was killed\n";
-  EXPECT_TRUE(std::regex_search(logOf(farm), std::regex("master \\(task 0 on node[12]\\) died \\(signal 9\\)")))
+  EXPECT_LE(std::stod(m[3]), 5.0) << "the step must end within 5 s of losing the " << service;
+  std::cout << "the job ended " << m[3] << " s after the " << service << " was killed\n";
+  const std::string task = std::string(service) == "master" ? "0" : "4";
+  EXPECT_TRUE(std::regex_search(logOf(farm), std::regex(std::string(service) + " \\(task " + task +
+                                                        " on node[12]\\) died \\(signal 9\\)")))
       << logOf(farm);
+  EXPECT_FALSE(fs::exists(farm / ".tessera-slurm"));
 }
+
+INSTANTIATE_TEST_SUITE_P(Slurm, SlurmLoss,
+                         ::testing::Values(std::pair{"master", "tessera-master"}, std::pair{"display", "tessera-display"}),
+                         [](const auto& p) { return std::string(p.param.first); });
 
 TEST(Slurm, ScancelLeavesNoFarmProcessBehindWithinTenSeconds) {
   FarmDir dir("slurm-scancel");

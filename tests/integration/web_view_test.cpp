@@ -72,8 +72,9 @@ class WebView : public ::testing::Test {
   }
   void TearDown() override {
     if (!farm_.valid()) return;
-    // Ctrl-C to this farm's tessera-up (its command line names this test's folder).
-    runCommand("pkill -INT -f 'tessera-up .*" + dir_.path().string() + "'", 10);
+    // Ctrl-C to this farm's tessera-up alone (argv[0]; its command line names this test's
+    // folder), not to the `timeout` around it, which would pass on a second one.
+    runCommand("pkill -INT -f '^[^ ]*tessera-up .*" + dir_.path().string() + "'", 10);
     if (farm_.wait_for(60s) != std::future_status::ready) ADD_FAILURE() << "the farm did not stop";
     else log_ = farm_.get().output;
   }
@@ -215,6 +216,44 @@ TEST_F(WebView, BadInputIsRefusedCountedAndEveryOtherViewerKeepsItsFrames) {
   EXPECT_GE(std::stoi(m[2]), 5) << "four paths, a POST (random bytes may count as well)";
   EXPECT_NE(log_.find("refused a viewer message: a message that is not JSON"), std::string::npos) << log_;
   EXPECT_NE(log_.find("an unknown message type 'launch-missiles'"), std::string::npos) << log_;
+}
+
+}  // namespace
+}  // namespace tessera::test
+
+namespace tessera::test {
+namespace {
+
+// A viewer that connects and never reads or acknowledges: it is sent 2 frames, then every
+// newer frame replaces the one it would get next; the farm's orbit is not held up and the
+// display's memory stays small.
+TEST(WebViewOrbit, AStalledViewerNeitherHoldsUpTheFarmNorGrowsTheDisplay) {
+  FarmDir dir("web-stalled");
+  const int frames = 40;
+  const fs::path scene = dir.writeScene(frames, 48, 320, 240);
+  const int port = freePort();
+  ASSERT_GT(port, 0);
+  std::ofstream(dir.path() / "stalled.sh")
+      << "for i in $(seq 200); do exec 3<>/dev/tcp/127.0.0.1/" << port << " 2>/dev/null && break; sleep 0.05; done\n"
+      << "printf 'GET /ws?token=" << kToken << " HTTP/1.1\\r\\nHost: x\\r\\nUpgrade: websocket\\r\\nConnection: Upgrade\\r\\n"
+      << "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\\r\\nSec-WebSocket-Version: 13\\r\\n\\r\\n' >&3\nsleep 60\n";
+  auto stalled = std::async(std::launch::async, [&] { return runCommand("bash " + (dir.path() / "stalled.sh").string(), 70); });
+  const auto r = dir.runFarm(scene, 2, 1, frames, 120,
+                             "--env TESSERA_WEB=127.0.0.1:" + std::to_string(port) + " --env TESSERA_WEB_TOKEN=" + kToken +
+                                 " --env TESSERA_IN_FLIGHT=1");
+  runCommand("pkill -f 'bash " + (dir.path() / "stalled.sh").string() + "'", 10);
+  stalled.wait();
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(metricsLines(dir).size(), size_t(frames)) << "every frame of the orbit";
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("web view: ([0-9]+) connections, ([0-9]+) frames sent, ([0-9]+) "
+                                                         "replaced before sending")))
+      << r.output;
+  EXPECT_EQ(m[1], "1");
+  EXPECT_EQ(std::stoi(m[2]), 2) << "2 frames unacknowledged at most";
+  EXPECT_GE(std::stoi(m[3]), 10) << "newer frames replace unsent ones";
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("display \\| .* peak memory ([0-9.]+) MiB"))) << r.output;
+  EXPECT_LT(std::stod(m[1]), 64.0) << "the display's peak memory";
 }
 
 }  // namespace
