@@ -29,6 +29,11 @@ struct InputEvent {
   std::chrono::steady_clock::time_point at;  // when the (first merged) event reached the display
 };
 
+// A drag and nothing else: consecutive ones collapse into one (the master needs the sum).
+inline bool isDrag(const InputEvent& ev) {
+  return ev.interacting && ev.zoom == 1 && !ev.quality && !ev.quit && ev.width == 0;
+}
+
 class Sink {
  public:
   virtual ~Sink() = default;

@@ -54,6 +54,7 @@ WebFrame encodeWebFrame(const Image8& frame, uint64_t id, bool lossless, const s
   const std::vector<uint8_t> outside = pngPixels(Image8(1, 1), background);
   const nlohmann::json header = {{"id", id},
                                  {"kind", r.w == 0 ? "empty" : (lossless ? "png" : "jpeg")},
+                                 {"moving", !lossless},
                                  {"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h},
                                  {"fw", frame.width}, {"fh", frame.height},
                                  {"bg", {outside[0], outside[1], outside[2]}},

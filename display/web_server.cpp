@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <random>
 #include <condition_variable>
+#include <deque>
 #include <cstring>
 #include <stdexcept>
 #include <thread>
@@ -24,8 +25,9 @@ struct WebServer::Viewer {
   std::mutex m;
   std::condition_variable cv;
   std::shared_ptr<const WebFrame> pending;  // the newest frame not yet sent
-  int unacked = 0;
+  std::deque<uint64_t> unacked;             // ids sent and not acknowledged yet
   bool closing = false;
+  bool dead = false;  // a write failed or was cut short: the connection is closed on its next read
   std::thread sender;
 };
 
@@ -62,21 +64,25 @@ WebServer* self(const mg_connection* conn) {
 }
 
 // One viewer's sending thread: the newest frame, when fewer than kMaxUnacked are unacknowledged.
+// mg_websocket_write takes the connection's lock itself. A write that fails or is cut short
+// (a viewer that stopped reading past the write timeout) would leave half a frame in the
+// stream: the viewer is dead, and civetweb's ping (no pong) or its next message closes it.
 void sendLoop(WebServer::Viewer& v, std::atomic<uint64_t>& sent) {
   std::unique_lock lock(v.m);
   while (true) {
-    v.cv.wait(lock, [&] { return v.closing || (v.pending && v.unacked < WebServer::kMaxUnacked); });
+    v.cv.wait(lock, [&] { return v.closing || (v.pending && (int)v.unacked.size() < WebServer::kMaxUnacked); });
     if (v.closing) return;
     auto frame = std::move(v.pending);
     v.pending.reset();
-    ++v.unacked;
+    v.unacked.push_back(frame->id);
     lock.unlock();
-    mg_lock_connection(v.conn);
     const int n = mg_websocket_write(v.conn, MG_WEBSOCKET_OPCODE_BINARY, reinterpret_cast<const char*>(frame->message.data()),
                                      frame->message.size());
-    mg_unlock_connection(v.conn);
     lock.lock();
-    if (n <= 0) return;  // the connection is gone; its close handler ends this viewer
+    if (n < 0 || (size_t)n < frame->message.size()) {
+      v.dead = true;
+      return;
+    }
     sent.fetch_add(1);
   }
 }
@@ -95,17 +101,22 @@ std::string webToken() {
   return token;
 }
 
-WebServer::WebServer(const std::string& address, std::string token) : token_(std::move(token)) {
-  const size_t colon = address.rfind(':');
-  if (colon == std::string::npos) throw std::runtime_error("--web " + address + ": expected HOST:PORT");
-  host_ = address.substr(0, colon);
+WebServer::WebServer(const std::string& given, std::string token) : token_(std::move(token)) {
+  if (token_.size() > 200) throw std::runtime_error("the web view's token is longer than 200 characters");
+  // PORT or :PORT listens on loopback: nothing is served beyond this host unless asked.
+  const size_t colon = given.rfind(':');
+  host_ = colon == std::string::npos || colon == 0 ? "127.0.0.1" : given.substr(0, colon);
+  const std::string address = host_ + ":" + (colon == std::string::npos ? given : given.substr(colon + 1));
   mg_init_library(0);
   mg_callbacks callbacks{};
   callbacks.http_error = &WebServer::onHttpError;
   // A WebSocket holds a worker thread while it is open: the viewers, plus some for pages.
   const std::string threads = std::to_string(kMaxViewers + 8);
+  // Pings every 3 s: a viewer whose link died (a laptop asleep, a dropped NAT entry) is
+  // closed instead of holding its slot until TCP gives up.
   const char* options[] = {"listening_ports", address.c_str(), "num_threads", threads.c_str(),
-                           "request_timeout_ms", "10000", "enable_keep_alive", "no", nullptr};
+                           "request_timeout_ms", "10000", "enable_keep_alive", "no",
+                           "websocket_timeout_ms", "3000", "enable_websocket_ping_pong", "yes", nullptr};
   ctx_ = mg_start(&callbacks, this, options);
   if (!ctx_) throw std::runtime_error("--web " + address + ": cannot listen there (in use, or not this host's address?)");
   mg_server_port ports[4];
@@ -116,7 +127,9 @@ WebServer::WebServer(const std::string& address, std::string token) : token_(std
 }
 
 WebServer::~WebServer() {
-  mg_stop(ctx_);  // closes every connection; each close handler ends its viewer's thread
+  // Closes every connection; each close handler ends its viewer's thread. A write blocked on
+  // a stalled viewer sees the stop within civetweb's 2 s socket quantum.
+  mg_stop(ctx_);
 }
 
 std::string WebServer::url() const { return "http://" + host_ + ":" + std::to_string(port_) + "/#" + token_; }
@@ -132,7 +145,17 @@ void WebServer::publish(std::shared_ptr<const WebFrame> frame) {
   }
 }
 
-std::vector<nlohmann::json> WebServer::takeInput() {
+void WebServer::onViewer(std::function<void()> f) {
+  std::lock_guard lock(mutex_);
+  on_viewer_ = std::move(f);
+}
+
+size_t WebServer::viewers() const {
+  std::lock_guard lock(mutex_);
+  return viewers_.size();
+}
+
+std::vector<WebInput> WebServer::takeInput() {
   std::lock_guard lock(mutex_);
   return std::exchange(input_, {});
 }
@@ -178,6 +201,7 @@ void WebServer::onReady(mg_connection* conn, void*) {
   v->sender = std::thread(sendLoop, std::ref(*v), std::ref(s.sent_));
   s.viewers_.push_back(v);
   ++s.counters_.connections;
+  if (s.on_viewer_) s.on_viewer_();
 }
 
 int WebServer::onData(mg_connection* conn, int bits, char* data, size_t size, void*) {
@@ -186,7 +210,12 @@ int WebServer::onData(mg_connection* conn, int bits, char* data, size_t size, vo
   if (opcode == MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE) return 0;
   if (opcode == MG_WEBSOCKET_OPCODE_PING || opcode == MG_WEBSOCKET_OPCODE_PONG) return 1;
   auto* v = static_cast<Viewer*>(mg_get_user_connection_data(conn));
+  const auto arrived = std::chrono::steady_clock::now();
   std::lock_guard lock(s.mutex_);
+  if (v) {
+    std::lock_guard vl(v->m);
+    if (v->dead) return 0;  // half a frame went out: close, the page reconnects
+  }
   if (size > kMaxMessage) {
     s.badMessage("a message larger than " + std::to_string(kMaxMessage) + " bytes (connection closed)");
     return 0;
@@ -200,17 +229,22 @@ int WebServer::onData(mg_connection* conn, int bits, char* data, size_t size, vo
   if (msg.is_discarded()) {
     s.badMessage("a message that is not JSON");
   } else if (type == "ack") {
+    const uint64_t id = msg.contains("id") && msg["id"].is_number_unsigned() ? msg["id"].get<uint64_t>() : UINT64_MAX;
+    bool known = false;
     if (v) {
       std::lock_guard vl(v->m);
-      v->unacked = std::max(0, v->unacked - 1);
+      const auto it = std::find(v->unacked.begin(), v->unacked.end(), id);
+      known = it != v->unacked.end();
+      if (known) v->unacked.erase(v->unacked.begin(), it + 1);  // and any older ones it passed
       v->cv.notify_one();
     }
+    if (!known) s.badMessage("an acknowledgement of a frame this connection has not been sent");
   } else if (type == "drag" || type == "release" || type == "wheel" || type == "key") {
     if (const std::string why = badInput(msg, type); !why.empty()) s.badMessage(why);
-    else if (s.input_.size() < kMaxQueuedInput) s.input_.push_back(msg);
-    else s.badMessage("input beyond " + std::to_string(kMaxQueuedInput) + " messages between two frames");
+    else if (s.input_.size() < kMaxQueuedInput) s.input_.push_back({msg, arrived});
+    else s.badMessage("input beyond " + std::to_string(kMaxQueuedInput) + " messages before the display read them");
   } else {
-    s.badMessage("an unknown message type '" + type.substr(0, 32) + "'");
+    s.badMessage("an unknown message type");
   }
   return 1;
 }

@@ -1,12 +1,16 @@
 // The web view's server (civetweb: HTTP and WebSocket): serves the page and its script,
 // which are compiled into the program, and one WebSocket per viewer (/ws?token=...).
 // Per viewer, at most 2 frames are unacknowledged and a newer frame replaces one not yet
-// sent, so a slow or stalled viewer holds one frame and never slows the farm or the other
-// viewers: each viewer has its own sending thread. Every refused connection and bad message
-// is counted and logged once per kind.
+// sent, so a slow or stalled viewer holds at most two frames (shared with the other viewers)
+// and never slows the farm or the other viewers: each viewer has its own sending thread.
+// Every refused connection and bad message is counted and logged once per kind. civetweb
+// 1.15 reads a whole incoming message before the size check: the 4 KiB limit protects the
+// display from a viewer with the token only after that read.
 #pragma once
 #include <atomic>
+#include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -34,6 +38,11 @@ struct WebCounters {
   uint64_t frames_replaced = 0;  // replaced by a newer one before a viewer could take it
 };
 
+struct WebInput {
+  nlohmann::json msg;  // {"t": "drag", ...}, checked
+  std::chrono::steady_clock::time_point at;  // when it arrived
+};
+
 class WebServer {
  public:
   static constexpr int kMaxViewers = 16;
@@ -51,8 +60,11 @@ class WebServer {
   int port() const { return port_; }
   // The newest frame for every viewer (and for viewers that connect later).
   void publish(std::shared_ptr<const WebFrame> frame);
-  // The viewers' input messages since the last call ({"t": "drag", ...}), oldest first.
-  std::vector<nlohmann::json> takeInput();
+  // The viewers' input messages since the last call, oldest first.
+  std::vector<WebInput> takeInput();
+  // Called (on a server thread) when a viewer connects; the sink re-sends its newest frame.
+  void onViewer(std::function<void()> f);
+  size_t viewers() const;
   WebCounters counters() const;
 
   struct Viewer;  // internal
@@ -72,7 +84,8 @@ class WebServer {
   mutable std::mutex mutex_;
   std::vector<std::shared_ptr<Viewer>> viewers_;
   std::shared_ptr<const WebFrame> latest_;
-  std::vector<nlohmann::json> input_;
+  std::vector<WebInput> input_;
+  std::function<void()> on_viewer_;
   WebCounters counters_;
   std::atomic<uint64_t> sent_{0};
   std::vector<std::string> logged_;  // kinds of bad input already logged

@@ -1,6 +1,6 @@
 // The web view as a display sink: frames are encoded on the sink's own thread (the newest
-// wins, so encoding never holds the display loop up) and handed to the server; viewers'
-// input becomes the same InputEvents the window makes.
+// wins, so encoding never holds the display loop up), and only while someone watches, and
+// handed to the server; viewers' input becomes the same InputEvents the window makes.
 #include <cmath>
 #include <condition_variable>
 #include <mutex>
@@ -22,6 +22,14 @@ class WebSink final : public Sink {
   WebSink(const std::string& address, const std::string& token, const std::array<double, 3>& background)
       : server_(address, token), background_(background) {
     spdlog::info("web view: open {}", server_.url());
+    // A viewer that connects gets the newest frame encoded now (none are while nobody watches).
+    server_.onViewer([this] {
+      {
+        std::lock_guard lock(m_);
+        if (!next_ && last_) next_ = last_;
+      }
+      cv_.notify_one();
+    });
     encoder_ = std::thread([this] { encodeLoop(); });
   }
 
@@ -38,20 +46,29 @@ class WebSink final : public Sink {
                  c.connections, c.frames_sent, c.frames_replaced, c.refused, c.bad_messages, c.bad_requests);
   }
 
+  // Lock order: the server's mutex (its viewer callback) before m_; never the reverse.
   void present(const Image8& frame, uint64_t id, const std::string& status, bool moving) override {
+    const bool watched = server_.viewers() > 0;
     {
       std::lock_guard lock(m_);
-      next_ = Next{frame, id, status, moving};
+      last_ = Next{frame, id, status, moving};
+      if (watched) next_ = last_;
     }
     cv_.notify_one();
   }
 
   std::vector<InputEvent> poll() override {
     std::vector<InputEvent> out;
-    for (const auto& msg : server_.takeInput()) {
+    for (const auto& in : server_.takeInput()) {
       InputEvent ev;
-      ev.at = std::chrono::steady_clock::now();
-      if (!translate(msg, ev)) continue;
+      ev.at = in.at;
+      if (!translate(in.msg, ev)) continue;
+      // Consecutive drags collapse into one, as the window's do: the master needs the sum.
+      if (!out.empty() && isDrag(out.back()) && isDrag(ev)) {
+        out.back().orbit_dx += ev.orbit_dx;
+        out.back().orbit_dy += ev.orbit_dy;
+        continue;
+      }
       out.push_back(ev);
     }
     return out;
@@ -109,7 +126,7 @@ class WebSink final : public Sink {
   std::array<double, 3> background_;
   std::mutex m_;
   std::condition_variable cv_;
-  std::optional<Next> next_;
+  std::optional<Next> next_, last_;  // to encode; the newest presented
   bool quit_ = false;
   std::thread encoder_;
 };

@@ -269,9 +269,6 @@ class WindowSink final : public Sink {
     out.push_back(ev);
   }
 
-  static bool isDrag(const InputEvent& ev) {
-    return ev.interacting && ev.zoom == 1 && !ev.quality && !ev.quit && ev.width == 0;
-  }
 
   SDL_Window* window_ = nullptr;
   SDL_Renderer* renderer_ = nullptr;

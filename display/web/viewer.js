@@ -8,27 +8,42 @@
   const kindEl = document.getElementById('kind');
   const statusEl = document.getElementById('status');
   const helpEl = document.getElementById('help');
-  const token = decodeURIComponent(location.hash.slice(1));
-  const state = { shown: -1, kind: 'none', frames: 0, connects: 0, inputAt: 0, latencies: [] };
+  const token = (() => { try { return decodeURIComponent(location.hash.slice(1)); } catch (e) { return location.hash.slice(1); } })();
+  // What the page saw (tests and the benchmark read it): frames shown, input-to-present times,
+  // and each frame's time, kind and bytes; the time from the last release to a lossless frame.
+  const state = { shown: -1, kind: 'none', frames: 0, connects: 0, inputAt: 0, latencies: [], log: [],
+                  releaseAt: 0, releaseToLossless: 0 };
   let ws = null;
   let retry = 250;
+  let failures = 0;  // connection attempts in a row that never opened
 
   function setKind(text, cls) {
     kindEl.textContent = text;
     kindEl.className = cls;
   }
 
-  async function onFrame(buf) {
-    const view = new DataView(buf);
-    const n = view.getUint32(0, true);
-    const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buf, 4, n)));
+  // Each frame is acknowledged on the socket it came by, also when it cannot be shown.
+  async function onFrame(buf, sock) {
+    let id = null;
+    try {
+      const n = new DataView(buf).getUint32(0, true);
+      const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buf, 4, n)));
+      id = header.id;
+      await show(header, buf, 4 + n, sock);
+    } finally {
+      if (id !== null && sock.readyState === WebSocket.OPEN) sock.send(JSON.stringify({ t: 'ack', id }));
+    }
+  }
+
+  async function show(header, buf, offset, sock) {
     let bitmap = null;
     if (header.kind === 'png' || header.kind === 'jpeg') {
-      const blob = new Blob([new Uint8Array(buf, 4 + n)], { type: 'image/' + header.kind });
+      const blob = new Blob([new Uint8Array(buf, offset)], { type: 'image/' + header.kind });
       bitmap = await createImageBitmap(blob, { premultiplyAlpha: 'none', colorSpaceConversion: 'none' });
     }
-    // Decoding is asynchronous: a frame finished after a newer one is never shown.
-    if (header.id > state.shown) {
+    // Decoding is asynchronous: a frame finished after a newer one, or one from a connection
+    // that has since been replaced, is never shown.
+    if (sock === ws && header.id > state.shown) {
       if (canvas.width !== header.fw || canvas.height !== header.fh) {
         canvas.width = header.fw;
         canvas.height = header.fh;
@@ -37,8 +52,15 @@
       ctx.fillRect(0, 0, canvas.width, canvas.height);
       if (bitmap) ctx.drawImage(bitmap, header.x, header.y);
       state.shown = header.id;
-      state.kind = header.kind === 'jpeg' ? 'moving' : 'lossless';
+      state.kind = header.moving ? 'moving' : 'lossless';
       state.frames++;
+      const now = performance.now();
+      state.log.push({ t: now, id: header.id, kind: header.kind, bytes: buf.byteLength });
+      if (state.log.length > 10000) state.log.shift();
+      if (state.kind === 'lossless' && state.releaseAt) {
+        state.releaseToLossless = now - state.releaseAt;
+        state.releaseAt = 0;
+      }
       if (state.inputAt) {  // input-to-present: the first input since the last frame shown
         state.latencies.push(performance.now() - state.inputAt);
         if (state.latencies.length > 10000) state.latencies.shift();
@@ -48,7 +70,6 @@
       statusEl.textContent = header.status;
     }
     if (bitmap) bitmap.close();
-    if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify({ t: 'ack', id: header.id }));
   }
 
   function connect() {
@@ -57,18 +78,24 @@
       statusEl.textContent = 'open the URL the display logged, with its #token';
       return;
     }
-    ws = new WebSocket(`ws://${location.host}/ws?token=${encodeURIComponent(token)}`);
-    ws.binaryType = 'arraybuffer';
-    ws.onopen = () => {
+    const sock = new WebSocket(`ws://${location.host}/ws?token=${encodeURIComponent(token)}`);
+    ws = sock;
+    sock.binaryType = 'arraybuffer';
+    let opened = false;
+    sock.onopen = () => {
+      opened = true;
       retry = 250;
+      failures = 0;
       state.connects++;
+      state.shown = -1;  // a restarted display numbers its frames from 0 again
       setKind('connected', 'lossless');
     };
-    ws.onmessage = (e) => { if (e.data instanceof ArrayBuffer) onFrame(e.data).catch((err) => console.error(err)); };
-    ws.onclose = () => {  // a reload, a restart of the display or a lost link: try again
+    sock.onmessage = (e) => { if (e.data instanceof ArrayBuffer) onFrame(e.data, sock).catch((err) => console.error(err)); };
+    sock.onclose = () => {  // a restart of the display or a lost link: try again, soon
+      if (!opened && ++failures >= 3) statusEl.textContent = 'refused or the display is down: check the URL the display logged';
       setKind('reconnecting', 'offline');
       setTimeout(connect, retry);
-      retry = Math.min(2000, retry * 2);
+      retry = Math.min(500, retry * 2);
     };
   }
 
@@ -85,7 +112,7 @@
     if (drag) requestAnimationFrame(flushDrag);
   }
   canvas.addEventListener('pointerdown', (e) => {
-    if (e.button !== 0) return;
+    if (e.button !== 0 || drag) return;
     drag = { x: e.clientX, y: e.clientY };
     canvas.setPointerCapture(e.pointerId);
     canvas.classList.add('dragging');
@@ -103,12 +130,17 @@
     canvas.classList.remove('dragging');
     flushDrag();
     send({ t: 'release' });
+    state.releaseAt = performance.now();
   };
   canvas.addEventListener('pointerup', release);
   canvas.addEventListener('pointercancel', release);
+  // Wheels and trackpads: deltas summed per animation frame, 100 px (3 lines) a notch.
+  let notches = 0;
   canvas.addEventListener('wheel', (e) => {
     e.preventDefault();
-    if (e.deltaY) send({ t: 'wheel', notches: e.deltaY < 0 ? 1 : -1 });
+    const scale = e.deltaMode === 1 ? 1 / 3 : e.deltaMode === 2 ? 1 : 1 / 100;
+    if (!notches) requestAnimationFrame(() => { if (notches) send({ t: 'wheel', notches }); notches = 0; });
+    notches = Math.max(-20, Math.min(20, notches - e.deltaY * scale));
   }, { passive: false });
   window.addEventListener('keydown', (e) => {
     if (e.key === 'h') helpEl.style.display = helpEl.style.display === 'block' ? 'none' : 'block';

@@ -34,7 +34,23 @@ struct Result {
   int image = 0, in_flight = 0, drag_frames = 0;
   double fps = 0, input_median = 0, input_p95 = 0, sharp_ms = 0, full_ms = 0;
   std::string widths;  // the interactive frames' widths (the rungs chosen)
+  nlohmann::json web;  // --web: what the page measured during the same kind of drag
 };
+
+// The same drag in the web view (tests/web/bench.mjs in chromium), on the same farm.
+nlohmann::json dragInPage(int port, double drag_s, const fs::path& dir) {
+  const std::string cmd = fmt::format("node {}/tests/web/bench.mjs 'http://127.0.0.1:{}/#bench-token' {} {} 2>&1",
+                                      TESSERA_SOURCE_DIR, port, drag_s, dir.string());
+  std::string out;
+  if (FILE* p = popen(cmd.c_str(), "r")) {
+    char buf[4096];
+    while (fgets(buf, sizeof buf, p)) out += buf;
+    pclose(p);
+  }
+  auto j = nlohmann::json::parse(out.substr(0, out.find('\n')), nullptr, false);
+  if (j.is_discarded() || j.contains("error")) throw std::runtime_error("the page's drag failed: " + out);
+  return j;
+}
 
 std::vector<nlohmann::json> lines(const fs::path& metrics) {
   std::vector<nlohmann::json> v;
@@ -59,7 +75,7 @@ bool waitUntil(F ok, std::chrono::seconds limit) {
   return false;
 }
 
-Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight, double drag_s) {
+Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight, double drag_s, int web_port) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   {
@@ -73,8 +89,10 @@ Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight
   setenv("DISPLAY", xvfb.display().c_str(), 1);
   const std::string cmd = fmt::format(
       "{}/tessera-up {}/compose.yaml --env TESSERA_SCENE={}/scene.yaml --env TESSERA_FRAMES=0 --env TESSERA_WINDOW=on "
-      "--env TESSERA_IN_FLIGHT={} --env TESSERA_OUT={} --env TESSERA_ENDPOINTS=ipc://{}/sockets > {}/farm.log 2>&1",
-      bin.string(), TESSERA_SOURCE_DIR, dir.string(), in_flight, dir.string(), dir.string(), dir.string());
+      "--env TESSERA_IN_FLIGHT={} --env TESSERA_OUT={} --env TESSERA_ENDPOINTS=ipc://{}/sockets {} > {}/farm.log 2>&1",
+      bin.string(), TESSERA_SOURCE_DIR, dir.string(), in_flight, dir.string(), dir.string(),
+      web_port ? fmt::format("--env TESSERA_WEB=127.0.0.1:{} --env TESSERA_WEB_TOKEN=bench-token", web_port) : "",
+      dir.string());
   auto farm = std::async(std::launch::async, [&] { return std::system(cmd.c_str()); });
   XUser user(xvfb.display());
   std::optional<XUser::Geometry> win;
@@ -108,19 +126,21 @@ Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight
     if (v.size() > before && !v.back()["interactive"].get<bool>()) sharp = v.back();
     return sharp.has_value();
   }, 60s);
+  const size_t sharp_frame = sharp ? (*sharp)["frame"].get<size_t>() : SIZE_MAX;
   std::this_thread::sleep_for(300ms);
   shot("sharp.png");
+  Result r;
+  if (web_port) r.web = dragInPage(web_port, drag_s, dir);
   user.key(XK_Escape);
   farm.wait();
   unsetenv("DISPLAY");
 
-  Result r;
   r.image = image;
   r.in_flight = in_flight;
   std::vector<double> input, done;
   std::vector<int> widths;
   for (const auto& l : lines(metrics)) {
-    if (!l["interactive"].get<bool>()) continue;
+    if (!l["interactive"].get<bool>() || l["frame"].get<size_t>() >= sharp_frame) continue;  // the window's drag
     done.push_back(l["done_ms"].get<double>());
     if (l.contains("input_ms")) input.push_back(l["input_ms"].get<double>());
     widths.push_back(l["width"].get<int>());
@@ -145,12 +165,15 @@ Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight
 int main(int argc, char** argv) {
   CLI::App app{"tessera-interaction-bench: fps and input-to-present latency while dragging in the farm's window"};
   std::vector<int> images{512, 1024}, in_flight{1, 3};
+  int web_port = 0;
   double drag_s = 5;
   std::string out = "bench-out/interaction";
   app.add_option("--image", images, "image sizes (square)")->capture_default_str();
   app.add_option("--in-flight", in_flight, "frames-in-flight settings")->capture_default_str();
   app.add_option("--drag-seconds", drag_s, "length of the drag")->capture_default_str()->check(CLI::Range(0.5, 120.0));
   app.add_option("--out", out, "folder for the runs and interaction.csv")->capture_default_str();
+  app.add_option("--web", web_port, "also serve the web view on this port and drag in it after the window "
+                                    "(chromium, tests/web/bench.mjs)");
   CLI11_PARSE(app, argc, argv);
   if (!tessera::display::testing::onPath("Xvfb")) {
     std::fprintf(stderr, "tessera-interaction-bench: Xvfb not installed (apt-get install xvfb)\n");
@@ -162,7 +185,7 @@ int main(int argc, char** argv) {
     for (int image : images)
       for (int k : in_flight) {
         std::fprintf(stderr, "image %dx%d, %d in flight: dragging for %.1f s...\n", image, image, k, drag_s);
-        results.push_back(runOne(bin, fs::absolute(out) / fmt::format("{}-{}", image, k), image, k, drag_s));
+        results.push_back(runOne(bin, fs::absolute(out) / fmt::format("{}-{}", image, k), image, k, drag_s, web_port));
       }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "tessera-interaction-bench: %s\n", e.what());
@@ -178,6 +201,25 @@ int main(int argc, char** argv) {
     std::printf("| %d² | %d | %d | %.1f | %.0f | %.0f | %.0f | %.0f | %.2f | %s |\n", r.image, r.in_flight, r.drag_frames,
                 r.fps, r.input_median, r.input_p95, r.sharp_ms, r.full_ms, r.full_ms > 0 ? r.sharp_ms / r.full_ms : 0,
                 r.widths.c_str());
+  }
+  if (web_port) {
+    std::ofstream wcsv(fs::absolute(out) / "web.csv");
+    wcsv << "image,in_flight,window_fps,page_fps,window_input_ms,page_input_ms,page_input_ms_p95,moving_bytes,"
+            "lossless_bytes,window_release_to_sharp_ms,page_release_to_lossless_ms\n";
+    std::printf("\n| image | in flight | fps window / page | input-to-present median ms, window / page (p95) | "
+                "bytes per moving frame | bytes per lossless frame | release to sharp ms, window / page |\n"
+                "|---|---:|---|---|---:|---:|---|\n");
+    for (const Result& r : results) {
+      const auto& w = r.web;
+      wcsv << fmt::format("{},{},{:.2f},{:.2f},{:.1f},{:.1f},{:.1f},{},{},{:.1f},{:.1f}\n", r.image, r.in_flight, r.fps,
+                          w["fps"].get<double>(), r.input_median, w["input_ms_median"].get<double>(),
+                          w["input_ms_p95"].get<double>(), w["moving_bytes_median"].get<double>(),
+                          w["lossless_bytes"].get<double>(), r.sharp_ms, w["release_to_lossless_ms"].get<double>());
+      std::printf("| %d² | %d | %.1f / %.1f | %.0f / %.0f (%.0f) | %.0f | %.0f | %.0f / %.0f |\n", r.image, r.in_flight,
+                  r.fps, w["fps"].get<double>(), r.input_median, w["input_ms_median"].get<double>(),
+                  w["input_ms_p95"].get<double>(), w["moving_bytes_median"].get<double>(),
+                  w["lossless_bytes"].get<double>(), r.sharp_ms, w["release_to_lossless_ms"].get<double>());
+    }
   }
   return 0;
 }

@@ -137,8 +137,17 @@ TEST_F(WebView, TheLosslessFrameOnThePageIsThePngSinksFrameExactly) {
 }
 
 TEST_F(WebView, ADragChangesThePictureAndEndsOnTheLosslessFrameOfTheFinalCamera) {
-  const auto out = browse("wait-lossless:0 pixels:before drag:30 wait-lossless:1 sleep:600 pixels:after");
-  ASSERT_EQ(out.size(), 6u);
+  const auto out = browse("wait-lossless:0 pixels:before drag:30 wait-lossless:+ sleep:600 pixels:after state");
+  ASSERT_EQ(out.size(), 7u);
+  // The page showed moving (JPEG) frames, and never an older frame after a newer one.
+  int jpeg = 0;
+  int64_t last = -1;
+  for (const auto& f : out[6]["state"]["log"]) {
+    jpeg += f["kind"] == "jpeg";
+    EXPECT_GT(f["id"].get<int64_t>(), last) << "frames out of order on the page";
+    last = f["id"].get<int64_t>();
+  }
+  EXPECT_GE(jpeg, 1) << "no moving frame reached the page";
   const Image8 before = pagePixels("before", out[1]);
   const Image8 after = pagePixels("after", out[5]);
   EXPECT_EQ(out[5]["kind"], "lossless");
@@ -178,8 +187,10 @@ TEST_F(WebView, WithoutTheTokenThePageGetsNoFrameAndTheRefusalIsCounted) {
                             10);
   EXPECT_NE(r.output, "101") << "a WebSocket without the token was accepted";
   out = browse("sleep:1500", "http://127.0.0.1:" + std::to_string(port_) + "/#wrong-token");
+  ASSERT_EQ(out.size(), 1u);
   EXPECT_EQ(out[0]["state"]["frames"], 0);
   out = browse("wait-lossless:0");  // the farm still serves a viewer with the token
+  ASSERT_EQ(out.size(), 1u);
   EXPECT_EQ(out[0]["state"]["kind"], "lossless");
   TearDown();
   farm_ = {};
@@ -200,7 +211,7 @@ TEST_F(WebView, BadInputIsRefusedCountedAndEveryOtherViewerKeepsItsFrames) {
   // and random bytes on the port.
   for (const char* path : {"/../../etc/passwd", "/%2e%2e/%2e%2e/etc/passwd", "/..%2f..%2fetc/passwd", "/etc/passwd"}) {
     const auto r = runCommand("curl -s --path-as-is -o /dev/null -w '%{http_code}' '" + base + path + "'", 10);
-    EXPECT_NE(r.output, "200") << path;
+    EXPECT_TRUE(r.output == "404" || r.output == "400") << path << ": " << r.output;
   }
   EXPECT_EQ(runCommand("curl -s -o /dev/null -w '%{http_code}' -X POST -d x " + base + "/", 10).output, "404");
   runCommand("bash -c 'head -c 4096 /dev/urandom > /dev/tcp/127.0.0.1/" + std::to_string(port_) + "'", 10);
@@ -215,7 +226,7 @@ TEST_F(WebView, BadInputIsRefusedCountedAndEveryOtherViewerKeepsItsFrames) {
   EXPECT_GE(std::stoi(m[1]), 5) << "not JSON, unknown type, bad values, binary, oversized";
   EXPECT_GE(std::stoi(m[2]), 5) << "four paths, a POST (random bytes may count as well)";
   EXPECT_NE(log_.find("refused a viewer message: a message that is not JSON"), std::string::npos) << log_;
-  EXPECT_NE(log_.find("an unknown message type 'launch-missiles'"), std::string::npos) << log_;
+  EXPECT_NE(log_.find("refused a viewer message: an unknown message type"), std::string::npos) << log_;
 }
 
 }  // namespace
@@ -226,11 +237,11 @@ namespace {
 
 // A viewer that connects and never reads or acknowledges: it is sent 2 frames, then every
 // newer frame replaces the one it would get next; the farm's orbit is not held up and the
-// display's memory stays small.
+// display's memory stays below what even a fifth of the frames queued would take.
 TEST(WebViewOrbit, AStalledViewerNeitherHoldsUpTheFarmNorGrowsTheDisplay) {
   FarmDir dir("web-stalled");
-  const int frames = 40;
-  const fs::path scene = dir.writeScene(frames, 48, 320, 240);
+  const int frames = 20;
+  const fs::path scene = dir.writeScene(frames, 48, 1024, 1024);  // 4 MiB a frame: 20 queued would be 80
   const int port = freePort();
   ASSERT_GT(port, 0);
   std::ofstream(dir.path() / "stalled.sh")

@@ -2,7 +2,8 @@
 // on the web view, for the tests and the benchmark.
 //   node view.mjs URL OUTDIR ACTION...
 // Actions, in order; each prints one JSON line:
-//   wait-lossless[:ID]  until the page shows a lossless frame with id >= ID (30 s at most)
+//   wait-lossless[:ID]  until the page shows a lossless frame with id >= ID (30 s at most);
+//                       ID "+": newer than the frame shown when the last drag began
 //   wait-frames:N       until the page has shown N frames since it loaded (30 s at most)
 //   pixels:NAME         the canvas's RGBA into OUTDIR/NAME.rgba, and its id/kind/size
 //   shot:NAME           a screenshot into OUTDIR/NAME.png
@@ -25,6 +26,7 @@ const browser = await puppeteer.launch({
          '--disable-sync', '--no-first-run', '--window-size=1200,1000'],
 });
 const say = (o) => console.log(JSON.stringify(o));
+let dragFrom = -1;  // the frame shown when the last drag began
 try {
   const page = await browser.newPage();
   await page.setViewport({ width: 1200, height: 1000 });
@@ -35,7 +37,7 @@ try {
     const [name, arg] = action.split(/:(.*)/s);
     const t0 = Date.now();
     if (name === 'wait-lossless') {
-      const id = Number(arg || 0);
+      const id = arg === '+' ? dragFrom + 1 : Number(arg || 0);
       await page.waitForFunction((i) => window.tessera && window.tessera.state.kind === 'lossless' &&
                                  window.tessera.state.shown >= i, { timeout: 30000, polling: 20 }, id);
       say({ action, ms: Date.now() - t0, state: await state() });
@@ -51,6 +53,7 @@ try {
       await page.screenshot({ path: path.join(outdir, arg + '.png') });
       say({ action });
     } else if (name === 'drag') {
+      dragFrom = (await state()).shown;
       const box = await (await page.$('canvas')).boundingBox();
       let x = box.x + box.width / 2, y = box.y + box.height / 2;
       await page.mouse.move(x, y);

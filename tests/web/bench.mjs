@@ -1,0 +1,62 @@
+// The web view as a user drags in it (tessera-interaction-bench --web runs it beside the
+// window): opens URL in Debian's chromium, waits for the lossless frame, drags across the
+// canvas at 60 events a second for SECONDS, releases, waits for the lossless frame, and
+// prints one JSON line of what the page measured: frames shown while dragging and their rate,
+// input-to-present times (the page's input event to the frame drawn), bytes per moving and
+// per lossless frame, and the time from the release to the lossless frame.
+//   node bench.mjs URL SECONDS OUTDIR
+import fs from 'node:fs';
+import path from 'node:path';
+import puppeteer from 'puppeteer-core';
+
+const [url, seconds, outdir] = process.argv.slice(2);
+const userDir = fs.mkdtempSync(path.join(outdir, 'chromium-'));
+const browser = await puppeteer.launch({
+  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+  headless: true,
+  userDataDir: userDir,
+  args: ['--no-sandbox', '--disable-gpu', '--disable-background-networking', '--disable-component-update',
+         '--disable-sync', '--no-first-run', '--window-size=1100,1100'],
+});
+const median = (v) => (v.length ? [...v].sort((a, b) => a - b)[Math.floor((v.length - 1) / 2)] : 0);
+const p95 = (v) => (v.length ? [...v].sort((a, b) => a - b)[Math.round(0.95 * (v.length - 1))] : 0);
+try {
+  const page = await browser.newPage();
+  await page.setViewport({ width: 1100, height: 1100 });
+  await page.goto(url, { waitUntil: 'load', timeout: 30000 });
+  const lossless = (after) => page.waitForFunction((i) => window.tessera && window.tessera.state.kind === 'lossless' &&
+                                                   window.tessera.state.shown > i, { timeout: 60000, polling: 10 }, after);
+  await lossless(-1);
+  const start = await page.evaluate(() => { const s = window.tessera.state; s.latencies = []; return { n: s.log.length, shown: s.shown, t: performance.now() }; });
+  const box = await (await page.$('canvas')).boundingBox();
+  const x0 = box.x + box.width / 4, y0 = box.y + box.height / 2;
+  await page.mouse.move(x0, y0);
+  await page.mouse.down();
+  const steps = Math.round(Number(seconds) * 60);
+  for (let i = 0; i < steps; ++i) {
+    const phase = i % 200;
+    await page.mouse.move(x0 + 3 * (phase < 100 ? phase : 200 - phase), y0 + (i % 2));
+    await new Promise((r) => setTimeout(r, 16));
+  }
+  const released = await page.evaluate(() => ({ t: performance.now(), shown: window.tessera.state.shown }));
+  await page.mouse.up();
+  await lossless(released.shown);
+  await new Promise((r) => setTimeout(r, 200));
+  const s = await page.evaluate(() => window.tessera.state);
+  const during = s.log.slice(start.n).filter((f) => f.t <= released.t + 1);
+  const moving = s.log.slice(start.n).filter((f) => f.kind === 'jpeg');
+  const still = s.log.slice(start.n).filter((f) => f.kind === 'png');
+  console.log(JSON.stringify({
+    drag_frames: during.length,
+    fps: during.length > 1 ? (during.length - 1) * 1000 / (during[during.length - 1].t - during[0].t) : 0,
+    input_ms_median: median(s.latencies), input_ms_p95: p95(s.latencies),
+    moving_bytes_median: median(moving.map((f) => f.bytes)), lossless_bytes: still.length ? still[still.length - 1].bytes : 0,
+    release_to_lossless_ms: s.releaseToLossless,
+  }));
+} catch (e) {
+  console.log(JSON.stringify({ error: String(e && e.message || e) }));
+  process.exitCode = 1;
+} finally {
+  await browser.close();
+  fs.rmSync(userDir, { recursive: true, force: true });
+}
