@@ -167,6 +167,14 @@ TEST_F(WebView, ADragChangesThePictureAndEndsOnTheLosslessFrameOfTheFinalCamera)
   EXPECT_TRUE(dir_.matches(after, pngFrame(id), 0, "final_page_vs_png_sink"));
 }
 
+TEST_F(WebView, FourViewersAtOnceAllFollowTheOneWhoSteers) {
+  const auto out = browse("wait-lossless:0 extra:3 drag:20 wait-lossless:+ extras-same");
+  ASSERT_EQ(out.size(), 5u);
+  EXPECT_EQ(out[1]["viewers"], 4);
+  EXPECT_GT(out[4]["id"].get<int>(), 0) << "the drag made new frames";
+  for (const auto& id : out[4]["ids"]) EXPECT_EQ(id, out[4]["id"]) << "every viewer ends on the steered frame";
+}
+
 TEST_F(WebView, AReloadShowsTheCurrentFrameWithinASecond) {
   const auto out = browse("wait-lossless:0 reload reload");
   ASSERT_EQ(out.size(), 3u);

@@ -5,19 +5,10 @@
 // input-to-present times (the page's input event to the frame drawn), bytes per moving and
 // per lossless frame, and the time from the release to the lossless frame.
 //   node bench.mjs URL SECONDS OUTDIR
-import fs from 'node:fs';
-import path from 'node:path';
-import puppeteer from 'puppeteer-core';
+import { launch } from './browser.mjs';
 
 const [url, seconds, outdir] = process.argv.slice(2);
-const userDir = fs.mkdtempSync(path.join(outdir, 'chromium-'));
-const browser = await puppeteer.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  headless: true,
-  userDataDir: userDir,
-  args: ['--no-sandbox', '--disable-gpu', '--disable-background-networking', '--disable-component-update',
-         '--disable-sync', '--no-first-run', '--window-size=1100,1100'],
-});
+const { browser, close } = await launch(outdir, 1100);
 const median = (v) => (v.length ? [...v].sort((a, b) => a - b)[Math.floor((v.length - 1) / 2)] : 0);
 const p95 = (v) => (v.length ? [...v].sort((a, b) => a - b)[Math.round(0.95 * (v.length - 1))] : 0);
 try {
@@ -57,6 +48,5 @@ try {
   console.log(JSON.stringify({ error: String(e && e.message || e) }));
   process.exitCode = 1;
 } finally {
-  await browser.close();
-  fs.rmSync(userDir, { recursive: true, force: true });
+  await close();
 }

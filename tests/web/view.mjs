@@ -11,22 +11,18 @@
 //   reload              reloads the page; prints the ms until it shows a frame again
 //   bad-ws              from the page, a second WebSocket (with the token) sends malformed,
 //                       unknown, oversized and binary messages, then closes
+//   extra:N             opens N more pages on URL (other viewers), each until it shows a frame
+//   extras-same         until every extra page shows the main page's frame (lossless); their ids
 //   sleep:MS, state     wait; print the page's state
 import fs from 'node:fs';
 import path from 'node:path';
-import puppeteer from 'puppeteer-core';
+import { launch } from './browser.mjs';
 
 const [url, outdir, ...actions] = process.argv.slice(2);
-const userDir = fs.mkdtempSync(path.join(outdir, 'chromium-'));
-const browser = await puppeteer.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  headless: true,
-  userDataDir: userDir,
-  args: ['--no-sandbox', '--disable-gpu', '--disable-background-networking', '--disable-component-update',
-         '--disable-sync', '--no-first-run', '--window-size=1200,1000'],
-});
+const { browser, close } = await launch(outdir, 1000);
 const say = (o) => console.log(JSON.stringify(o));
 let dragFrom = -1;  // the frame shown when the last drag began
+const extras = [];  // other viewers' pages
 try {
   const page = await browser.newPage();
   await page.setViewport({ width: 1200, height: 1000 });
@@ -84,6 +80,23 @@ try {
         setTimeout(() => resolve(false), 5000);
       }));
       say({ action, closed_by_display: closed, state: await state() });
+    } else if (name === 'extra') {
+      for (let i = 0; i < Number(arg); ++i) {
+        const p = await browser.newPage();
+        await p.goto(url, { waitUntil: 'load', timeout: 30000 });
+        extras.push(p);
+      }
+      await Promise.all(extras.map((p) => p.waitForFunction(() => window.tessera && window.tessera.state.frames >= 1,
+                                                            { timeout: 30000, polling: 20 })));
+      await page.bringToFront();  // a background tab gets no animation frames: the drag's input waits
+      say({ action, viewers: 1 + extras.length });
+    } else if (name === 'extras-same') {
+      const id = (await state()).shown;
+      await Promise.all(extras.map((p) => p.waitForFunction((i) => window.tessera.state.shown === i &&
+                                                            window.tessera.state.kind === 'lossless',
+                                                            { timeout: 30000, polling: 20 }, id)));
+      const ids = await Promise.all(extras.map((p) => p.evaluate(() => window.tessera.state.shown)));
+      say({ action, id, ids });
     } else if (name === 'sleep') {
       await new Promise((r) => setTimeout(r, Number(arg)));
       say({ action, state: await state() });
@@ -97,6 +110,5 @@ try {
   say({ error: String(e && e.message || e) });
   process.exitCode = 1;
 } finally {
-  await browser.close();
-  fs.rmSync(userDir, { recursive: true, force: true });
+  await close();
 }
