@@ -150,6 +150,7 @@
   // For tests and benchmarks: what is shown, and the canvas's pixels (RGBA, base64).
   window.tessera = {
     state,
+    drop() { if (ws) ws.close(); },  // as a lost connection: the page reconnects by itself
     pixels() {
       const data = ctx.getImageData(0, 0, canvas.width, canvas.height).data;
       let s = '';

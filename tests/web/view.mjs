@@ -13,6 +13,8 @@
 //                       unknown, oversized and binary messages, then closes
 //   extra:N             opens N more pages on URL (other viewers), each until it shows a frame
 //   extras-same         until every extra page shows the main page's frame (lossless); their ids
+//   drop                closes the page's connection as a lost link would; prints the ms
+//                       until it has reconnected and shows a frame again
 //   sleep:MS, state     wait; print the page's state
 import fs from 'node:fs';
 import path from 'node:path';
@@ -97,6 +99,11 @@ try {
                                                             { timeout: 30000, polling: 20 }, id)));
       const ids = await Promise.all(extras.map((p) => p.evaluate(() => window.tessera.state.shown)));
       say({ action, id, ids });
+    } else if (name === 'drop') {
+      const before = await page.evaluate(() => { const s = window.tessera.state; const b = { c: s.connects, f: s.frames }; window.tessera.drop(); return b; });
+      await page.waitForFunction((b) => window.tessera.state.connects > b.c && window.tessera.state.frames > b.f,
+                                 { timeout: 30000, polling: 10 }, before);
+      say({ action, ms: Date.now() - t0, state: await state() });
     } else if (name === 'sleep') {
       await new Promise((r) => setTimeout(r, Number(arg)));
       say({ action, state: await state() });
