@@ -29,7 +29,7 @@ bool haveBrowser() {
 }
 
 int freePort() {
-  const auto r = runCommand("bash -c 'for i in $(seq 100); do p=$((20000 + RANDOM % 20000)); "
+  const auto r = runCommand("bash -c 'for i in $(seq 100); do p=$((20000 + RANDOM % 12000)); "
                             "ss -Htln \"sport = :$p\" | grep -q . || { echo $p; exit; }; done'", 10);
   return std::atoi(r.output.c_str());
 }

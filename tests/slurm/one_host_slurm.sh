@@ -27,18 +27,26 @@ own_dir=0
 mkdir -p "$dir"/{spool,state,log,munge}
 chmod 700 "$dir/munge"
 
-# A port nothing listens on (random in 30000-59999, checked with ss), for slurmctld and
-# each slurmd.
+# A port nothing listens on, for slurmctld and each slurmd: random in 6000-9999, below both
+# the farm's ports (10000-31999) and the kernel's ephemeral ports (where an outgoing
+# connection could take it before the daemon binds), checked with ss, never one chosen before.
+# Sets $port (no command substitution: its subshell would forget the ports chosen).
+chosen=" "
 free_port() {
   local p
   for _ in $(seq 100); do
-    p=$((30000 + RANDOM % 30000))
-    ss -Htln "sport = :$p" | grep -q . || { echo "$p"; return; }
+    p=$((6000 + RANDOM % 4000))
+    case "$chosen" in *" $p "*) continue ;; esac
+    ss -Htan "sport = :$p" | grep -q . && continue
+    chosen="$chosen$p "
+    port=$p
+    return
   done
   echo "one_host_slurm.sh: no free port" >&2
   exit 1
 }
-ctld_port=$(free_port)
+free_port
+ctld_port=$port
 cpus=$(nproc)
 
 pids=()
@@ -108,7 +116,8 @@ InactiveLimit=0
 MinJobAge=30
 CONF
   for i in $(seq "$nodes"); do
-    echo "NodeName=node$i NodeHostname=localhost NodeAddr=127.0.0.1 Port=$(free_port) CPUs=$cpus State=UNKNOWN"
+    free_port
+    echo "NodeName=node$i NodeHostname=localhost NodeAddr=127.0.0.1 Port=$port CPUs=$cpus State=UNKNOWN"
   done
   echo "PartitionName=farm Nodes=ALL Default=YES MaxTime=INFINITE State=UP OverSubscribe=FORCE:8"
   # For heterogeneous jobs (docs/tessera-hetjob.sbatch): the last node is the display's.
