@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include "common/camera.h"
 #include "common/quality.h"
@@ -13,11 +14,38 @@
 
 namespace tessera {
 
+// The run's frames: frame k's camera is the scene's turned by k*degrees/frames about axis.
+// A time series played without an orbit runs one pass over its steps with degrees 0.
 struct Orbit {
   int frames = 1;
   Vec3 axis{0, 1, 0};
-  Camera at(const Camera& base, int frame) const;  // frame k rotated by k*360/frames degrees
+  double degrees = 360;
+  Camera at(const Camera& base, int frame) const;
 };
+
+// The volume's time steps (`volume: {series: ...}`, a 4-D file, or a time-varying generator
+// with `steps`), all of one shape: the same dims, type and spacing. Opening a series reads
+// the first step's header only; later steps are checked when first read (stepVolume).
+struct TimeSeries {
+  int steps = 1;
+  std::vector<std::string> files;  // one file per step, resolved; empty: one file (or a generator)
+  std::vector<double> times;       // each step's time (a .series file's), else empty: the index
+  uint64_t step_bytes = 0;         // steps in one file: bytes from one step's samples to the next
+  bool operator==(const TimeSeries&) const = default;
+};
+
+// `time:` how a run plays the steps: frame k shows stepAt(k).
+struct Playback {
+  enum class Mode { Loop, Once, Swing };  // wrap around | stop on the last | back and forth
+  bool play = false;                      // false: every frame shows `step`
+  int stride = 1;                         // steps per frame; negative plays backwards
+  Mode mode = Mode::Loop;
+  int step = 0;                           // the first frame's
+  int stepAt(uint64_t frame, int steps) const;
+  int onePass(int steps) const;           // frames to show every step once (swing: there and back)
+  bool operator==(const Playback&) const = default;
+};
+const char* playbackModeName(Playback::Mode m);
 
 // `mesh:` (geometry scenes, drawn by the OSMesa backend): a .ply/.obj file (path resolved
 // against the scene's folder; fitted to the unit box) or the isosurface of the scene's volume.
@@ -50,6 +78,8 @@ struct Scene {
   int width = 512, height = 512;
   Quality quality;
   Orbit orbit;
+  TimeSeries series;
+  Playback time;
 };
 
 // Limits checked where a scene is read, so that no renderer meets them later. Each *Problem
@@ -85,10 +115,16 @@ Scene defaultScene();
 // contract (1/255 of tessera-render); else why not and what to change. Bricks terminate their
 // rays separately: early termination at e can leave (1 - e) * 255 levels out of one process.
 std::string farmAccuracyProblem(const Quality& q, int renderers);
-// Loads or generates the scene's volume.
+// Loads or generates the scene's volume (of step 0 for a series).
 Volume loadVolume(const Scene& scene);
-// Only the voxels of `box` (a renderer's bricks and their ghost voxels): see loadRawVolume.
-Volume loadVolume(const Scene& scene, const VoxelBox& box);
+// Only the voxels of `box` (a renderer's bricks and their ghost voxels) of time step `step`:
+// see loadRawVolume and stepVolume.
+Volume loadVolume(const Scene& scene, const VoxelBox& box, int step = 0);
+// Where step `step` of the scene's volume is: its file (a series), its offset (a 4-D file)
+// or its generator time. A step's own header is read and checked against step 0's: throws
+// std::runtime_error naming the file, the field and both values when they differ, or the
+// step when it is outside 0..steps-1. The scene's range and spacing apply to every step.
+std::variant<RawVolumeSpec, GeneratorSpec> stepVolume(const Scene& scene, int step);
 // The volume's dims from the scene alone (no voxel read).
 std::array<int, 3> volumeDims(const Scene& scene);
 // Half extents of the scene's box from the volume's dims and spacing (no voxel read); a mesh

@@ -53,11 +53,12 @@ std::array<int, 3> volumeDims(const Scene& scene) {
   return {n, n, n};
 }
 
-Volume loadVolume(const Scene& scene, const VoxelBox& box) {
+Volume loadVolume(const Scene& scene, const VoxelBox& box, int step) {
   const std::string name = scene.path.empty() ? "<default scene>" : scene.path;
   try {
-    if (const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume)) return loadRawVolume(*raw, box);
-    return generateVolume(std::get<GeneratorSpec>(scene.volume), box);
+    const auto spec = stepVolume(scene, step);
+    if (const auto* raw = std::get_if<RawVolumeSpec>(&spec)) return loadRawVolume(*raw, box);
+    return generateVolume(std::get<GeneratorSpec>(spec), box);
   } catch (const SceneError&) {
     throw;
   } catch (const std::exception& e) {

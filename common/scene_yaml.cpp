@@ -32,7 +32,13 @@ void list(YAML::Emitter& e, const std::array<T, N>& a) {
 void volume(YAML::Emitter& e, const Scene& s) {
   e << YAML::Key << "volume" << YAML::Value << YAML::BeginMap;
   if (const auto* raw = std::get_if<RawVolumeSpec>(&s.volume)) {
-    e << YAML::Key << "file" << YAML::Value << raw->file;
+    if (s.series.files.empty()) {
+      e << YAML::Key << "file" << YAML::Value << raw->file;
+    } else {  // as a list: a pattern or a .series file lists the same names
+      e << YAML::Key << "series" << YAML::Value << YAML::BeginSeq;
+      for (const auto& f : s.series.files) e << f;
+      e << YAML::EndSeq;
+    }
     if (raw->format == VolumeFormat::Raw) {  // a NIfTI or NRRD header gives them
       e << YAML::Key << "dims" << YAML::Value;
       list(e, raw->dims);
@@ -48,7 +54,9 @@ void volume(YAML::Emitter& e, const Scene& s) {
     const auto& g = std::get<GeneratorSpec>(s.volume);
     e << YAML::Key << "generator" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "name"
       << YAML::Value << g.name << YAML::Key << "size" << YAML::Value << g.size << YAML::Key << "seed" << YAML::Value
-      << g.seed << YAML::EndMap;
+      << g.seed;
+    if (s.series.steps > 1) e << YAML::Key << "steps" << YAML::Value << s.series.steps;
+    e << YAML::EndMap;
     e << YAML::Key << "spacing" << YAML::Value;
     list(e, g.spacing);
   }
@@ -104,7 +112,13 @@ std::string sceneYaml(const Scene& s) {
   e << YAML::Key << "orbit" << YAML::Value << YAML::BeginMap << YAML::Key << "frames" << YAML::Value << s.orbit.frames
     << YAML::Key << "axis" << YAML::Value;
   vec(e, s.orbit.axis);
+  if (s.orbit.degrees != 360) e << YAML::Key << "degrees" << YAML::Value << num(s.orbit.degrees);
   e << YAML::EndMap;
+  const Playback& t = s.time;
+  if (t != Playback{})
+    e << YAML::Key << "time" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "play" << YAML::Value
+      << t.play << YAML::Key << "stride" << YAML::Value << t.stride << YAML::Key << "mode" << YAML::Value
+      << playbackModeName(t.mode) << YAML::Key << "step" << YAML::Value << t.step << YAML::EndMap;
   if (length(s.light) > 0) {
     e << YAML::Key << "light" << YAML::Value;
     vec(e, s.light);

@@ -243,7 +243,40 @@ void headPhantom(Volume& v, uint32_t seed) {
   });
 }
 
-constexpr const char* kGenerators[] = {"hollow-shell", "marschner-lobb", "noise-cloud", "head"};
+// Time-varying: seven soft blobs on tilted circles about the centre, each at a whole number
+// of turns per period and breathing in size, so time 0..1 is one period and a loop closes.
+// Values fall to exactly 0 outside each blob (empty space stays empty).
+void movingBlobs(Volume& v, double time, uint32_t seed) {
+  constexpr int kBlobs = 7;
+  constexpr double kTwoPi = 2 * std::numbers::pi;
+  struct Blob {
+    double orbit, tilt, phase, size, turns, breaths;
+  };
+  Blob b[kBlobs];
+  for (int i = 0; i < kBlobs; ++i) {
+    const uint64_t h = splitmix64(seed * 977ull + (uint64_t)i);
+    auto unit = [&](int k) { return (double)((h >> (8 * k)) & 0xff) / 255.0; };
+    b[i] = {0.3 + 0.4 * unit(1), std::numbers::pi * unit(2), kTwoPi * unit(3), 0.2 + 0.12 * unit(4),
+            (double)(1 + i % 3), (double)(1 + (i + 1) % 2)};
+  }
+  Vec3 centre[kBlobs];
+  double size[kBlobs];
+  for (int i = 0; i < kBlobs; ++i) {
+    const double a = kTwoPi * b[i].turns * time + b[i].phase;
+    const double x = b[i].orbit * std::cos(a), y = b[i].orbit * std::sin(a);
+    centre[i] = {x, y * std::cos(b[i].tilt), y * std::sin(b[i].tilt)};
+    size[i] = b[i].size * (1 + 0.35 * std::sin(kTwoPi * b[i].breaths * time + b[i].phase));
+  }
+  const int n = v.wholeDims()[0];
+  forEachVoxel(v, [&](int x, int y, int z, float& value) {
+    const Vec3 p{2.0 * (x + 0.5) / n - 1, 2.0 * (y + 0.5) / n - 1, 2.0 * (z + 0.5) / n - 1};
+    double s = 0;
+    for (int i = 0; i < kBlobs; ++i) s += (0.6 + 0.06 * i) * bump(length(p - centre[i]) / size[i], 0.3, 1.0);
+    value = (float)std::min(1.0, s);
+  });
+}
+
+constexpr const char* kGenerators[] = {"hollow-shell", "marschner-lobb", "noise-cloud", "head", "moving-blobs"};
 
 }  // namespace
 
@@ -255,6 +288,8 @@ const std::string& generatorNames() {
   }();
   return names;
 }
+
+bool isTimeGenerator(const std::string& name) { return name == "moving-blobs"; }
 
 bool isGeneratorName(const std::string& name) {
   return std::find(std::begin(kGenerators), std::end(kGenerators), name) != std::end(kGenerators);
@@ -281,6 +316,7 @@ Volume generateVolume(const GeneratorSpec& spec, const VoxelBox& box) {
   else if (spec.name == "marschner-lobb") marschnerLobb(v);
   else if (spec.name == "noise-cloud") noiseCloud(v, spec.seed);
   else if (spec.name == "head") headPhantom(v, spec.seed);
+  else if (spec.name == "moving-blobs") movingBlobs(v, spec.time, spec.seed);
   else throw std::invalid_argument("unknown generator '" + spec.name + "' (" + generatorNames() + ")");
   const auto [mn, mx] = std::minmax_element(v.values.begin(), v.values.end());
   v.data_range = {*mn, *mx};  // of the window: a generator's values are normalised already

@@ -67,6 +67,8 @@ struct GeneratorSpec {
   int size = 64;     // cube edge in voxels
   uint32_t seed = 1;
   std::array<double, 3> spacing{1, 1, 1};
+  // A time-varying generator (isTimeGenerator): where in its period, in [0, 1), the volume is.
+  double time = 0;
 };
 
 // Checks done where a scene is read and again before loading; each returns "" when fine,
@@ -109,6 +111,8 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box);
 // whether `name` is one of them.
 const std::string& generatorNames();
 bool isGeneratorName(const std::string& name);
+// Generators whose volume changes with GeneratorSpec::time (a scene gives them `steps`).
+bool isTimeGenerator(const std::string& name);
 Volume generateVolume(const GeneratorSpec& spec);
 Volume generateVolume(const GeneratorSpec& spec, const VoxelBox& box);
 // "" if box is a non-empty box inside a volume of `whole` dims, else what is wrong.

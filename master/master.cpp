@@ -260,6 +260,8 @@ class Master {
     p.input_seq = spec.input_seq;
     p.input_first = spec.input_first;
     p.interactive = spec.interactive;
+    p.step = (uint32_t)spec.step;
+    p.next_step = (uint32_t)spec.next_step;
     plan_->fill(p, w);
     p.display_endpoint = opt_.endpoints.display();
     std::set<uint32_t> renderers = proto::renderersWithWork(p), compositors;

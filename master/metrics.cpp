@@ -126,6 +126,18 @@ nlohmann::json Metrics::summarize(const std::vector<proto::StageStats>& renderer
     chunks = std::max(chunks, (double)s.chunks_total);
     triangles += (double)s.triangles;
   }
+  // A time series: each renderer's step cache (cumulative hits and misses, bytes read and
+  // prefetch time since its last frame).
+  uint64_t hits = 0, misses = 0, read = 0;
+  double prefetch = 0;
+  for (const auto& s : renderers)
+    hits += s.step_hits, misses += s.step_misses, read += s.bytes_read, prefetch = std::max(prefetch, s.prefetch_ms);
+  if (hits + misses > 0) {
+    j["render_step_hits"] = hits;
+    j["render_step_misses"] = misses;
+    j["render_bytes_read"] = read;
+    j["render_prefetch_ms_max"] = prefetch;
+  }
   if (chunks > 0) {  // only geometry frames have them
     j["overlap_factor"] = drawn / chunks;
     j["triangles"] = triangles;
@@ -143,6 +155,7 @@ void Metrics::write(uint64_t frame, Frame& f) {
   auto j = summarize(f.r, f.c, f.d, f.latency_ms);
   j["frame"] = frame;
   j["epoch"] = f.epoch;
+  j["step"] = f.spec.step;
   j["master_dropped"] = f.master_dropped;
   j["reassignments"] = reassignments_;
   j["reissued_frames"] = reissued_;

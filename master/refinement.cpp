@@ -28,6 +28,8 @@ FrameSpec orbitFrame(const Scene& scene, uint64_t frame) {
   s.quality = scene.quality;
   s.width = s.full_width = scene.width;
   s.height = s.full_height = scene.height;
+  s.step = scene.time.stepAt(frame, scene.series.steps);
+  s.next_step = scene.time.stepAt(frame + 1, scene.series.steps);
   return s;
 }
 

@@ -27,6 +27,7 @@ struct FrameSpec {
   uint64_t input_first = 0;  // the first Input since the last issued frame that changed the view (0: none)
   bool after_cancel = false;  // issued behind a cancelled full frame: its time says nothing of its rung
   double reduction = 1;    // interactive frames: the image reduction factor
+  int step = 0, next_step = 0;  // the volume's time step, and the one expected next (renderers prefetch it)
   bool operator==(const FrameSpec&) const = default;
 };
 

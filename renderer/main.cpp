@@ -11,6 +11,10 @@ int main(int argc, char** argv) {
   renderer::StageOptions opt;
   addStageArgs(app, args, "scene file (default: the built-in scene)");
   app.add_option("--threads", opt.threads, "ray-casting threads (0: all cores)")->envname("TESSERA_THREADS");
+  app.add_option("--cache-mb", opt.cache_mb, "time series: MiB of voxels held for steps besides the one rendered")
+      ->envname("TESSERA_CACHE_MB")
+      ->check(CLI::Range(0, 1 << 20))
+      ->capture_default_str();
   std::string backend = "cpu";
   app.add_option("--backend", backend, "volume backend: cpu (SIMD ray caster) | osmesa (GLSL on llvmpipe)")
       ->envname("TESSERA_BACKEND")

@@ -13,6 +13,7 @@
 #include "common/wire/protocol.h"
 #include "common/net/stage_link.h"
 #include "common/net/transport.h"
+#include "renderer/step_cache.h"
 #include "renderer/tile_render.h"
 
 namespace tessera::renderer {
@@ -27,6 +28,7 @@ struct RenderKey {
   Quality quality;
   int width = 0, height = 0;
   BrickBox brick;
+  int step = 0;
   bool operator==(const RenderKey&) const = default;
 };
 
@@ -38,8 +40,9 @@ class Stage {
       tiles_ = std::make_unique<TileRenderer>(opt.scene);
     } else {
       // Before joining, so a bad file is said at once; every window loaded later is
-      // normalised with the whole file's range without scanning it again.
+      // normalised with the whole file's range (a series: step 0's) without scanning it again.
       fixVolumeRange(scene_);
+      steps_ = std::make_unique<StepCache>(scene_, opt.backend, (uint64_t)opt.cache_mb << 20);
     }
   }
 
@@ -67,6 +70,7 @@ class Stage {
       if (link_.masterLost()) return 1;
       std::erase_if(queued, [&](const auto& p) { return p.epoch != epoch_ || p.frame < first_wanted_; });
       if (queued.empty()) continue;
+      if (steps_) steps_->prefetch(stepsAfter(queued));
       renderFrameOrLog(queued.front());
       queued.pop_front();
     }
@@ -94,9 +98,19 @@ class Stage {
     renderBricks(p, *p.sortLast(), st);
   }
 
+  // The steps the frames after the first will show, soonest first, then the one the master
+  // expects after the last: what to prefetch.
+  static std::vector<int> stepsAfter(const std::deque<proto::FrameParams>& queued) {
+    std::vector<int> steps;
+    for (const auto& p : queued)
+      for (int s : {(int)p.step, (int)p.next_step})
+        if (s != (int)queued.front().step && std::find(steps.begin(), steps.end(), s) == steps.end()) steps.push_back(s);
+    return steps;
+  }
+
   void renderBricks(const proto::FrameParams& p, const proto::SortLastWork& work, proto::StageStats& st) {
     if (tiles_) return drops_.drop(~0u, "sort-last FrameParams for a geometry scene");
-    holdBricks(p.frame, work, st);
+    if (!holdBricks(p, work, st)) return;
     for (uint32_t b = 0; b < work.bricks.size(); ++b) {
       if (work.bricks[b].renderer != link_.rank()) continue;
       auto t0 = Clock::now();
@@ -132,10 +146,11 @@ class Stage {
     link_.report(proto::encode(st, link_.rank()));
   }
 
-  // Loads the voxels of this renderer's bricks and their ghost layer unless the window held
-  // has them all.
-  // Memory follows the bricks, not the volume; a move of bricks costs one load, in the stats.
-  void holdBricks(uint64_t frame, const proto::SortLastWork& work, proto::StageStats& st) {
+  // Holds the voxels of this renderer's bricks and their ghost layer for the frame's step:
+  // from the step cache, or loaded now. Memory follows the bricks, not the volume; a move
+  // of bricks or a step not prefetched costs a load, in the stats. False: nothing to render
+  // with (the step could not be read and no earlier step is held).
+  bool holdBricks(const proto::FrameParams& p, const proto::SortLastWork& work, proto::StageStats& st) {
     const auto whole = volumeDims(scene_);
     // Trilinear sampling near a brick face reads one voxel beyond it; its gradient, one more.
     const int ghost = scene_.shading.on ? 2 : 1;
@@ -147,23 +162,34 @@ class Stage {
         need.hi[a] = std::max(need.hi[a], std::min(whole[a], b.brick.hi[a] + ghost));
       }
     }
-    if (need.lo[0] >= need.hi[0]) return;  // no brick of ours this frame
-    if (volume_) {
+    if (need.lo[0] >= need.hi[0]) return true;  // no brick of ours this frame
+    // Same window as before: keep the window held for it (bricks within the held window
+    // after a neighbour's loss are rendered from it).
+    if (held_.volume) {
       bool inside = true;
       for (int a = 0; a < 3; ++a)
-        inside = inside && need.lo[a] >= volume_->origin[a] && need.hi[a] <= volume_->origin[a] + volume_->dims[a];
-      if (inside) return;
+        inside = inside && need.lo[a] >= held_.volume->origin[a] && need.hi[a] <= held_.volume->origin[a] + held_.volume->dims[a];
+      if (inside) need = VoxelBox{held_.volume->origin, {held_.volume->origin[0] + held_.volume->dims[0],
+                                                         held_.volume->origin[1] + held_.volume->dims[1],
+                                                         held_.volume->origin[2] + held_.volume->dims[2]}};
+      else held_ = {};  // before loading the next: peak memory is one window
     }
-    const auto t0 = Clock::now();
-    caster_.reset();
-    cache_.clear();
-    volume_.reset();  // before loading the next: peak memory is one window
-    volume_ = std::make_shared<Volume>(loadVolume(scene_, need));
-    caster_ = makeVolumeBackend(opt_.backend, volume_, scene_.tf, scene_.shading, scene_.light);
-    st.load_ms = msSince(t0);
-    spdlog::info("frame={} loaded voxels [{}, {}, {}] .. [{}, {}, {}) ({:.1f} MiB) in {:.0f} ms", frame,
-                 need.lo[0], need.lo[1], need.lo[2], need.hi[0], need.hi[1], need.hi[2],
-                 (double)volume_->voxelCount() * sizeof(float) / (1 << 20), st.load_ms);
+    held_ = steps_->get(need, (int)p.step);
+    const StepCacheStats cs = steps_->take();
+    st.load_ms = cs.load_ms;
+    if (scene_.series.steps > 1) {
+      st.step = (uint32_t)held_.step;
+      st.step_hits = cs.hits;
+      st.step_misses = cs.misses;
+      st.bytes_read = cs.bytes_read;
+      st.prefetch_ms = cs.prefetch_ms;
+    }
+    if (!held_.volume) throw std::runtime_error("step " + std::to_string(p.step) + " could not be read and no other step is held");
+    if (cs.load_ms > 0)
+      spdlog::info("frame={} step={} loaded voxels [{}, {}, {}] .. [{}, {}, {}) ({:.1f} MiB) in {:.0f} ms", p.frame, p.step,
+                   need.lo[0], need.lo[1], need.lo[2], need.hi[0], need.hi[1], need.hi[2],
+                   (double)held_.volume->voxelCount() * sizeof(float) / (1 << 20), cs.load_ms);
+    return true;
   }
 
   struct Cached {
@@ -173,7 +199,7 @@ class Stage {
   };
 
   const Cached& render(const proto::FrameParams& p, const BrickBox& brick, proto::StageStats& st) {
-    RenderKey key{p.camera, p.quality, p.width, p.height, brick};
+    RenderKey key{p.camera, p.quality, p.width, p.height, brick, held_.step};
     for (auto& c : cache_)
       if (c.key == key) return ++st.images_reused, c;  // unchanged inputs: reuse, do not render again
     ++st.images_made;
@@ -182,9 +208,9 @@ class Stage {
     ro.threads = opt_.threads;
     Cached c{key, {}, {}};
     Brick local = brick;  // in the held window's voxel indices
-    for (int a = 0; a < 3; ++a) local.lo[a] -= volume_->origin[a], local.hi[a] -= volume_->origin[a];
+    for (int a = 0; a < 3; ++a) local.lo[a] -= held_.volume->origin[a], local.hi[a] -= held_.volume->origin[a];
     // No RenderStats: the farm needs no sample counts, and counting skipped samples costs.
-    c.image = caster_->render(p.camera, p.width, p.height, local, ro, nullptr, &c.active);
+    c.image = held_.caster->render(p.camera, p.width, p.height, local, ro, nullptr, &c.active);
     if (cache_.size() >= 2) cache_.pop_front();  // a renderer may own two bricks after a failure
     cache_.push_back(std::move(c));
     return cache_.back();
@@ -224,8 +250,8 @@ class Stage {
   zmq::context_t& ctx_;
   StageLink link_;
   Scene scene_;                      // the scene, with the data's range fixed once
-  std::shared_ptr<Volume> volume_;   // the window of this renderer's bricks
-  std::unique_ptr<VolumeBackend> caster_;  // volume scenes (sort-last)
+  std::unique_ptr<StepCache> steps_;  // volume scenes (sort-last): the windows of this renderer's bricks, per step
+  HeldStep held_;                     // the window and caster of the frame being rendered
   std::unique_ptr<TileRenderer> tiles_;   // geometry scenes (sort-first)
   std::deque<Cached> cache_;
   std::map<std::string, zmq::socket_t> pushes_;

@@ -17,6 +17,7 @@ struct StageOptions {
   Endpoints endpoints;
   int threads = 0;  // ray-casting threads; 0 = all cores
   BackendKind backend = BackendKind::Cpu;  // volume scenes
+  int cache_mb = 1024;  // time series: voxels held for steps besides the one rendered (step_cache.h)
 };
 
 // Returns the exit code: 0 on Shutdown or stop, 1 if it could not join the farm.

@@ -11,7 +11,7 @@
 
 namespace tessera {
 
-RawVolumeSpec readNiftiHeader(const std::string& path) {
+RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps) {
   auto fail = [&](const std::string& what) -> RawVolumeSpec { throw std::runtime_error(path + ": " + what); };
   nifti_set_debug_level(0);  // its messages go to stderr; ours name the file and field
   std::unique_ptr<nifti_image, void (*)(nifti_image*)> nim(nifti_image_read(path.c_str(), 0), nifti_image_free);
@@ -24,15 +24,20 @@ RawVolumeSpec readNiftiHeader(const std::string& path) {
     if (n[a] < 1 || n[a] > 65536) fail("dim[" + std::to_string(a + 1) + "] = " + std::to_string(n[a]) + ", must be in 1..65536");
     s.dims[a] = (int)n[a];
   }
-  // dim[4..7] beyond dim[0] are unset (0 or 1): only those within dim[0] count.
-  int64_t more = 1;
+  // dim[4..7] beyond dim[0] are unset (0 or 1): only those within dim[0] count. dim[4] is
+  // time; dim[5..7] (vector components and more) are not rendered.
+  int64_t more = 1, steps = 1;
   std::string extra;
   for (int i = 4; i <= 7; ++i) {
     const int64_t d = i <= nim->dim[0] ? std::max<int64_t>(1, nim->dim[i]) : 1;
-    more *= d;
+    (i == 4 && time_steps ? steps : more) *= d;
     extra += (i > 4 ? ", " : "") + std::to_string(d);
   }
-  if (more != 1) fail("holds " + std::to_string(more) + " volumes (dim[4..7] = " + extra + "); Tessera renders one 3-D volume");
+  if (more != 1)
+    fail("holds " + std::to_string(more) + " volumes (dim[4..7] = " + extra + "); Tessera renders one 3-D volume" +
+         (time_steps ? " per time step (dim[4])" : ""));
+  if (steps > 1000000) fail("dim[4] = " + std::to_string(steps) + " time steps, must be in 1..1000000");
+  if (time_steps) *time_steps = (int)steps;
   switch (nim->datatype) {
     case DT_UINT8: s.type = VoxelType::UInt8; break;
     case DT_INT8: s.type = VoxelType::Int8; break;

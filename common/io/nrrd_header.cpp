@@ -60,7 +60,7 @@ bool readSpacing(std::map<std::string, std::string>& f, std::array<double, 3>& s
 
 }  // namespace
 
-RawVolumeSpec readNrrdHeader(const std::string& path) {
+RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps) {
   auto fail = [&](const std::string& what) -> RawVolumeSpec { throw std::runtime_error(path + ": " + what); };
   std::ifstream in(path, std::ios::binary);
   if (!in) return fail("cannot open NRRD file");
@@ -86,12 +86,27 @@ RawVolumeSpec readNrrdHeader(const std::string& path) {
   };
   if (auto t = nrrdType(need("type"))) s.type = *t;
   else fail("type '" + f["type"] + "' is not a scalar type Tessera renders");
-  if (need("dimension") != "3") fail("dimension " + f["dimension"] + ": Tessera renders 3-D volumes (dimension: 3)");
+  const std::string dimension = need("dimension");
+  if (dimension != "3" && !(dimension == "4" && time_steps))
+    fail("dimension " + dimension + ": Tessera renders 3-D volumes (dimension: 3" +
+         (time_steps ? ", or 4 with time as the last axis)" : ")"));
+  const int axes = dimension == "4" ? 4 : 3;
   std::istringstream sizes(need("sizes"));
-  for (int a = 0; a < 3; ++a) {
+  long long steps = 1;
+  for (int a = 0; a < axes; ++a) {
     long long n = 0;
-    if (!(sizes >> n) || n < 1 || n > 65536) fail("sizes '" + f["sizes"] + "': expected 3 sizes in 1..65536");
-    s.dims[a] = (int)n;
+    if (!(sizes >> n) || n < 1 || n > (a < 3 ? 65536 : 1000000))
+      fail("sizes '" + f["sizes"] + "': expected " + dimension + " sizes, in 1..65536" + (a < 3 ? "" : " (time: 1..1000000)"));
+    if (a < 3) s.dims[a] = (int)n;
+    else steps = n;
+  }
+  if (time_steps) *time_steps = (int)steps;
+  if (axes == 4 && f.count("kinds")) {  // the time axis must be the last: RGB or vector data are not volumes
+    std::istringstream kinds(f["kinds"]);
+    std::string k;
+    for (int a = 0; a < 3 && kinds >> k; ++a)
+      if (k != "domain" && k != "space")
+        fail("kinds '" + f["kinds"] + "': axis " + std::to_string(a) + " is '" + k + "'; a 4-D volume needs 3 space axes then time");
   }
   if (!readSpacing(f, s.spacing)) fail("spacing '" + f["spacings"] + f["space directions"] + "'");
   if (std::string p = spacingProblem(s.spacing); !p.empty()) fail("spacing: " + p);
@@ -117,7 +132,7 @@ RawVolumeSpec readNrrdHeader(const std::string& path) {
   if (skip == -1 && !s.gzip) {  // the data is the file's last bytes
     std::error_code ec;
     const uintmax_t size = std::filesystem::file_size(s.samples(), ec);
-    const uintmax_t bytes = (uintmax_t)s.dims[0] * s.dims[1] * s.dims[2] * voxelTypeSize(s.type);
+    const uintmax_t bytes = (uintmax_t)s.dims[0] * s.dims[1] * s.dims[2] * voxelTypeSize(s.type) * steps;
     if (ec || size < bytes) fail("byte skip -1 but the data file is shorter than the data");
     s.offset = size - bytes;
   } else if (skip < 0) {

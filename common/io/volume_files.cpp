@@ -5,8 +5,8 @@
 
 namespace tessera {
 
-RawVolumeSpec readNiftiHeader(const std::string& path);  // nifti_header.cpp
-RawVolumeSpec readNrrdHeader(const std::string& path);   // nrrd_header.cpp
+RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps);  // nifti_header.cpp
+RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps);   // nrrd_header.cpp
 
 VolumeFormat volumeFormatOf(const std::string& path) {
   std::string p = path;
@@ -18,8 +18,9 @@ VolumeFormat volumeFormatOf(const std::string& path) {
   return VolumeFormat::Raw;
 }
 
-RawVolumeSpec readVolumeHeader(const std::string& path) {
-  return volumeFormatOf(path) == VolumeFormat::Nifti ? readNiftiHeader(path) : readNrrdHeader(path);
+RawVolumeSpec readVolumeHeader(const std::string& path, int* time_steps) {
+  return volumeFormatOf(path) == VolumeFormat::Nifti ? readNiftiHeader(path, time_steps)
+                                                     : readNrrdHeader(path, time_steps);
 }
 
 }  // namespace tessera

@@ -16,8 +16,10 @@ namespace tessera {
 VolumeFormat volumeFormatOf(const std::string& path);
 // dims, type, spacing, byte order, data file, offset and compression from the header.
 // Throws std::runtime_error naming the file, the field and the value when the header is
-// unreadable, inconsistent or describes what Tessera does not render (more than one
-// volume in time, complex or RGB samples).
-RawVolumeSpec readVolumeHeader(const std::string& path);
+// unreadable, inconsistent or describes what Tessera does not render (complex or RGB
+// samples; more than one volume unless `time_steps` is given). With `time_steps`, a 4-D file
+// (NIfTI dim[4], NRRD's fourth axis) is a time series: its length goes there (1 for 3-D),
+// and step t's samples follow step t-1's.
+RawVolumeSpec readVolumeHeader(const std::string& path, int* time_steps = nullptr);
 
 }  // namespace tessera

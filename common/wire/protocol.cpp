@@ -290,6 +290,11 @@ std::vector<std::byte> encode(const StageStats& m, uint32_t sender) {
     w.u32(m.images_made);
     w.u32(m.images_reused);
     w.f64(m.load_ms);
+    w.u32(m.step);
+    w.u32(m.step_hits);
+    w.u32(m.step_misses);
+    w.u64(m.bytes_read);
+    w.f64(m.prefetch_ms);
   });
 }
 Result<StageStats> decodeStageStats(std::span<const std::byte> msg) {
@@ -314,6 +319,11 @@ Result<StageStats> decodeStageStats(std::span<const std::byte> msg) {
     m.images_made = r.u32("images_made");
     m.images_reused = r.u32("images_reused");
     m.load_ms = detail::readFinite(r, "load_ms");
+    m.step = r.u32("step");
+    m.step_hits = r.u32("step_hits");
+    m.step_misses = r.u32("step_misses");
+    m.bytes_read = r.u64("bytes_read");
+    m.prefetch_ms = detail::readFinite(r, "prefetch_ms");
   });
 }
 

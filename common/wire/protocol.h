@@ -41,8 +41,9 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 4;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
-                                         // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms)
+inline constexpr uint16_t kVersion = 5;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
+                                         // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms);
+                                         // 5: time steps (FrameParams step, Stats step cache)
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -152,6 +153,7 @@ struct CompositorRegion {
 //   input_seq                  u64      8
 //   input_first                u64      8     <= input_seq
 //   interactive                bool     1
+//   step, next_step            u32 x2   8     each < 1000000
 //   regions                    u32      4     count <= 65536, then per region (>= 24 bytes):
 //   regions.compositor         u32      4
 //   regions.region             rect     16    0 <= x, y, w, h; inside width x height
@@ -199,6 +201,8 @@ struct FrameParams {                                                       // ma
   // the frame is not a response to input): the display measures input-to-present from it.
   uint64_t input_first = 0;
   bool interactive = false;                  // a reduced frame while the camera moves (level of detail)
+  uint32_t step = 0;                         // the time step of the volume shown (0 for a static volume)
+  uint32_t next_step = 0;                    // the step the master expects to show next: renderers prefetch it
   std::variant<SortLastWork, SortFirstWork> work;  // the mode: each stage dispatches on it once
   FrameMode mode() const { return work.index() == 0 ? FrameMode::SortLast : FrameMode::SortFirst; }
   const SortLastWork* sortLast() const { return std::get_if<SortLastWork>(&work); }    // null if sort-first
@@ -270,6 +274,9 @@ struct Framebuffer {                           // renderer -> compositor (router
 //   chunks_drawn, chunks_total, triangles        u64 x3  24
 //   images_made, images_reused                   u32 x2  8
 //   load_ms                                      f64     8   finite
+//   step, step_hits, step_misses                 u32 x3  12
+//   bytes_read                                   u64     8
+//   prefetch_ms                                  f64     8   finite
 struct StageStats {                            // renderer/compositor -> master, per frame
   Role role = Role::Renderer; uint32_t rank = 0; uint64_t frame = 0;
   // What the stage sends: its output before (raw) and after (encoded) the codec, the time
@@ -285,7 +292,13 @@ struct StageStats {                            // renderer/compositor -> master,
   // Renderers: images (bricks or tiles) rendered this frame, and images reused from an
   // earlier frame because nothing that shapes them (camera, quality, size, brick) changed.
   uint32_t images_made = 0, images_reused = 0;
-  double load_ms = 0;  // renderers: reading (or generating) the voxels of newly assigned bricks
+  double load_ms = 0;  // renderers: reading (or generating) voxels on the render path (new bricks, a step not cached)
+  // Renderers of a time series: the step shown, whether its voxels were in the step cache
+  // (hits, misses: cumulative), the file bytes read since the last Stats (loads and
+  // prefetches) and the prefetch thread's time since then.
+  uint32_t step = 0, step_hits = 0, step_misses = 0;
+  uint64_t bytes_read = 0;
+  double prefetch_ms = 0;
   bool operator==(const StageStats&) const = default;
 };
 

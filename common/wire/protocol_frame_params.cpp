@@ -1,6 +1,7 @@
 // FrameParams on the wire: everything every stage needs to do its part of one frame.
 // The decoder checks the cross-field invariants (order is a permutation, regions inside
 // the image), so a stage can index with the decoded values without re-checking.
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -157,6 +158,8 @@ std::vector<std::byte> encode(const FrameParams& m, uint32_t sender) {
     w.u64(m.input_seq);
     w.u64(m.input_first);
     w.boolean(m.interactive);
+    w.u32(m.step);
+    w.u32(m.next_step);
     w.u32(static_cast<uint32_t>(m.regions.size()));
     for (const CompositorRegion& c : m.regions) {
       w.u32(c.compositor);
@@ -222,6 +225,10 @@ Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
         if (r.ok() && m.input_first > m.input_seq)
           r.fail("input_first " + std::to_string(m.input_first) + " after input_seq " + std::to_string(m.input_seq));
         m.interactive = r.boolean("interactive");
+        m.step = r.u32("step");
+        m.next_step = r.u32("next_step");
+        if (r.ok() && std::max(m.step, m.next_step) >= 1000000)
+          r.fail("step " + std::to_string(m.step) + " or next_step " + std::to_string(m.next_step) + " >= 1000000");
         readRegions(r, m);
         m.display_endpoint = r.str("display_endpoint");
         const uint8_t mode = r.u8("mode");

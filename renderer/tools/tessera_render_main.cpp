@@ -20,6 +20,7 @@
 #include "common/cpu.h"
 #include "common/io/image_io.h"
 #include "common/scene.h"
+#include "common/volume_summary.h"
 #include "renderer/volume/backend.h"
 #include "renderer/tools/mesh_render_tool.h"
 
@@ -57,7 +58,7 @@ ImageF renderScene(const renderer::VolumeBackend& rc, const Volume& vol, const B
 struct Args {
   std::string scene_path, out = "out.png", quality_name, size, raw, pam, backend = "cpu";
   std::vector<double> background;
-  int bricks = 1, frame = 0, threads = 0, repeat = 1;
+  int bricks = 1, frame = 0, threads = 0, repeat = 1, step = -1;
   bool print_stats = false, compare_ref = false, no_skip = false;
   // Mesh scenes (OSMesa): tiles, anti-aliasing overrides and the anti-aliasing sweep.
   std::string tiles = "1x1", aa;
@@ -76,7 +77,9 @@ void addOptions(CLI::App& app, Args& a) {
   });
   app.add_option("--quality", a.quality_name, "reference | default | fast (default: the scene's)");
   app.add_option("--bricks", a.bricks, "split into N bricks and composite them like the farm")->check(CLI::Range(1, 4096));
-  app.add_option("--frame", a.frame, "orbit frame K")->check(CLI::NonNegativeNumber);
+  app.add_option("--frame", a.frame, "orbit frame K (and the time step the scene's playback shows in it)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--step", a.step, "time step N of a series (default: the step of --frame)")->check(CLI::NonNegativeNumber);
   app.add_option("--image", a.size, "image size WxH (default: the scene's)");
   app.add_option("--backend", a.backend, "volume backend: cpu (ray caster) | osmesa (GLSL on llvmpipe)")
       ->check(CLI::IsMember({"cpu", "osmesa"}))
@@ -107,7 +110,11 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   opt.threads = a.threads;
   const Camera cam = scene.orbit.at(scene.camera, a.frame);
 
-  auto vol = std::make_shared<const Volume>(loadVolume(scene));
+  // A series is normalised with step 0's range (as the farm does), whatever step is shown.
+  Scene fixed = scene;
+  if (scene.series.steps > 1) fixVolumeRange(fixed);
+  const int step = a.step >= 0 ? a.step : scene.time.stepAt(a.frame, scene.series.steps);
+  auto vol = std::make_shared<const Volume>(loadVolume(fixed, VoxelBox{{0, 0, 0}, volumeDims(scene)}, step));
   if (std::string why = rangeProblem(*vol); !why.empty()) std::fprintf(stderr, "tessera-render: warning: %s\n", why.c_str());
   auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, scene.tf, scene.shading, scene.light);
   // Split once, outside the timed renders, as the farm's master does once per run (no tree:
@@ -127,8 +134,8 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   // (4% of a default frame), and the times are those of a render as the farm runs it.
   if (a.print_stats) renderScene(*chosen, *vol, tree, cam, w, h, opt, &stats);
   writePng(a.out, img, bg);
-  std::printf("wrote %s (%dx%d, quality %s, %d brick%s, frame %d, backend %s)\n", a.out.c_str(), w, h,
-              qualityName(opt.quality.name), a.bricks, a.bricks == 1 ? "" : "s", a.frame, a.backend.c_str());
+  std::printf("wrote %s (%dx%d, quality %s, %d brick%s, frame %d, step %d, backend %s)\n", a.out.c_str(), w, h,
+              qualityName(opt.quality.name), a.bricks, a.bricks == 1 ? "" : "s", a.frame, step, a.backend.c_str());
   if (!a.raw.empty()) {
     writeRawF32(a.raw, img);
     std::printf("wrote %s\n", a.raw.c_str());

@@ -27,6 +27,8 @@ inline FrameParams sampleParams() {
   p.input_seq = 77;
   p.input_first = 70;
   p.interactive = true;
+  p.step = 12345;
+  p.next_step = 12344;
   p.work = SortLastWork{{{0, {{0, 0, 0}, {128, 256, 256}}}, {1, {{128, 0, 0}, {256, 256, 256}}}, {1, {{0, 0, 0}, {1, 1, 1}}}},
                         {2, 0, 1}};
   return p;

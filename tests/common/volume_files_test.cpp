@@ -154,13 +154,16 @@ std::string errorOf(const std::string& yaml, const std::string& dir) {
 
 TEST(VolumeFiles, BadHeadersAreNamedByFileAndField) {
   TempDir t("bad-headers");
-  const int64_t dims[8] = {4, 4, 4, 4, 3, 1, 1, 1};
+  // dim[4] is time (a series: time_series_test.cpp); dim[5] (vector components) is not rendered.
+  const int64_t dims[8] = {5, 4, 4, 4, 3, 2, 1, 1};
   nifti_image* nim = nifti_make_new_nim(dims, DT_UINT8, 1);
   nifti_set_filenames(nim, t.file("t.nii").c_str(), 0, 1);
   nifti_image_write(nim);
   nifti_image_free(nim);
-  EXPECT_NE(errorOf("volume: {file: t.nii}\n", t.path.string()).find("t.nii: holds 3 volumes (dim[4..7] = 3, 1, 1, 1)"),
-            std::string::npos);
+  EXPECT_NE(errorOf("volume: {file: t.nii}\n", t.path.string())
+                .find("t.nii: holds 2 volumes (dim[4..7] = 3, 2, 1, 1); Tessera renders one 3-D volume per time step (dim[4])"),
+            std::string::npos)
+      << errorOf("volume: {file: t.nii}\n", t.path.string());
   writeNifti(t.file("h.nii"));
   EXPECT_NE(errorOf("volume: {file: h.nii, dims: [13, 11, 7]}\n", t.path.string())
                 .find("volume.dims: comes from the header of"),

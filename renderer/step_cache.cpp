@@ -1,0 +1,186 @@
+#include "renderer/step_cache.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "common/net/log.h"
+
+namespace tessera::renderer {
+namespace {
+
+double msSince(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+uint64_t floorMod(long long a, long long m) { return (uint64_t)(((a % m) + m) % m); }
+
+}  // namespace
+
+StepCache::StepCache(const Scene& scene, BackendKind backend, uint64_t budget_bytes)
+    : scene_(scene), backend_(backend), budget_(budget_bytes) {
+  // Only a series prefetches; the cpu backend's hierarchy is built there too (osmesa's GL
+  // objects belong to the render thread's context: built on first use there).
+  if (scene_.series.steps > 1) thread_ = std::thread([this] { prefetchLoop(); });
+}
+
+StepCache::~StepCache() {
+  {
+    std::lock_guard lock(mu_);
+    stop_ = true;
+  }
+  changed_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+uint64_t StepCache::entryBytes() const {
+  uint64_t voxels = 1;
+  for (int a = 0; a < 3; ++a) voxels *= (uint64_t)(box_.hi[a] - box_.lo[a]);
+  return voxels * (sizeof(float) + (scene_.shading.on ? 8 : 0));  // values, and gradients when shading
+}
+
+uint64_t StepCache::distance(int step) const {
+  if (current_ < 0) return 0;
+  return floorMod((long long)(step - current_) * direction_, std::max(1, scene_.series.steps));
+}
+
+bool StepCache::makeRoom(uint64_t need, uint64_t keep_within) {
+  auto held = [&] {
+    uint64_t b = 0;
+    for (const auto& [s, e] : held_) b += e.bytes;
+    return b;
+  };
+  while (held() + need > budget_) {
+    auto far = held_.end();
+    for (auto it = held_.begin(); it != held_.end(); ++it)
+      if (it->first != current_ && distance(it->first) > keep_within &&
+          (far == held_.end() || distance(it->first) > distance(far->first)))
+        far = it;
+    if (far == held_.end()) return false;
+    held_.erase(far);
+  }
+  return true;
+}
+
+StepCache::Entry StepCache::load(int step, double& ms) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Entry e;
+  auto v = std::make_shared<Volume>(loadVolume(scene_, box_, step));
+  if (step > 0 && (v->data_range[0] < v->mapped_range[0] || v->data_range[1] > v->mapped_range[1]))
+    spdlog::warn("step {}: values {} .. {} lie outside the range [{}, {}] fixed for the series (step 0's, or "
+                 "volume.range): they show as its ends; give volume.range to cover every step",
+                 step, v->data_range[0], v->data_range[1], v->mapped_range[0], v->mapped_range[1]);
+  e.bytes = (uint64_t)v->voxelCount() * (sizeof(float) + (scene_.shading.on ? 8 : 0));
+  const auto* raw = std::get_if<RawVolumeSpec>(&scene_.volume);
+  e.file_bytes = raw ? (uint64_t)v->voxelCount() * voxelTypeSize(raw->type) : 0;  // generated: none
+  e.volume = v;
+  if (backend_ == BackendKind::Cpu) e.caster = makeVolumeBackend(backend_, v, scene_.tf, scene_.shading, scene_.light);
+  ms = msSince(t0);
+  return e;
+}
+
+HeldStep StepCache::get(const VoxelBox& box, int step) {
+  std::unique_lock lock(mu_);
+  if (!(box == box_)) {
+    held_.clear();  // the bricks moved: every held step is of the old window
+    box_ = box;
+    ++generation_;
+  }
+  direction_ = current_ >= 0 && step < current_ ? -1 : current_ >= 0 && step > current_ ? 1 : direction_;
+  current_ = step;
+  changed_.wait(lock, [&] { return prefetching_ != step; });  // the prefetch thread is on it: wait, not load twice
+  auto it = held_.find(step);
+  if (it != held_.end()) {
+    if (scene_.series.steps > 1) ++stats_.hits;
+  } else {
+    if (scene_.series.steps > 1) ++stats_.misses;
+    // Room first (nothing held but this step if need be): memory stays within the budget
+    // plus the step being loaded.
+    makeRoom(budget_ >= entryBytes() ? entryBytes() : budget_, 0);
+    loading_ = step;
+    lock.unlock();
+    Entry e;
+    double ms = 0;
+    try {
+      e = load(step, ms);
+    } catch (const std::exception& ex) {
+      lock.lock();
+      loading_ = -1;
+      ++stats_.bad_steps;
+      spdlog::error("step {}: {}; showing step {} instead (bad steps: {})", step, ex.what(), last_good_,
+                    stats_.bad_steps);
+      auto good = held_.find(last_good_);
+      if (good == held_.end()) return {};
+      return {last_good_, good->second.volume, good->second.caster};
+    }
+    lock.lock();
+    loading_ = -1;
+    stats_.load_ms += ms;
+    stats_.bytes_read += e.file_bytes;
+    it = held_.insert_or_assign(step, std::move(e)).first;
+  }
+  if (!it->second.caster) it->second.caster = makeVolumeBackend(backend_, it->second.volume, scene_.tf, scene_.shading, scene_.light);
+  last_good_ = step;
+  return {step, it->second.volume, it->second.caster};
+}
+
+void StepCache::prefetch(const std::vector<int>& steps) {
+  {
+    std::lock_guard lock(mu_);
+    wanted_ = steps;
+  }
+  changed_.notify_all();
+}
+
+void StepCache::prefetchLoop() {
+  std::unique_lock lock(mu_);
+  while (!stop_) {
+    // The soonest wanted step that is not held, if it fits without evicting a sooner one.
+    int next = -1;
+    for (int s : wanted_) {
+      if (s < 0 || s >= scene_.series.steps || held_.count(s) || s == loading_ || box_.hi[0] <= box_.lo[0]) continue;
+      if (makeRoom(entryBytes(), distance(s))) next = s;
+      break;
+    }
+    if (next < 0) {
+      changed_.wait(lock);
+      continue;
+    }
+    prefetching_ = next;
+    const uint64_t generation = generation_;
+    lock.unlock();
+    Entry e;
+    double ms = 0;
+    bool ok = true;
+    try {
+      e = load(next, ms);
+    } catch (const std::exception&) {
+      ok = false;  // said (and counted) by get() when the step is shown
+    }
+    lock.lock();
+    prefetching_ = -1;
+    stats_.prefetch_ms += ms;
+    if (ok && generation == generation_) {
+      stats_.bytes_read += e.file_bytes;
+      held_.insert_or_assign(next, std::move(e));
+    }
+    std::erase(wanted_, next);  // tried once: a bad step is not read again and again
+    changed_.notify_all();
+  }
+}
+
+StepCacheStats StepCache::take() {
+  std::lock_guard lock(mu_);
+  StepCacheStats s = stats_;
+  stats_.bytes_read = 0;
+  stats_.load_ms = stats_.prefetch_ms = 0;
+  return s;
+}
+
+uint64_t StepCache::heldBytes() const {
+  std::lock_guard lock(mu_);
+  uint64_t b = 0;
+  for (const auto& [s, e] : held_) b += e.bytes;
+  return b;
+}
+
+}  // namespace tessera::renderer

@@ -1,0 +1,87 @@
+// A renderer's voxels over time: the window of its bricks (plus ghost voxels) for each time
+// step it holds, under a byte budget, and one prefetch thread that loads the steps the
+// master will show next off the render path (voxels and, for the cpu backend, the min-max
+// hierarchy). Entries are evicted by playback order: the step farthest ahead of the
+// playhead in the direction of play (the one passed longest ago) goes first.
+// A static volume is a series of one step: it is loaded once and kept.
+#pragma once
+#include <condition_variable>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <variant>
+#include <vector>
+
+#include "common/scene.h"
+#include "renderer/volume/backend.h"
+
+namespace tessera::renderer {
+
+struct HeldStep {
+  int step = -1;
+  std::shared_ptr<const Volume> volume;
+  std::shared_ptr<const VolumeBackend> caster;
+};
+
+// What the cache did since the last take(): for a renderer's Stats.
+struct StepCacheStats {
+  uint32_t hits = 0, misses = 0;  // cumulative
+  uint64_t bytes_read = 0;        // file bytes read (loads and prefetches) since the last take
+  double load_ms = 0;             // on the render path (misses) since the last take
+  double prefetch_ms = 0;         // on the prefetch thread since the last take
+  uint64_t bad_steps = 0;         // steps that could not be read (cumulative)
+};
+
+class StepCache {
+ public:
+  // `budget_bytes`: voxels held (4 bytes each) at most, besides the step being rendered.
+  StepCache(const Scene& scene, BackendKind backend, uint64_t budget_bytes);
+  ~StepCache();
+  StepCache(const StepCache&) = delete;
+  StepCache& operator=(const StepCache&) = delete;
+
+  // Step `step` of the window `box`: held, or loaded now (a miss). A step that cannot be
+  // read is logged and counted, and the last good step is returned instead (nullptr volume
+  // when there is none: the caller fails the frame). A new box drops every held step.
+  HeldStep get(const VoxelBox& box, int step);
+  // The steps the master will show next, soonest first: the prefetch thread loads those not
+  // held, as the budget allows, and forgets earlier wishes (steps playback has passed).
+  void prefetch(const std::vector<int>& steps);
+  StepCacheStats take();
+  // Voxel bytes held now (tests: the budget holds).
+  uint64_t heldBytes() const;
+
+ private:
+  struct Entry {
+    std::shared_ptr<const Volume> volume;
+    std::shared_ptr<const VolumeBackend> caster;
+    uint64_t bytes = 0;       // held in memory
+    uint64_t file_bytes = 0;  // read from the file for it
+  };
+  void prefetchLoop();
+  // Loads step `step` of box_ (unlocked while reading); throws what loadVolume throws.
+  Entry load(int step, double& ms);
+  // Frees held steps farther along playback than `keep_within` (and never `current_`) until
+  // `need` more bytes fit the budget; false if they still do not.
+  bool makeRoom(uint64_t need, uint64_t keep_within);
+  uint64_t distance(int step) const;  // steps from the playhead to `step` in the direction of play
+  uint64_t entryBytes() const;
+
+  const Scene& scene_;
+  BackendKind backend_;
+  uint64_t budget_;
+  mutable std::mutex mu_;
+  std::condition_variable changed_;
+  VoxelBox box_{};
+  uint64_t generation_ = 0;  // bumped with box_: a load of an old box is dropped
+  std::map<int, Entry> held_;
+  int current_ = -1, direction_ = 1, last_good_ = -1;
+  int loading_ = -1, prefetching_ = -1;  // the step being read by get() and by the prefetch thread
+  std::vector<int> wanted_;
+  StepCacheStats stats_;
+  bool stop_ = false;
+  std::thread thread_;  // last: started once everything above is ready
+};
+
+}  // namespace tessera::renderer

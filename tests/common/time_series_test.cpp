@@ -1,0 +1,235 @@
+// Time series: which step a frame shows (loop, once, swing, backwards), series in every form
+// (pattern, list, ParaView .series, 4-D NIfTI written by nifticlib, 4-D NRRD written by teem)
+// loading as the same steps given as raw files, and the bad inputs named by file and field.
+#include <gtest/gtest.h>
+#include <nifti2_io.h>
+#include <teem/nrrd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <vector>
+
+#include "common/scene.h"
+#include "tests/common/temp_dir.h"
+
+namespace tessera {
+namespace {
+
+using test::TempDir;
+
+constexpr int kNx = 9, kNy = 7, kNz = 5, kSteps = 4;
+
+// A different value at every voxel of every step, so a step or axis mix-up shows.
+std::vector<int16_t> stepSamples(int step) {
+  std::vector<int16_t> v((size_t)kNx * kNy * kNz);
+  for (int z = 0; z < kNz; ++z)
+    for (int y = 0; y < kNy; ++y)
+      for (int x = 0; x < kNx; ++x) v[x + kNx * (y + kNy * z)] = (int16_t)(x * 3 - y * 40 + z * 500 + step * 1000 - 900);
+  return v;
+}
+
+std::vector<int16_t> allSteps() {
+  std::vector<int16_t> all;
+  for (int s = 0; s < kSteps; ++s) {
+    auto v = stepSamples(s);
+    all.insert(all.end(), v.begin(), v.end());
+  }
+  return all;
+}
+
+void writeRawSteps(const TempDir& t) {
+  for (int s = 0; s < kSteps; ++s) {
+    auto v = stepSamples(s);
+    t.write(std::string("t") + std::to_string(s) + ".raw", v.data(), v.size() * 2);
+  }
+}
+
+void writeNifti4d(const std::string& path) {
+  const int64_t dims[8] = {4, kNx, kNy, kNz, kSteps, 1, 1, 1};
+  nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 1);
+  ASSERT_NE(nim, nullptr);
+  nim->dx = nim->pixdim[1] = 0.5;
+  const auto v = allSteps();
+  std::memcpy(nim->data, v.data(), v.size() * 2);
+  ASSERT_EQ(nifti_set_filenames(nim, path.c_str(), 0, 1), 0);
+  nifti_image_write(nim);
+  nifti_image_free(nim);
+}
+
+void writeNifti3d(const std::string& path, int step, int nz = kNz) {
+  const int64_t dims[8] = {3, kNx, kNy, nz, 1, 1, 1, 1};
+  nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 1);
+  ASSERT_NE(nim, nullptr);
+  nim->dx = nim->pixdim[1] = 0.5;
+  const auto v = stepSamples(step);
+  std::memcpy(nim->data, v.data(), (size_t)kNx * kNy * nz * 2);
+  ASSERT_EQ(nifti_set_filenames(nim, path.c_str(), 0, 1), 0);
+  nifti_image_write(nim);
+  nifti_image_free(nim);
+}
+
+void writeNrrd4d(const std::string& path) {
+  auto v = allSteps();
+  Nrrd* n = nrrdNew();
+  ASSERT_EQ(nrrdWrap_va(n, v.data(), nrrdTypeShort, 4, (size_t)kNx, (size_t)kNy, (size_t)kNz, (size_t)kSteps), 0);
+  nrrdAxisInfoSet_va(n, nrrdAxisInfoSpacing, 0.5, 1.0, 1.0, AIR_NAN);
+  ASSERT_EQ(nrrdSave(path.c_str(), n, nullptr), 0) << path;
+  nrrdNix(n);  // the data is ours
+}
+
+const std::string kRaw = "  dims: [9, 7, 5]\n  type: int16\n  spacing: [0.5, 1, 1]\n";
+
+Scene scene(const TempDir& t, const std::string& volume, const std::string& rest = "") {
+  return parseScene("volume:\n" + volume + rest, t.path.string(), "s.yaml");
+}
+
+std::string errorOf(const TempDir& t, const std::string& volume, const std::string& rest = "") {
+  try {
+    scene(t, volume, rest);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+TEST(Playback, LoopOnceSwingAndBackwards) {
+  Playback p;
+  p.play = true;
+  std::vector<int> got;
+  for (int k = 0; k < 7; ++k) got.push_back(p.stepAt(k, 3));
+  EXPECT_EQ(got, (std::vector<int>{0, 1, 2, 0, 1, 2, 0}));
+  p.mode = Playback::Mode::Swing;
+  got.clear();
+  for (int k = 0; k < 9; ++k) got.push_back(p.stepAt(k, 4));
+  EXPECT_EQ(got, (std::vector<int>{0, 1, 2, 3, 2, 1, 0, 1, 2}));
+  EXPECT_EQ(p.onePass(4), 6);
+  p.mode = Playback::Mode::Once;
+  EXPECT_EQ(p.stepAt(10, 4), 3);
+  p.mode = Playback::Mode::Loop;
+  p.stride = -1;
+  p.step = 1;
+  got.clear();
+  for (int k = 0; k < 5; ++k) got.push_back(p.stepAt(k, 4));
+  EXPECT_EQ(got, (std::vector<int>{1, 0, 3, 2, 1}));
+  p.stride = 3;
+  EXPECT_EQ(p.onePass(10), 4);
+  p.play = false;
+  EXPECT_EQ(p.stepAt(5, 4), 1) << "paused: the first step";
+}
+
+TEST(TimeSeries, EveryFormLoadsTheSameStepsAsRawFiles) {
+  TempDir t("series-forms");
+  writeRawSteps(t);
+  writeNifti4d(t.file("four.nii"));
+  writeNifti4d(t.file("four.nii.gz"));
+  writeNrrd4d(t.file("four.nrrd"));
+  for (int s = 0; s < kSteps; ++s) writeNifti3d(t.file(std::string("n") + std::to_string(s) + ".nii"), s);
+  std::ofstream(t.file("run.series")) << R"({"file-series-version": "1.0", "files": [
+    {"name": "t0.raw", "time": 0}, {"name": "t1.raw", "time": 0.25}, {"name": "t2.raw", "time": 0.5}, {"name": "t3.raw", "time": 1}]})";
+  const Scene ref = scene(t, "  series: [t0.raw, t1.raw, t2.raw, t3.raw]\n" + kRaw);
+  EXPECT_EQ(ref.series.steps, kSteps);
+  const std::vector<std::string> forms = {
+      "  series: {pattern: t%d.raw, first: 0, last: 3}\n" + kRaw, "  series: run.series\n" + kRaw,
+      "  file: four.nii\n", "  file: four.nii.gz\n", "  file: four.nrrd\n",
+      "  series: {pattern: n%d.nii, first: 0, last: 3}\n"};
+  const VoxelBox whole{{0, 0, 0}, {kNx, kNy, kNz}}, window{{2, 1, 1}, {7, 6, 4}};
+  for (const auto& form : forms) {
+    Scene s = scene(t, form);
+    ASSERT_EQ(s.series.steps, kSteps) << form;
+    for (int step = 0; step < kSteps; ++step)
+      for (const VoxelBox& box : {whole, window}) {
+        const Volume a = loadVolume(s, box, step), b = loadVolume(ref, box, step);
+        EXPECT_EQ(a.values, b.values) << form << " step " << step;
+        EXPECT_EQ(a.spacing, b.spacing) << form;
+      }
+  }
+  EXPECT_EQ(scene(t, "  series: run.series\n" + kRaw).series.times, (std::vector<double>{0, 0.25, 0.5, 1}));
+}
+
+TEST(TimeSeries, ScenesPlayOnePassWithoutAnOrbitAndRoundTrip) {
+  TempDir t("series-scene");
+  writeRawSteps(t);
+  const Scene s = scene(t, "  series: {pattern: t%d.raw, first: 0, last: 3}\n" + kRaw, "time: {play: true, mode: swing}\n");
+  EXPECT_EQ(s.orbit.frames, 6) << "0 1 2 3 2 1";
+  EXPECT_EQ(s.orbit.degrees, 0);
+  const Scene again = parseScene(sceneYaml(s), t.path.string(), "again.yaml");
+  EXPECT_EQ(sceneYaml(again), sceneYaml(s));
+  EXPECT_EQ(again.series, s.series);
+  EXPECT_EQ(again.time, s.time);
+  const Scene g = parseScene("volume: {generator: {name: moving-blobs, size: 16, steps: 10}}\ntime: {play: true, stride: -2}\n",
+                             ".", "g.yaml");
+  EXPECT_EQ(g.series.steps, 10);
+  EXPECT_EQ(g.orbit.frames, 5);
+  EXPECT_EQ(sceneYaml(parseScene(sceneYaml(g), ".", "g2.yaml")), sceneYaml(g));
+}
+
+TEST(TimeSeries, BadSeriesAreNamedBeforeTheFirstFrame) {
+  TempDir t("series-bad");
+  writeRawSteps(t);
+  auto has = [&](const std::string& volume, const std::string& rest, const std::string& what) {
+    const std::string e = errorOf(t, volume, rest);
+    EXPECT_NE(e.find(what), std::string::npos) << e;
+  };
+  has("  series: {pattern: x%d.raw, first: 0, last: 3}\n" + kRaw, "", "volume.series.pattern: file not found");
+  has("  series: {pattern: t%d.raw, first: 0, last: 9}\n" + kRaw, "", "t9.raw (pattern");
+  has("  series: {pattern: t%d_%d.raw, first: 0, last: 3}\n" + kRaw, "", "has 2 integer conversions");
+  has("  series: {pattern: t%s.raw, first: 0, last: 3}\n" + kRaw, "", "expected one integer conversion");
+  has("  series: []\n" + kRaw, "", "volume.series: an empty list");
+  has("  series: [t0.raw]\n  file: t0.raw\n" + kRaw, "", "give either file");
+  std::ofstream(t.file("back.series")) << R"({"files": [{"name": "t0.raw", "time": 1}, {"name": "t1.raw", "time": 1}]})";
+  has("  series: back.series\n" + kRaw, "", "is not after the previous step's");
+  std::ofstream(t.file("none.series")) << R"({"files": []})";
+  has("  series: none.series\n" + kRaw, "", "the files list is empty");
+  has("  generator: {name: hollow-shell, steps: 4}\n", "", "'hollow-shell' does not change over time");
+  has("  series: [t0.raw, t1.raw]\n" + kRaw, "time: {step: 2}\n", "time.step: must be in 0..1");
+  has("  series: [t0.raw, t1.raw]\n" + kRaw, "time: {stride: 0}\n", "time.stride: must not be 0");
+  has("  series: [t0.raw, t1.raw]\n" + kRaw, "time: {mode: bounce}\n", "expected loop, once or swing");
+}
+
+TEST(TimeSeries, AStepThatDiffersOrIsMissingIsNamedWhenRead) {
+  TempDir t("series-step-bad");
+  writeNifti3d(t.file("a0.nii"), 0);
+  writeNifti3d(t.file("a1.nii"), 1, kNz - 1);  // one slice short
+  const Scene s = scene(t, "  series: [a0.nii, a1.nii, a2.nii]\n");
+  EXPECT_NO_THROW(loadVolume(s, {{0, 0, 0}, {kNx, kNy, kNz}}, 0));
+  try {
+    loadVolume(s, {{0, 0, 0}, {kNx, kNy, kNz}}, 1);
+    ADD_FAILURE() << "a step of other dims loaded";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("a1.nii: dims [9, 7, 4] differs from step 0's [9, 7, 5]"), std::string::npos)
+        << e.what();
+  }
+  try {
+    loadVolume(s, {{0, 0, 0}, {kNx, kNy, kNz}}, 2);
+    ADD_FAILURE() << "a missing step loaded";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("a2.nii: file not found"), std::string::npos) << e.what();
+  }
+  // A raw step cut short is named by the reader with both sizes.
+  writeRawSteps(t);
+  std::filesystem::resize_file(t.file("t2.raw"), 100);
+  const Scene r = scene(t, "  series: {pattern: t%d.raw, first: 0, last: 3}\n" + kRaw);
+  try {
+    loadVolume(r, {{0, 0, 0}, {kNx, kNy, kNz}}, 2);
+    ADD_FAILURE() << "a short step loaded";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("t2.raw: file size is 100 bytes"), std::string::npos) << e.what();
+  }
+}
+
+TEST(TimeSeries, AGeneratedSeriesClosesItsLoop) {
+  const Scene g = parseScene("volume: {generator: {name: moving-blobs, size: 16, steps: 8}}\n", ".", "g.yaml");
+  const VoxelBox box{{0, 0, 0}, {16, 16, 16}};
+  const Volume s0 = loadVolume(g, box, 0), s1 = loadVolume(g, box, 1), s4 = loadVolume(g, box, 4);
+  EXPECT_NE(s0.values, s1.values) << "the blobs move";
+  EXPECT_NE(s0.values, s4.values);
+  // The generator's period is the series: a step past the last would be step 0 again.
+  GeneratorSpec spec = std::get<GeneratorSpec>(g.volume);
+  spec.time = 1.0;
+  const Volume wrapped = generateVolume(spec, box);
+  for (size_t i = 0; i < s0.values.size(); ++i) ASSERT_NEAR(wrapped.values[i], s0.values[i], 1e-5) << i;
+}
+
+}  // namespace
+}  // namespace tessera
