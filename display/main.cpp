@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
     const Scene parsed = args.scene();
     opt.width = parsed.width;
     opt.height = parsed.height;
+    opt.steps = parsed.series.steps;
     opt.endpoints = endpoints;
     opt.web_token = display::webToken();
     return display::runStage(opt, ctx, stop);

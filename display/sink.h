@@ -11,6 +11,7 @@
 
 #include "common/image.h"
 #include "common/scene.h"
+#include "common/wire/protocol.h"
 
 namespace tessera::display {
 
@@ -26,12 +27,13 @@ struct InputEvent {
   bool quit = false;                  // window closed, Esc or q
   bool interacting = false;           // a drag, wheel or resize goes on (false: button released, a key)
   int width = 0, height = 0;          // the window's new size (0: unchanged)
+  proto::TimeKey time = proto::TimeKey::None;  // Space, arrows, Home, End: a time series' playback
   std::chrono::steady_clock::time_point at;  // when the (first merged) event reached the display
 };
 
 // A drag and nothing else: consecutive ones collapse into one (the master needs the sum).
 inline bool isDrag(const InputEvent& ev) {
-  return ev.interacting && ev.zoom == 1 && !ev.quality && !ev.quit && ev.width == 0;
+  return ev.interacting && ev.zoom == 1 && !ev.quality && !ev.quit && ev.width == 0 && ev.time == proto::TimeKey::None;
 }
 
 class Sink {

@@ -220,6 +220,7 @@ class Stage {
                                      params.frame, params.interactive ? fmt::format("moving: {}x{}", params.width, params.height)
                                                                       : std::string("sharp"),
                                      fps, msSince(p.first_seen), render_ms, composite_ms, last_display_ms_);
+    if (opt_.steps > 1) status += fmt::format("  step {}/{}", params.step, opt_.steps - 1);
     const auto input_at = inputShown(params);
     if (input_at) status += fmt::format("  input {:.0f} ms", msSince(*input_at));  // up to now, before presenting
     if (sink_->interactive()) status += "  h: help";
@@ -291,6 +292,7 @@ class Stage {
       in.interacting = e.interacting;
       in.width = e.width;
       in.height = e.height;
+      in.time = e.time;
       input_at_[in.seq] = e.at;
       if (input_at_.size() > 4096) input_at_.erase(input_at_.begin());  // inputs no frame showed
       link_.report(proto::encode(in, 0));

@@ -21,6 +21,7 @@ struct StageOptions {
   std::optional<std::array<double, 3>> background;  // PNG: composite over this colour
   // The scene's image size (every process loads the same scene): bounds what peers may send.
   int width = 512, height = 512;
+  int steps = 1;  // a time series' steps: the status line shows the frame's
   bool premultiplied = false;  // also write frame_NNNNNN.pam (exact premultiplied rgba8)
   std::string web{};      // HOST:PORT of the web view, beside the window or PNG files ("": none)
   std::string web_token{};  // what its viewers must present

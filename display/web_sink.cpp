@@ -117,6 +117,11 @@ class WebSink final : public Sink {
       if (key == "1") ev.quality = QualityName::Reference;
       else if (key == "2") ev.quality = QualityName::Default;
       else if (key == "3") ev.quality = QualityName::Fast;
+      else if (key == " ") ev.time = proto::TimeKey::PlayPause;
+      else if (key == "ArrowRight") ev.time = proto::TimeKey::Forward;
+      else if (key == "ArrowLeft") ev.time = proto::TimeKey::Back;
+      else if (key == "Home") ev.time = proto::TimeKey::First;
+      else if (key == "End") ev.time = proto::TimeKey::Last;
       else return false;
     }  // "release": interacting = false, the full frame now
     return true;

@@ -25,6 +25,7 @@ constexpr const char* kHelp[] = {
     "drag: orbit    wheel: zoom    resize: re-render at the window's size",
     "while the mouse moves the farm shows reduced frames, then the full one",
     "1 / 2 / 3: reference / default / fast quality",
+    "a time series: Space play/pause   <- -> step back/forward   Home/End first/last step",
     "h: this help    Esc, q or closing the window: stop the farm",
 };
 
@@ -250,12 +251,18 @@ class WindowSink final : public Sink {
         break;
       }
       case SDL_KEYDOWN:
-        if (e.key.repeat) return;
+        // A held arrow steps on (scrubbing); other keys act once per press.
+        if (e.key.repeat && e.key.keysym.sym != SDLK_LEFT && e.key.keysym.sym != SDLK_RIGHT) return;
         switch (e.key.keysym.sym) {
           case SDLK_1: case SDLK_KP_1: ev.quality = QualityName::Reference; break;
           case SDLK_2: case SDLK_KP_2: ev.quality = QualityName::Default; break;
           case SDLK_3: case SDLK_KP_3: ev.quality = QualityName::Fast; break;
           case SDLK_ESCAPE: case SDLK_q: ev.quit = true; break;
+          case SDLK_SPACE: ev.time = proto::TimeKey::PlayPause; break;
+          case SDLK_RIGHT: ev.time = proto::TimeKey::Forward; break;
+          case SDLK_LEFT: ev.time = proto::TimeKey::Back; break;
+          case SDLK_HOME: ev.time = proto::TimeKey::First; break;
+          case SDLK_END: ev.time = proto::TimeKey::Last; break;
           case SDLK_h:
             help_ = !help_;
             draw();

@@ -31,7 +31,9 @@ class Master {
  public:
   Master(const MasterOptions& opt, zmq::context_t& ctx)
       : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router, kMaxControlMessage)),
-        window_(opt.in_flight, opt.deadline), refinement_(opt.scene.camera, opt.scene.quality, opt.scene.width, opt.scene.height),
+        window_(opt.in_flight, opt.deadline),
+        refinement_(opt.scene.camera, opt.scene.quality, opt.scene.width, opt.scene.height, opt.scene.time,
+                    opt.scene.series.steps),
         metrics_(opt.metrics_path, opt.frames < 0 ? opt.scene.orbit.frames : opt.frames) {
     // No receive bound on the control socket: with makeSocket's 64, libzmq lost messages of a
     // peer that sent faster than the master read (a third of 300 junk messages, never counted;
@@ -45,13 +47,12 @@ class Master {
                  opt_.endpoints.masterPub(), opt_.endpoints.masterControl(), opt_.renderers, opt_.compositors,
                  total_frames_ == 0 ? std::string("interactive") : std::to_string(total_frames_), opt_.in_flight);
     if (total_frames_ == 0)
-      spdlog::info("interactive run: a frame is rendered when the display window sends input (drag: orbit, wheel: "
-                   "zoom, h: help); without a window only the first frame is rendered. Ctrl-C or closing the window stops it");
+      spdlog::info("interactive run: a frame is rendered when the display window sends input (drag: orbit, wheel: zoom, "
+                   "Space: play a series, h: help); without a window only the first frame is rendered (a series plays on). "
+                   "Ctrl-C or closing the window stops it");
     // Sort-first (geometry) scenes need no volume here: renderers own the mesh.
-    if (sortFirst())
-      plan_ = std::make_unique<SortFirstPlan>(opt_.balance, opt_.tiles_per_renderer);
-    else
-      plan_ = std::make_unique<SortLastPlan>(summarizeVolume(opt_.scene), opt_.scene.tf, opt_.balance);
+    plan_ = sortFirst() ? std::unique_ptr<Plan>(std::make_unique<SortFirstPlan>(opt_.balance, opt_.tiles_per_renderer))
+                        : std::make_unique<SortLastPlan>(summarizeVolume(opt_.scene), opt_.scene.tf, opt_.balance);
   }
 
   int run(const std::atomic<bool>* stop) {
@@ -158,21 +159,17 @@ class Master {
     membersCameOrWent();
   }
 
-  // Who the oldest frame still waits for, e.g. "stats from renderer 1 (pid 1234) and strips
-  // from compositor 0 (pid 99)"; `culprit` is the first of them.
-  std::string waitingFor(uint64_t frame, const Member** culprit) const {
-    auto w = window_.waiting(frame);
-    return describeWaiting(members_, w.renderers, w.compositors, w.display, culprit);
-  }
-
   // A frame waiting long gets a warning naming who it waits for; past its deadline, the first
   // stage that has not delivered for it is lost (its heartbeat may be fine: a stage can be
   // alive and useless), and its work goes to the others.
   void watchOldestFrame() {
     auto oldest = window_.oldest(Clock::now());
     if (!oldest || oldest->second < window_.stallMs()) return;
+    // Whom it waits for, e.g. "stats from renderer 1 (pid 1234) and strips from compositor 0
+    // (pid 99)"; `culprit` is the first of them.
     const Member* culprit = nullptr;
-    const std::string who = waitingFor(oldest->first, &culprit);
+    const auto w = window_.waiting(oldest->first);
+    const std::string who = describeWaiting(members_, w.renderers, w.compositors, w.display, &culprit);
     if (oldest->second >= window_.deadlineMs() && culprit && culprit->alive) {  // dead ones: already handled
       spdlog::warn("frame={} missed its deadline of {:.0f} ms waiting for {}: {} {} (pid {}) lost; reassigning its work",
                    oldest->first, window_.deadlineMs(), who, roleName(culprit->role), culprit->rank, culprit->pid);

@@ -17,7 +17,7 @@ double msBetween(Refinement::Clock::time_point a, Refinement::Clock::time_point 
 // change of rung alone or an input that moved nothing issues no frame.
 bool sameView(const FrameSpec& a, const FrameSpec& b) {
   return a.camera == b.camera && a.interactive == b.interactive && a.quality == b.quality &&
-         a.full_width == b.full_width && a.full_height == b.full_height;
+         a.full_width == b.full_width && a.full_height == b.full_height && a.step == b.step;
 }
 
 }  // namespace
@@ -33,8 +33,38 @@ FrameSpec orbitFrame(const Scene& scene, uint64_t frame) {
   return s;
 }
 
-Refinement::Refinement(const Camera& camera, const Quality& quality, int width, int height)
-    : camera_(camera), quality_(quality), max_w_(width), max_h_(height), width_(width), height_(height) {}
+Refinement::Refinement(const Camera& camera, const Quality& quality, int width, int height, const Playback& time,
+                       int steps)
+    : camera_(camera), quality_(quality), max_w_(width), max_h_(height), width_(width), height_(height),
+      play_(time), steps_(steps), step_(time.stepAt(0, steps)) {}
+
+void Refinement::issued(const FrameSpec& s) {
+  last_ = s;
+  first_change_ = 0;
+  if (play_.play) step_ = play_.stepAt(++played_, steps_);
+}
+
+// Space plays or pauses (a finished `once` plays again from the first step); the arrows,
+// Home and End pause and step. Stepping wraps around, as a loop does.
+void Refinement::timeKey(proto::TimeKey key) {
+  using proto::TimeKey;
+  if (key == TimeKey::None || steps_ <= 1) return;
+  if (key == TimeKey::PlayPause && !play_.play) {
+    const int first = play_.stride > 0 ? 0 : steps_ - 1, last = steps_ - 1 - first;
+    const bool finished = play_.mode == Playback::Mode::Once && step_ == last;
+    play_.play = true;
+    play_.step = finished ? first : step_;
+    played_ = 0;
+    step_ = play_.step;
+    if (last_ && last_->step == step_) step_ = play_.stepAt(++played_, steps_);  // shown: go on from it
+    return;
+  }
+  play_.play = false;
+  if (key == TimeKey::Forward) step_ = (step_ + 1) % steps_;
+  if (key == TimeKey::Back) step_ = (step_ + steps_ - 1) % steps_;
+  if (key == TimeKey::First) step_ = 0;
+  if (key == TimeKey::Last) step_ = steps_ - 1;
+}
 
 Quality Refinement::interactiveQuality(const Quality& full) {
   Quality q = namedQuality(QualityName::Default);
@@ -54,6 +84,7 @@ void Refinement::input(const proto::Input& in, Clock::time_point now) {
   camera_ = moved;
   if (in.quality) quality_ = namedQuality(*in.quality);
   if (in.width > 0 && in.height > 0) std::tie(width_, height_) = fitWindow(in.width, in.height, max_w_, max_h_);
+  timeKey(in.time);
   held_ = in.interacting;
   last_input_ = now;
   seq_ = std::max(seq_, in.seq);
@@ -73,6 +104,8 @@ std::optional<FrameSpec> Refinement::next(Clock::time_point now) const {
   s.interactive = interacting(now);
   s.full_width = width_;
   s.full_height = height_;
+  s.step = step_;
+  s.next_step = play_.play ? play_.stepAt(played_ + 1, steps_) : step_;
   if (s.interactive) {
     s.reduction = reduction();
     s.quality = interactiveQuality(quality_);

@@ -50,18 +50,18 @@ class Refinement {
   static constexpr double kReductions[] = {1, 1.5, 2, 3, 4};
   static constexpr int kLevels = 5, kStartLevel = 2;
 
-  // `width` x `height`: the scene's image, the largest frame the farm renders.
-  Refinement(const Camera& camera, const Quality& quality, int width, int height);
+  // `width` x `height`: the scene's image, the largest frame the farm renders. `time` and
+  // `steps`: a time series' playback as the scene starts it.
+  Refinement(const Camera& camera, const Quality& quality, int width, int height, const Playback& time = {},
+             int steps = 1);
 
   // Applies a display's Input. Throws std::invalid_argument (nothing changed) for values
   // applyInput refuses. A drag that starts forgets what the rungs cost in the last one.
   void input(const proto::Input& in, Clock::time_point now);
   // The frame to issue now, or nothing when it would show the same as the last one issued.
   std::optional<FrameSpec> next(Clock::time_point now) const;
-  void issued(const FrameSpec& s) {
-    last_ = s;
-    first_change_ = 0;
-  }
+  // A frame went out: playing, the next one shows the next step.
+  void issued(const FrameSpec& s);
   // A drag (or a wheel or resize burst) goes on: input within kStillAfterMs, not released.
   bool interacting(Clock::time_point now) const;
   // An interactive frame took `latency_ms` from issue to display: the next rung.
@@ -85,6 +85,11 @@ class Refinement {
   int level_ = kStartLevel;
   double seen_ms_[kLevels] = {};  // recent interactive frame times per rung (0: not seen)
   std::optional<FrameSpec> last_;
+  // A time series: keys pause, play and step; every issued frame advances a playing series.
+  void timeKey(proto::TimeKey key);
+  Playback play_;        // play_.step: where the playing started
+  int steps_ = 1, step_ = 0;
+  uint64_t played_ = 0;  // frames issued since
 };
 
 }  // namespace tessera::master

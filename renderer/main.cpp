@@ -1,4 +1,6 @@
 // tessera-renderer: one renderer stage of the farm (ranks come from the master).
+#include <malloc.h>
+
 #include "common/net/log.h"
 #include "common/net/stage_main.h"
 #include "renderer/stage.h"
@@ -6,6 +8,10 @@
 int main(int argc, char** argv) {
   using namespace tessera;
   setupLogging("renderer");
+  // Voxel windows (a time series: one per step held) are big and come and go on two threads:
+  // a fixed threshold keeps them mmap'ed, so a freed step goes back to the system. glibc's
+  // default threshold grows past them after the first free and fragments the heap instead.
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);
   CLI::App app{"Tessera renderer: renders its bricks of every frame"};
   StageArgs args;
   renderer::StageOptions opt;

@@ -46,6 +46,14 @@ class Stage {
     }
   }
 
+  // A time series: what the step cache did over the run.
+  void logSteps() {
+    if (!steps_ || scene_.series.steps <= 1) return;
+    const StepCacheStats s = steps_->take();
+    spdlog::info("step cache: budget {} MiB, held at most {:.1f} MiB besides the shown step; {} hits, {} misses, {} bad steps",
+                 opt_.cache_mb, (double)s.peak_bytes / (1 << 20), s.hits, s.misses, s.bad_steps);
+  }
+
   int run(const std::atomic<bool>* stop) {
     if (!link_.join(stop)) {
       if (stop && *stop) return 0;  // stopped (Ctrl-C) while it waited: not a failure to join
@@ -265,7 +273,9 @@ class Stage {
 
 int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop) {
   Stage s(opt, ctx);
-  return s.run(stop);
+  const int code = s.run(stop);
+  s.logSteps();
+  return code;
 }
 
 }  // namespace tessera::renderer

@@ -32,10 +32,14 @@ StepCache::~StepCache() {
   if (thread_.joinable()) thread_.join();
 }
 
-uint64_t StepCache::entryBytes() const {
-  uint64_t voxels = 1;
-  for (int a = 0; a < 3; ++a) voxels *= (uint64_t)(box_.hi[a] - box_.lo[a]);
-  return voxels * (sizeof(float) + (scene_.shading.on ? 8 : 0));  // values, and gradients when shading
+uint64_t StepCache::entryBytes() const { return bytesFor(box_.hi[0] - box_.lo[0], box_.hi[1] - box_.lo[1], box_.hi[2] - box_.lo[2]); }
+
+// A held step's memory: its float values, the cpu caster's bricked uint16 copy (9^3 voxels
+// per 8^3 cells: volume_accel.h) and, when shading, its 8-byte gradients.
+uint64_t StepCache::bytesFor(int nx, int ny, int nz) const {
+  const uint64_t voxels = (uint64_t)nx * ny * nz;
+  const uint64_t bricks = (uint64_t)((nx + 7) / 8) * ((ny + 7) / 8) * ((nz + 7) / 8);
+  return voxels * (sizeof(float) + (scene_.shading.on ? 8 : 0)) + (backend_ == BackendKind::Cpu ? bricks * 729 * 2 : 0);
 }
 
 uint64_t StepCache::distance(int step) const {
@@ -44,9 +48,9 @@ uint64_t StepCache::distance(int step) const {
 }
 
 bool StepCache::makeRoom(uint64_t need, uint64_t keep_within) {
-  auto held = [&] {
+  auto held = [&] {  // the shown step is not the budget's: it is held whatever the budget
     uint64_t b = 0;
-    for (const auto& [s, e] : held_) b += e.bytes;
+    for (const auto& [s, e] : held_) b += s == current_ ? 0 : e.bytes;
     return b;
   };
   while (held() + need > budget_) {
@@ -69,7 +73,7 @@ StepCache::Entry StepCache::load(int step, double& ms) {
     spdlog::warn("step {}: values {} .. {} lie outside the range [{}, {}] fixed for the series (step 0's, or "
                  "volume.range): they show as its ends; give volume.range to cover every step",
                  step, v->data_range[0], v->data_range[1], v->mapped_range[0], v->mapped_range[1]);
-  e.bytes = (uint64_t)v->voxelCount() * (sizeof(float) + (scene_.shading.on ? 8 : 0));
+  e.bytes = bytesFor(v->dims[0], v->dims[1], v->dims[2]);
   const auto* raw = std::get_if<RawVolumeSpec>(&scene_.volume);
   e.file_bytes = raw ? (uint64_t)v->voxelCount() * voxelTypeSize(raw->type) : 0;  // generated: none
   e.volume = v;
@@ -87,15 +91,13 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
   }
   direction_ = current_ >= 0 && step < current_ ? -1 : current_ >= 0 && step > current_ ? 1 : direction_;
   current_ = step;
+  makeRoom(0, 0);  // the step shown before now counts against the budget
   changed_.wait(lock, [&] { return prefetching_ != step; });  // the prefetch thread is on it: wait, not load twice
   auto it = held_.find(step);
   if (it != held_.end()) {
     if (scene_.series.steps > 1) ++stats_.hits;
   } else {
     if (scene_.series.steps > 1) ++stats_.misses;
-    // Room first (nothing held but this step if need be): memory stays within the budget
-    // plus the step being loaded.
-    makeRoom(budget_ >= entryBytes() ? entryBytes() : budget_, 0);
     loading_ = step;
     lock.unlock();
     Entry e;
@@ -117,6 +119,8 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
     stats_.load_ms += ms;
     stats_.bytes_read += e.file_bytes;
     it = held_.insert_or_assign(step, std::move(e)).first;
+    makeRoom(0, 0);
+    notePeak();
   }
   if (!it->second.caster) it->second.caster = makeVolumeBackend(backend_, it->second.volume, scene_.tf, scene_.shading, scene_.light);
   last_good_ = step;
@@ -162,6 +166,8 @@ void StepCache::prefetchLoop() {
     if (ok && generation == generation_) {
       stats_.bytes_read += e.file_bytes;
       held_.insert_or_assign(next, std::move(e));
+      makeRoom(0, 0);  // the shown step may have moved on while it loaded: the budget holds again
+      notePeak();
     }
     std::erase(wanted_, next);  // tried once: a bad step is not read again and again
     changed_.notify_all();
@@ -176,11 +182,10 @@ StepCacheStats StepCache::take() {
   return s;
 }
 
-uint64_t StepCache::heldBytes() const {
-  std::lock_guard lock(mu_);
+void StepCache::notePeak() {
   uint64_t b = 0;
-  for (const auto& [s, e] : held_) b += e.bytes;
-  return b;
+  for (const auto& [s, e] : held_) b += s == current_ ? 0 : e.bytes;
+  stats_.peak_bytes = std::max(stats_.peak_bytes, b);
 }
 
 }  // namespace tessera::renderer

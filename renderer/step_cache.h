@@ -31,11 +31,13 @@ struct StepCacheStats {
   double load_ms = 0;             // on the render path (misses) since the last take
   double prefetch_ms = 0;         // on the prefetch thread since the last take
   uint64_t bad_steps = 0;         // steps that could not be read (cumulative)
+  uint64_t peak_bytes = 0;        // the most held besides the shown step (cumulative peak)
 };
 
 class StepCache {
  public:
-  // `budget_bytes`: voxels held (4 bytes each) at most, besides the step being rendered.
+  // `budget_bytes`: memory of the steps held besides the one shown, the prefetched ones
+  // included (about 7 bytes a voxel with the cpu backend, 15 when shading).
   StepCache(const Scene& scene, BackendKind backend, uint64_t budget_bytes);
   ~StepCache();
   StepCache(const StepCache&) = delete;
@@ -49,8 +51,6 @@ class StepCache {
   // held, as the budget allows, and forgets earlier wishes (steps playback has passed).
   void prefetch(const std::vector<int>& steps);
   StepCacheStats take();
-  // Voxel bytes held now (tests: the budget holds).
-  uint64_t heldBytes() const;
 
  private:
   struct Entry {
@@ -67,6 +67,8 @@ class StepCache {
   bool makeRoom(uint64_t need, uint64_t keep_within);
   uint64_t distance(int step) const;  // steps from the playhead to `step` in the direction of play
   uint64_t entryBytes() const;
+  uint64_t bytesFor(int nx, int ny, int nz) const;
+  void notePeak();  // under mu_
 
   const Scene& scene_;
   BackendKind backend_;

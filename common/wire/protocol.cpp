@@ -360,6 +360,7 @@ std::vector<std::byte> encode(const Input& m, uint32_t sender) {
     w.boolean(m.interacting);
     w.i32(m.width);
     w.i32(m.height);
+    w.u8(static_cast<uint8_t>(m.time));
   });
 }
 Result<Input> decodeInput(std::span<const std::byte> msg) {
@@ -380,6 +381,9 @@ Result<Input> decodeInput(std::span<const std::byte> msg) {
     const bool unchanged = m.width == 0 && m.height == 0;
     if (r.ok() && !unchanged && (m.width < 1 || m.width > detail::kMaxDimension || m.height < 1 || m.height > detail::kMaxDimension))
       r.fail("window size " + std::to_string(m.width) + "x" + std::to_string(m.height) + " neither 0x0 nor within 1..16384");
+    const uint8_t t = r.u8("time");
+    if (r.ok() && t > static_cast<uint8_t>(TimeKey::LastKey)) r.fail("time key " + std::to_string(t) + " not in 0..5");
+    m.time = static_cast<TimeKey>(t);
   });
 }
 

@@ -43,7 +43,7 @@ namespace tessera::proto {
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
 inline constexpr uint16_t kVersion = 5;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
                                          // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms);
-                                         // 5: time steps (FrameParams step, Stats step cache)
+                                         // 5: time steps (FrameParams step, Stats step cache, Input time keys)
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -323,6 +323,9 @@ struct FrameDone {                             // display -> master
 //   quality             u8      1    0 = unchanged, else QualityName Reference..Fast
 //   interacting         bool    1
 //   width, height       i32 x2  8    both 0 (unchanged) or both 1..16384
+//   time                u8      1    TimeKey 0..Last
+// A time series' playback keys (the window's Space, arrows, Home and End).
+enum class TimeKey : uint8_t { None = 0, PlayPause, Forward, Back, First, Last, LastKey = Last };
 struct Input {                                 // display -> master (interactive camera)
   uint64_t seq = 0;                            // echoed in FrameParams::input_seq
   double orbit_dx = 0, orbit_dy = 0;           // degrees
@@ -330,6 +333,7 @@ struct Input {                                 // display -> master (interactive
   std::optional<QualityName> quality;          // nullopt = unchanged
   bool interacting = false;                    // a drag (button held) or a wheel/resize burst goes on
   int width = 0, height = 0;                   // the window's new size (0: unchanged)
+  TimeKey time = TimeKey::None;
   bool operator==(const Input&) const = default;
 };
 

@@ -144,7 +144,10 @@
   }, { passive: false });
   window.addEventListener('keydown', (e) => {
     if (e.key === 'h') helpEl.style.display = helpEl.style.display === 'block' ? 'none' : 'block';
-    else if (e.key === '1' || e.key === '2' || e.key === '3') send({ t: 'key', key: e.key });
+    else if (['1', '2', '3', ' ', 'ArrowRight', 'ArrowLeft', 'Home', 'End'].includes(e.key)) {
+      e.preventDefault();  // Space and the arrows would scroll the page
+      send({ t: 'key', key: e.key });
+    }
   });
 
   // For tests and benchmarks: what is shown, and the canvas's pixels (RGBA, base64).

@@ -16,7 +16,12 @@ namespace tessera::display::testing {
 
 class XUser {
  public:
-  explicit XUser(const std::string& display) : dpy_(XOpenDisplay(display.c_str())) {}
+  explicit XUser(const std::string& display) : dpy_(XOpenDisplay(display.c_str())) {
+    // A window that goes between XQueryTree and a query of it (the display's window being
+    // made or closed) raises BadWindow, and Xlib's default handler ends the process: the
+    // query just fails instead.
+    XSetErrorHandler([](Display*, XErrorEvent*) { return 0; });
+  }
   ~XUser() {
     if (dpy_) XCloseDisplay(dpy_);
   }

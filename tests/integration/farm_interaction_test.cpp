@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <future>
+#include <sstream>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -51,16 +52,21 @@ class FarmInteraction : public ::testing::Test {
     unsetenv("WAYLAND_DISPLAY");
     user_ = std::make_unique<XUser>(xvfb_.display());
     ASSERT_TRUE(user_->ok()) << "no XTEST on " << xvfb_.display();
-    // A cloud of noise, not the symmetric shell: turning it changes the picture.
-    scene_ = dir_.path() / "cloud.yaml";
-    std::ofstream(scene_) << "volume:\n  generator: {name: noise-cloud, size: 48, seed: 7}\n"
+    scene_ = dir_.path() / "scene.yaml";
+    std::ofstream(scene_) << sceneText();
+    farm_ = std::async(std::launch::async, [&] { return dir_.runFarm(scene_, 2, 1, 0, 200, "--env TESSERA_WINDOW=on"); });
+    ASSERT_TRUE(waitUntil([&] { return (win_ = user_->find("Tessera")) && !metricsLines(dir_).empty(); }, 90s))
+        << dir_.farmLog();
+  }
+  // A cloud of noise, not the symmetric shell: turning it changes the picture.
+  virtual std::string sceneText() const {
+    std::ostringstream s;
+    s << "volume:\n  generator: {name: noise-cloud, size: 48, seed: 7}\n"
                           << "transfer_function:\n  - [0.00, 0.6, 0.7, 0.9, 0.0]\n  - [0.03, 0.6, 0.7, 0.9, 0.0]\n"
                           << "  - [0.10, 0.6, 0.7, 0.9, 0.05]\n  - [0.40, 0.9, 0.9, 1.0, 0.2]\n  - [1.00, 1.0, 1.0, 1.0, 0.6]\n"
                           << "camera: {eye: [1.6, 0.8, 1.6], target: [0, 0, 0], up: [0, 1, 0], fov: 30}\n"
                           << "image: [" << kW << ", " << kH << "]\nquality: default\n";
-    farm_ = std::async(std::launch::async, [&] { return dir_.runFarm(scene_, 2, 1, 0, 200, "--env TESSERA_WINDOW=on"); });
-    ASSERT_TRUE(waitUntil([&] { return (win_ = user_->find("Tessera")) && !metricsLines(dir_).empty(); }, 90s))
-        << dir_.farmLog();
+    return s.str();
   }
   void TearDown() override {
     if (farm_.valid()) {
@@ -179,6 +185,47 @@ TEST_F(FarmInteraction, ABurstOfMotionIssuesFewFramesAndAResizeRendersAtTheNewSi
       },
       60s))
       << "no sharp frame at the window's new size; " << dir_.farmLog();
+}
+
+// A time series in the window: the arrows step, End and Home jump, Space plays and pauses;
+// each takes effect on the next frame (metrics say which step every frame showed).
+class FarmTimeKeys : public FarmInteraction {
+ protected:
+  std::string sceneText() const override {
+    return "volume:\n  generator: {name: moving-blobs, size: 24, steps: 10}\nimage: [160, 120]\ntime: {play: false, step: 3}\n";
+  }
+  // Whether a frame after `frame` shows `step`; the newest frame's number goes to `frame`.
+  bool shows(int step, uint64_t& frame) {
+    return waitUntil([&] {
+      for (auto& l : metricsLines(dir_))
+        if (l["frame"].get<uint64_t>() > frame && l["step"].get<int>() == step) return frame = l["frame"].get<uint64_t>(), true;
+      return false;
+    }, 30s);
+  }
+};
+
+TEST_F(FarmTimeKeys, ArrowsHomeEndAndSpaceMoveThroughTheSteps) {
+  uint64_t frame = 0;
+  EXPECT_EQ(metricsLines(dir_).front()["step"], 3) << "the scene's time.step";
+  user_->key(XK_Right);
+  ASSERT_TRUE(shows(4, frame)) << dir_.farmLog();
+  user_->key(XK_Left);
+  std::this_thread::sleep_for(100ms);  // two presses, not one press seen as its auto-repeat
+  user_->key(XK_Left);
+  ASSERT_TRUE(shows(2, frame));
+  user_->key(XK_End);
+  ASSERT_TRUE(shows(9, frame));
+  user_->key(XK_space);  // play: on through the last step to the first again
+  ASSERT_TRUE(shows(0, frame));
+  ASSERT_TRUE(shows(1, frame));
+  user_->key(XK_space);  // pause: frames stop
+  std::this_thread::sleep_for(500ms);
+  const size_t paused = metricsLines(dir_).size();
+  std::this_thread::sleep_for(500ms);
+  EXPECT_EQ(metricsLines(dir_).size(), paused) << "no frames while paused";
+  user_->key(XK_Home);
+  uint64_t after = metricsLines(dir_).back()["frame"].get<uint64_t>();
+  ASSERT_TRUE(shows(0, after));
 }
 
 }  // namespace

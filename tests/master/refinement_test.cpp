@@ -181,5 +181,67 @@ TEST(Refinement, RefusedInputChangesNothing) {
   EXPECT_FALSE(r.next(t));
 }
 
+proto::Input key(uint64_t seq, proto::TimeKey k) {
+  proto::Input in;
+  in.seq = seq;
+  in.time = k;
+  return in;
+}
+
+// Issues frames while there are new ones (at most `max`) and returns their steps.
+std::vector<int> play(Refinement& r, int max) {
+  std::vector<int> steps;
+  for (int i = 0; i < max; ++i) {
+    auto s = r.next(Clock::now());
+    if (!s) break;
+    steps.push_back(s->step);
+    r.issued(*s);
+  }
+  return steps;
+}
+
+TEST(Refinement, ASeriesPlaysPausesAndStepsOnTheNextFrame) {
+  Playback p;
+  p.play = true;
+  Refinement r(Camera{}, namedQuality(QualityName::Default), 64, 64, p, 5);
+  auto s = r.next(Clock::now());
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->next_step, 1) << "renderers prefetch the step after";
+  EXPECT_EQ(play(r, 7), (std::vector<int>{0, 1, 2, 3, 4, 0, 1}));
+  r.input(key(1, proto::TimeKey::PlayPause), Clock::now());  // pause: the step the next frame would show stays
+  EXPECT_EQ(play(r, 7), (std::vector<int>{2}));
+  r.input(key(2, proto::TimeKey::Back), Clock::now());
+  EXPECT_EQ(play(r, 7), (std::vector<int>{1}));
+  r.input(key(3, proto::TimeKey::Back), Clock::now());
+  r.input(key(4, proto::TimeKey::Back), Clock::now());
+  EXPECT_EQ(play(r, 7), (std::vector<int>{4})) << "stepping wraps around";
+  r.input(key(5, proto::TimeKey::First), Clock::now());
+  EXPECT_EQ(play(r, 7), (std::vector<int>{0}));
+  r.input(key(6, proto::TimeKey::Last), Clock::now());
+  EXPECT_EQ(play(r, 7), (std::vector<int>{4}));
+  r.input(key(7, proto::TimeKey::Forward), Clock::now());
+  EXPECT_EQ(play(r, 7), (std::vector<int>{0}));
+  r.input(key(8, proto::TimeKey::PlayPause), Clock::now());
+  EXPECT_EQ(play(r, 3), (std::vector<int>{1, 2, 3})) << "plays on after the step shown";
+}
+
+TEST(Refinement, AFinishedOncePlaysAgainFromTheStart) {
+  Playback p;
+  p.play = true;
+  p.mode = Playback::Mode::Once;
+  Refinement r(Camera{}, namedQuality(QualityName::Default), 64, 64, p, 3);
+  EXPECT_EQ(play(r, 9), (std::vector<int>{0, 1, 2})) << "once: no frame after the last step";
+  r.input(key(1, proto::TimeKey::PlayPause), Clock::now());  // pause at the end
+  r.input(key(2, proto::TimeKey::PlayPause), Clock::now());  // play: from the start again
+  EXPECT_EQ(play(r, 9), (std::vector<int>{0, 1, 2}));
+}
+
+TEST(Refinement, TimeKeysDoNothingWithoutASeries) {
+  Refinement r = make();
+  r.issued(*r.next(Clock::now()));
+  r.input(key(1, proto::TimeKey::Forward), Clock::now());
+  EXPECT_FALSE(r.next(Clock::now()));
+}
+
 }  // namespace
 }  // namespace tessera::master
