@@ -200,19 +200,25 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box) {
     const int y = box.lo[1] + (int)(row % v.dims[1]), z = box.lo[2] + (int)(row / v.dims[1]);
     file.read(box.lo[0] + (size_t)n[0] * (y + (size_t)n[1] * z), per_read, &v.values[row * v.dims[0]]);
   }
+  // With a declared range (a renderer's window, a time step) one pass finds the window's
+  // values and normalises them; without, the range must be known first.
   std::array<double, 2> data{INFINITY, -INFINITY};
   if (v.isWindow() && !spec.has_range) {
     data = file.scanRange();  // the whole volume's, so every window normalises alike
-  } else {
+  } else if (!spec.has_range) {
     for (float x : v.values) data[0] = std::min(data[0], (double)x), data[1] = std::max(data[1], (double)x);
   }
   // Like ParaView: with no declared range, colours and opacity span the data's own values.
   const double lo = spec.has_range ? spec.range[0] : data[0], hi = spec.has_range ? spec.range[1] : data[1];
-  v.data_range = data;  // a window with a declared range knows only its own values
-  v.mapped_range = {lo, hi};
   // Normalise in double; a constant volume (lo == hi) maps to 0 everywhere.
   const double scale = hi > lo ? 1.0 / (hi - lo) : 0.0;
-  for (float& x : v.values) x = (float)std::clamp((x - lo) * scale, 0.0, 1.0);
+  float mn = INFINITY, mx = -INFINITY;
+  for (float& x : v.values) {
+    mn = std::min(mn, x), mx = std::max(mx, x);
+    x = (float)std::clamp((x - lo) * scale, 0.0, 1.0);
+  }
+  v.data_range = spec.has_range ? std::array<double, 2>{mn, mx} : data;  // a declared range: the window's own values
+  v.mapped_range = {lo, hi};
   return v;
 }
 

@@ -110,7 +110,7 @@ void GlVolumeRenderer::Impl::uploadVolume() {
                                   " exceeds the 3D texture limit " + std::to_string(max3d));
   std::vector<uint16_t> q(v.voxelCount());
   for (size_t i = 0; i < q.size(); ++i)
-    q[i] = (uint16_t)(std::fmin(std::fmax(v.values[i], 0.0f), 1.0f) * kQuantScale + 0.5f);
+    q[i] = (uint16_t)(std::clamp(v.values[i], 0.0f, 1.0f) * kQuantScale + 0.5f);  // finite values: no fmin/fmax calls
   glGenTextures(1, &tex_vol);
   glBindTexture(GL_TEXTURE_3D, tex_vol);
   texParams(GL_TEXTURE_3D, GL_LINEAR);
