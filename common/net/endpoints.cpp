@@ -33,12 +33,12 @@ TcpBase parseTcp(const std::string& base) {
   return {rest.substr(0, colon), port};
 }
 
+}  // namespace
+
 std::string envOr(const char* name, const std::string& fallback) {
   const char* v = std::getenv(name);
   return v && *v ? v : fallback;
 }
-
-}  // namespace
 
 Endpoints makeEndpoints(const std::string& base) {
   if (startsWith(base, "tcp://")) {

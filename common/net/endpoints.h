@@ -32,5 +32,7 @@ std::string defaultEndpointBase();
 // The farm this process belongs to: TESSERA_RUN (tessera-up makes one per run), "" if unset.
 // Stages say it in their Hello; a master refuses a stage of another run.
 std::string farmRun();
+// The environment variable `name`, or `fallback` when it is unset or empty.
+std::string envOr(const char* name, const std::string& fallback);
 
 }  // namespace tessera

@@ -15,17 +15,13 @@
 #include <sstream>
 
 #include "common/net/curve.h"
+#include "common/net/endpoints.h"
 #include "master/launcher/launcher.h"
 
 extern char** environ;
 
 namespace tessera::launcher {
 namespace {
-
-std::string envOr(const char* name, const std::string& fallback) {
-  const char* v = std::getenv(name);
-  return v && *v ? v : fallback;
-}
 
 // The first farm number whose run folder does not exist yet (mkdir is the claim).
 int claimFarmNumber(const std::filesystem::path& base, const std::string& job, bool dry_run) {

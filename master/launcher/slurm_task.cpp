@@ -14,6 +14,7 @@
 #include <sstream>
 #include <thread>
 
+#include "common/net/endpoints.h"
 #include "master/launcher/launcher.h"
 #include "master/launcher/slurm.h"
 
@@ -21,11 +22,6 @@ namespace tessera::launcher {
 namespace {
 
 constexpr auto kRendezvousWait = std::chrono::seconds(60);  // all tasks start together
-
-std::string envOr(const char* name, const std::string& fallback) {
-  const char* v = std::getenv(name);
-  return v && *v ? v : fallback;
-}
 
 // The node's address as the cluster knows it (NodeAddr), so that other nodes reach it; the
 // host name when scontrol cannot say.
