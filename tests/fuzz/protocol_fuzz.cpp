@@ -77,12 +77,17 @@ void writeSeeds(const std::string& dir) {
   fp.height = 32;
   fp.work = SortLastWork{{{0, {{0, 0, 0}, {8, 8, 8}}}, {1, {{8, 0, 0}, {16, 8, 8}}}}, {1, 0}};
   fp.regions = {{0, {0, 0, 64, 16}, "a"}, {1, {0, 16, 64, 16}, "b"}};
+  fp.step = 3, fp.next_step = 4;
   writeSeed(dir, n, encode(fp, 1));
   fp.work = SortFirstWork{{{0, 1, {0, 0, 32, 32}}, {1, 0, {32, 0, 32, 32}}}};
   writeSeed(dir, n, encode(fp, 1));
-  writeSeed(dir, n, encode(StageStats{Role::Renderer, 1, 3, 1, 2, 0.5, 3, 4, 5, {0, 0, 4, 4}, 0}, 1));
+  StageStats st;  // fields by name: a partial brace list warns (-Wmissing-field-initializers)
+  st.rank = 1, st.frame = 3, st.work_ms = 1, st.encode_ms = 2, st.decode_ms = 0.5;
+  st.bytes_raw = 3, st.bytes_encoded = 4, st.active_pixels = 5, st.active = {0, 0, 4, 4};
+  st.step = 7, st.step_hits = 6, st.step_misses = 1, st.bytes_read = 4096, st.prefetch_ms = 2;
+  writeSeed(dir, n, encode(st, 1));
   writeSeed(dir, n, encode(FrameDone{3, 1, 2, 3, 4, 5}, 1));
-  writeSeed(dir, n, encode(Input{3, 1, 2, 1.5, QualityName::Fast, true, 640, 480}, 1));
+  writeSeed(dir, n, encode(Input{3, 1, 2, 1.5, QualityName::Fast, true, 640, 480, TimeKey::Forward}, 1));
   for (uint8_t c = 0; c < kCodecCount; ++c) {
     Piece p;
     p.region = {0, 0, 16, 16};
