@@ -116,10 +116,19 @@ class RawFile {
 
  private:
   void readPiece(size_t first, size_t count, float* out) {
-    buf_.resize(count * ts_);
     const uint64_t at = spec_.offset + first * ts_;
-    if (gz_) readGzip(at);
-    else readPlain(at);
+    // Native float32 without scaling (what simulations write) is read straight into place:
+    // no copy, no conversion pass (a time step's preparation is on the renderers' cores).
+    const bool direct = spec_.type == VoxelType::Float32 && spec_.big_endian == (std::endian::native == std::endian::big) &&
+                        spec_.slope == 1 && spec_.inter == 0;
+    unsigned char* dst = direct ? reinterpret_cast<unsigned char*>(out) : (buf_.resize(count * ts_), buf_.data());
+    if (gz_) readGzip(at, dst, count * ts_);
+    else readPlain(at, dst, count * ts_);
+    if (direct) {
+      for (size_t i = 0; i < count; ++i)
+        if (!std::isfinite(out[i])) nonFinite(first + i, out[i]);
+      return;
+    }
     const unsigned char* p = buf_.data();
     switch (spec_.type) {
       case VoxelType::UInt8: convert<uint8_t>(p, count, spec_, out); break;
@@ -135,10 +144,10 @@ class RawFile {
       if (!std::isfinite(out[i])) nonFinite(first + i, out[i]);
   }
 
-  void readPlain(uint64_t at) {
+  void readPlain(uint64_t at, unsigned char* dst, size_t bytes) {
     size_t done = 0;
-    while (done < buf_.size()) {
-      const ssize_t r = ::pread(fd_, buf_.data() + done, buf_.size() - done, (off_t)(at + done));
+    while (done < bytes) {
+      const ssize_t r = ::pread(fd_, dst + done, bytes - done, (off_t)(at + done));
       if (r < 0 && errno == EINTR) continue;
       if (r <= 0) fail(spec_.samples(), r < 0 ? std::string("read failed: ") + std::strerror(errno) : "read failed: file shrank");
       done += (size_t)r;
@@ -147,11 +156,11 @@ class RawFile {
 
   // Windows are read in file order, so the stream only moves forward (zlib decompresses
   // what it skips); memory stays one piece.
-  void readGzip(uint64_t at) {
+  void readGzip(uint64_t at, unsigned char* dst, size_t bytes) {
     if ((uint64_t)gztell(gz_) != at && gzseek(gz_, (z_off_t)at, SEEK_SET) < 0)
       fail(spec_.samples(), "compressed data ends before byte " + std::to_string(at));
-    const int r = gzread(gz_, buf_.data(), (unsigned)buf_.size());
-    if (r != (int)buf_.size()) {
+    const int r = gzread(gz_, dst, (unsigned)bytes);
+    if (r != (int)bytes) {
       int err = 0;
       const char* msg = gzerror(gz_, &err);
       fail(spec_.samples(), err ? std::string("corrupt compressed data: ") + msg
