@@ -4,6 +4,7 @@
 #include <chrono>
 
 #include "common/net/log.h"
+#include "renderer/volume/volume_accel.h"
 
 namespace tessera::renderer {
 namespace {
@@ -34,12 +35,30 @@ StepCache::~StepCache() {
 
 uint64_t StepCache::entryBytes() const { return bytesFor(box_.hi[0] - box_.lo[0], box_.hi[1] - box_.lo[1], box_.hi[2] - box_.lo[2]); }
 
-// A held step's memory: its float values, the cpu caster's bricked uint16 copy (9^3 voxels
-// per 8^3 cells: volume_accel.h) and, when shading, its 8-byte gradients.
+// A held step's memory: its float values, the cpu caster's bricked uint16 copy (volume_accel.h)
+// and, when shading, its 8-byte gradients.
 uint64_t StepCache::bytesFor(int nx, int ny, int nz) const {
+  constexpr int B = MinMaxHierarchy::kBlock;
   const uint64_t voxels = (uint64_t)nx * ny * nz;
-  const uint64_t bricks = (uint64_t)((nx + 7) / 8) * ((ny + 7) / 8) * ((nz + 7) / 8);
-  return voxels * (sizeof(float) + (scene_.shading.on ? 8 : 0)) + (backend_ == BackendKind::Cpu ? bricks * 729 * 2 : 0);
+  const uint64_t bricks = (uint64_t)((nx + B - 1) / B) * ((ny + B - 1) / B) * ((nz + B - 1) / B);
+  return voxels * (sizeof(float) + (scene_.shading.on ? 8 : 0)) +
+         (backend_ == BackendKind::Cpu ? bricks * VolumeAccel::kBrickSize * sizeof(uint16_t) : 0);
+}
+
+uint64_t StepCache::heldBytes() const {  // the shown step is not the budget's: it is held whatever the budget
+  uint64_t b = 0;
+  for (const auto& [s, e] : held_) b += s == current_ ? 0 : e.bytes;
+  return b;
+}
+
+// A loaded step joins the cache, which then evicts down to its budget again (the shown step
+// may have moved on while it loaded).
+std::map<int, StepCache::Entry>::iterator StepCache::keep(int step, Entry&& e) {
+  stats_.bytes_read += e.file_bytes;
+  auto it = held_.insert_or_assign(step, std::move(e)).first;
+  makeRoom(0, 0);
+  stats_.peak_bytes = std::max(stats_.peak_bytes, heldBytes());
+  return it;
 }
 
 uint64_t StepCache::distance(int step) const {
@@ -48,12 +67,7 @@ uint64_t StepCache::distance(int step) const {
 }
 
 bool StepCache::makeRoom(uint64_t need, uint64_t keep_within) {
-  auto held = [&] {  // the shown step is not the budget's: it is held whatever the budget
-    uint64_t b = 0;
-    for (const auto& [s, e] : held_) b += s == current_ ? 0 : e.bytes;
-    return b;
-  };
-  while (held() + need > budget_) {
+  while (heldBytes() + need > budget_) {
     auto far = held_.end();
     for (auto it = held_.begin(); it != held_.end(); ++it)
       if (it->first != current_ && distance(it->first) > keep_within &&
@@ -117,10 +131,7 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
     lock.lock();
     loading_ = -1;
     stats_.load_ms += ms;
-    stats_.bytes_read += e.file_bytes;
-    it = held_.insert_or_assign(step, std::move(e)).first;
-    makeRoom(0, 0);
-    notePeak();
+    it = keep(step, std::move(e));
   }
   if (!it->second.caster) it->second.caster = makeVolumeBackend(backend_, it->second.volume, scene_.tf, scene_.shading, scene_.light);
   last_good_ = step;
@@ -163,12 +174,7 @@ void StepCache::prefetchLoop() {
     lock.lock();
     prefetching_ = -1;
     stats_.prefetch_ms += ms;
-    if (ok && generation == generation_) {
-      stats_.bytes_read += e.file_bytes;
-      held_.insert_or_assign(next, std::move(e));
-      makeRoom(0, 0);  // the shown step may have moved on while it loaded: the budget holds again
-      notePeak();
-    }
+    if (ok && generation == generation_) keep(next, std::move(e));
     std::erase(wanted_, next);  // tried once: a bad step is not read again and again
     changed_.notify_all();
   }
@@ -180,12 +186,6 @@ StepCacheStats StepCache::take() {
   stats_.bytes_read = 0;
   stats_.load_ms = stats_.prefetch_ms = 0;
   return s;
-}
-
-void StepCache::notePeak() {
-  uint64_t b = 0;
-  for (const auto& [s, e] : held_) b += s == current_ ? 0 : e.bytes;
-  stats_.peak_bytes = std::max(stats_.peak_bytes, b);
 }
 
 }  // namespace tessera::renderer
