@@ -1,5 +1,6 @@
 #include "compositor/gather.h"
 
+#include <algorithm>
 #include <utility>
 
 namespace tessera::compositor {
@@ -11,6 +12,12 @@ size_t partBytes(const Frame& f) {
   for (const auto& [key, piece] : f.pieces) n += piece.pixels.size();
   for (const auto& [key, fb] : f.framebuffers) n += fb.pixels.size();
   return n;
+}
+
+bool allOfEpoch(const auto& f, uint32_t epoch) {
+  auto same = [&](const auto& kv) { return kv.second.epoch == epoch; };
+  return std::all_of(f.pieces.begin(), f.pieces.end(), same) &&
+         std::all_of(f.framebuffers.begin(), f.framebuffers.end(), same);
 }
 
 }  // namespace
@@ -97,14 +104,12 @@ std::string Gather::addParams(proto::FrameParams p) {
   if (p.epoch < epoch_) return "FrameParams of an older epoch";
   if (p.epoch > epoch_) {  // membership changed: everything of older epochs is stale
     epoch_ = p.epoch;
-    for (auto it = frames_.begin(); it != frames_.end();) {
-      if (it->second.params && it->second.params->epoch < epoch_) {
-        it = frames_.erase(it);
-        continue;
-      }
+    for (auto it = frames_.begin(); it != frames_.end();) {  // parts of the new epoch may be here already
+      if (it->second.params && it->second.params->epoch < epoch_) it->second.params.reset();
       std::erase_if(it->second.pieces, [&](const auto& kv) { return kv.second.epoch < epoch_; });
       std::erase_if(it->second.framebuffers, [&](const auto& kv) { return kv.second.epoch < epoch_; });
-      ++it;
+      it = it->second.params || !it->second.pieces.empty() || !it->second.framebuffers.empty() ? std::next(it)
+                                                                                              : frames_.erase(it);
     }
     if (p.frame < next_expected_) next_expected_ = p.frame;  // frames in flight are issued again
   }
@@ -145,9 +150,17 @@ std::string Gather::add(Part part, uint32_t key, std::map<uint32_t, Part> Frame:
   if (cancelled_.contains(part.frame)) return "";  // cancelled: discarded
   if (part.frame < next_expected_ && part.epoch == epoch_) return std::string(what) + " for a finished frame";
   auto it = frames_.find(part.frame);
-  if (it != frames_.end() && (it->second.*parts).count(key)) return std::string("duplicate ") + what + " " + std::to_string(key);
+  if (it != frames_.end()) {
+    auto held = (it->second.*parts).find(key);
+    if (held != (it->second.*parts).end()) {
+      if (held->second.epoch == part.epoch) return std::string("duplicate ") + what + " " + std::to_string(key);
+      if (held->second.epoch > part.epoch) return std::string(what) + " of an older epoch than the one held";
+      // A newer epoch's part may come before its FrameParams: the held one is stale.
+      (it->second.*parts).erase(held);
+    }
+  }
   std::string why;
-  if (it != frames_.end() && it->second.params) {
+  if (it != frames_.end() && it->second.params && it->second.params->epoch == part.epoch) {
     why = check(*it->second.params, part);
   } else {
     why = checkWaiting(part);
@@ -171,7 +184,7 @@ std::string Gather::addFramebuffer(proto::Framebuffer fb) {
 std::optional<Gather::Ready> Gather::pop() {
   for (auto it = frames_.begin(); it != frames_.end(); ++it) {
     Frame& f = it->second;
-    if (!f.params) continue;
+    if (!f.params || !allOfEpoch(f, f.params->epoch)) continue;  // newer parts: newer FrameParams are coming
     const proto::SortLastWork* sort_last = f.params->sortLast();
     if (sort_last ? f.pieces.size() != sort_last->bricks.size()
                   : f.framebuffers.size() != routedRenderers(*f.params).size())

@@ -102,6 +102,7 @@ class Stage {
     st.role = proto::Role::Compositor;
     st.rank = link_.rank();
     st.frame = r.params.frame;
+    st.epoch = r.params.epoch;
     if (auto it = decode_ms_.find(st.frame); it != decode_ms_.end()) st.decode_ms = it->second;
     decode_ms_.erase(decode_ms_.begin(), decode_ms_.upper_bound(st.frame));
     if (!r.region) return;  // a spare compositor this frame: nothing to report

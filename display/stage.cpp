@@ -14,19 +14,19 @@
 #include "common/net/stage_link.h"
 #include "common/wire/strips.h"
 #include "common/net/transport.h"
-#include "common/wire/cancelled_frames.h"
+#include "display/assembly.h"
 #include "display/sink.h"
 
 namespace tessera::display {
 namespace {
-
 
 class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
       : opt_(opt), link_(ctx, opt.endpoints, proto::Role::Display),
         waiting_budget_(kWaitingFrames * 4 * size_t(opt.width + kStripHeaderPixels) * size_t(opt.height)),
-        inbox_(ctx, proto::Role::Compositor, maxPixelMessageBytes(opt.width, opt.height), waiting_budget_) {
+        inbox_(ctx, proto::Role::Compositor, maxPixelMessageBytes(opt.width, opt.height), waiting_budget_),
+        frames_(waiting_budget_) {
     inbox_.bind(opt_.endpoints.bind(opt_.endpoints.display()));
     // Listening from the start: a viewer may connect before the first frame.
     if (!opt_.web.empty()) web_ = makeWebSink(opt_.web, opt_.web_token, opt_.background.value_or(kWebBackground));
@@ -54,92 +54,18 @@ class Stage {
       if (items[2].revents & ZMQ_POLLIN) readStrips(inbox_.receive(drops_));
       presentReady();
       if (sink_ && pollInput()) return 0;
-      auto next = frames_.find(next_);  // strips without FrameParams never hold the display up
-      if (shutdown_ && (next == frames_.end() || !next->second.params)) break;
+      if (shutdown_ && !frames_.nextHasParams()) break;  // strips without FrameParams never hold the display up
     }
     spdlog::info("display done: frames={} strips_rejected={} dropped={}", presented_, rejected_, drops_.total());
     return 0;
   }
 
  private:
-  struct Pending {
-    std::optional<proto::FrameParams> params;
-    std::map<uint32_t, proto::Strips> strips;  // by compositor
-    Clock::time_point first_seen = Clock::now();
-    uint64_t bytes = 0;  // of its Strips messages as received (compressed): this frame's, not the last interval's
-  };
-
   void readParams() {
     auto published = link_.receive(drops_);
     shutdown_ = shutdown_ || published.shutdown;
-    for (auto& p : published.params) {
-      if (p.epoch < epoch_) continue;
-      if (p.epoch > epoch_) {  // frames in flight were issued again: forget their old strips
-        epoch_ = p.epoch;
-        for (auto& [f, pend] : frames_) std::erase_if(pend.strips, [&](auto& kv) { return kv.second.epoch < epoch_; });
-      }
-      if (p.first_wanted > next_) cancelBelow(p.first_wanted);
-      if (p.frame < next_) continue;
-      if (!newest_ || p.epoch > newest_->epoch || p.frame > newest_->frame) newest_ = p;
-      auto& pend = frames_[p.frame];
-      pend.params = std::move(p);
-      for (auto it = pend.strips.begin(); it != pend.strips.end();) {  // strips that came first
-        std::string why = checkMember(*pend.params, it->second);
-        if (!why.empty()) drops_.drop(it->first, why);
-        it = why.empty() ? std::next(it) : pend.strips.erase(it);
-      }
-    }
-    if (!newest_) return;
-    for (auto it = frames_.upper_bound(newest_->frame + kAheadWithoutParams); it != frames_.end();)
-      it = it->second.params ? std::next(it) : dropWaiting(it, "strips waited too far ahead of the newest FrameParams");
-  }
-
-  // An interaction made the frames before `first_wanted` stale: they are never shown, and
-  // their strips, still on their way, are expected rather than faults.
-  void cancelBelow(uint64_t first_wanted) {
-    frames_.erase(frames_.begin(), frames_.lower_bound(first_wanted));
-    cancelled_.add(next_, first_wanted);
-    next_ = first_wanted;
-  }
-
-  static std::string checkMember(const proto::FrameParams& p, const proto::Strips& s) {
-    if (s.epoch != p.epoch) return "strips epoch differs from FrameParams";
-    for (const auto& r : p.regions)
-      if (r.compositor == s.compositor) return "";
-    return "strips from compositor " + std::to_string(s.compositor) + " that has no region in the frame";
-  }
-
-  // Strips that beat their FrameParams (the PUB-vs-PUSH race): accepted only a bounded
-  // number of frames ahead of the newest FrameParams, from members of its epoch, within a
-  // byte budget; nearer frames evict farther ones. "" when admitted.
-  std::string admitWaiting(const proto::Strips& s) {
-    if (newest_ && s.frame > newest_->frame + kAheadWithoutParams) return "strips for a frame too far ahead";
-    if (newest_ && s.epoch == newest_->epoch) {
-      if (auto why = checkMember(*newest_, s); !why.empty()) return why + " (waiting for its FrameParams)";
-    }
-    size_t held = waitingBytes();
-    while (held + s.stream.size() > waiting_budget_) {
-      auto far = frames_.end();
-      for (auto it = frames_.upper_bound(s.frame); it != frames_.end(); ++it)
-        if (!it->second.params) far = it;
-      if (far == frames_.end()) return "strips waiting for FrameParams would exceed the budget";
-      for (const auto& [c, st] : far->second.strips) held -= st.stream.size();
-      dropWaiting(far, "strips evicted while waiting for FrameParams: a nearer frame needed the room");
-    }
-    return "";
-  }
-
-  size_t waitingBytes() const {
-    size_t n = 0;
-    for (const auto& [f, pend] : frames_)
-      if (!pend.params)
-        for (const auto& [c, st] : pend.strips) n += st.stream.size();
-    return n;
-  }
-
-  std::map<uint64_t, Pending>::iterator dropWaiting(std::map<uint64_t, Pending>::iterator it, const std::string& why) {
-    for (const auto& [c, st] : it->second.strips) drops_.drop(c, "frame " + std::to_string(it->first) + ": " + why);
-    return frames_.erase(it);
+    for (auto& p : published.params) frames_.addParams(std::move(p));
+    countLateDrops();
   }
 
   // Strips from roster members; the compositor they name must be the one their connection is.
@@ -154,45 +80,20 @@ class Stage {
         drops_.drop(rank, "claims compositor " + std::to_string(s->compositor) + " from compositor " + std::to_string(rank));
         continue;
       }
-      if (s->epoch < epoch_) continue;  // stale, not malformed
-      if (cancelled_.contains(s->frame)) continue;  // cancelled, not malformed
-      if (s->frame < next_) {
-        drops_.drop(s->compositor, "strips for a frame already shown");
-        continue;
-      }
-      auto it = frames_.find(s->frame);
-      std::string why;
-      if (it != frames_.end() && it->second.strips.count(s->compositor)) why = "duplicate strips";
-      else if (it != frames_.end() && it->second.params) why = checkMember(*it->second.params, *s);
-      else why = admitWaiting(*s);
-      if (!why.empty()) {
-        drops_.drop(s->compositor, why);
-        continue;
-      }
-      Pending& pending = frames_[s->frame];
-      pending.bytes += m.size();
-      pending.strips.emplace(s->compositor, std::move(*s));
+      if (std::string why = frames_.addStrips(std::move(*s), m.size()); !why.empty()) drops_.drop(rank, why);
     }
+    countLateDrops();
   }
 
-  bool complete(const Pending& p) const {
-    if (!p.params) return false;
-    for (const auto& r : p.params->regions)
-      if (!p.strips.count(r.compositor)) return false;
-    return true;
+  void countLateDrops() {
+    for (const auto& [compositor, why] : frames_.takeLateDrops()) drops_.drop(compositor, why);
   }
 
   void presentReady() {
-    while (true) {
-      auto it = frames_.find(next_);
-      if (it == frames_.end() || !complete(it->second)) return;
-      present(it->second);
-      frames_.erase(it);
-      ++next_;
-    }
+    while (auto f = frames_.popNext()) present(*f);
   }
 
-  void present(Pending& p) {
+  void present(Assembly::Frame& p) {
     const auto& params = *p.params;
     auto t0 = Clock::now();
     if (image_.width != params.width || image_.height != params.height) image_ = Image8(params.width, params.height);
@@ -308,19 +209,13 @@ class Stage {
   std::unique_ptr<Sink> web_;  // the web view until the first frame joins it to sink_
   // The web view's background without --background: the window's dark grey.
   static constexpr std::array<double, 3> kWebBackground{32 / 255.0, 32 / 255.0, 36 / 255.0};
-  // Frames with FrameParams are bounded by the master's window; strips by their regions.
-  std::map<uint64_t, Pending> frames_;
-  // The master's --in-flight is at most 64 frames in flight: no real strips are further ahead.
-  static constexpr uint64_t kAheadWithoutParams = 64;
   // Strips waiting for FrameParams: at most this many whole frames of strips (every pixel
   // once at 4 bytes, plus 2 header pixels per row); the race needs about one.
   static constexpr size_t kWaitingFrames = 8;
-  std::optional<proto::FrameParams> newest_;
-  uint64_t next_ = 0, presented_ = 0, rejected_ = 0;
-  CancelledFrames cancelled_;  // the frames the latest cancels gave up
+  Assembly frames_;
+  uint64_t presented_ = 0, rejected_ = 0;
   uint64_t input_seq_ = 0, shown_input_ = 0;      // inputs sent; the newest one shown
   std::map<uint64_t, Clock::time_point> input_at_;  // inputs not shown yet: when they arrived
-  uint32_t epoch_ = 0;
   bool shutdown_ = false;
   Image8 image_;
   std::deque<Clock::time_point> fps_times_;

@@ -4,9 +4,9 @@
 
 namespace tessera::master {
 
-void CreditWindow::issue(uint64_t frame, const FrameSpec& spec, std::set<uint32_t> renderers,
+void CreditWindow::issue(uint64_t frame, uint32_t epoch, const FrameSpec& spec, std::set<uint32_t> renderers,
                          std::set<uint32_t> compositors, Clock::time_point now) {
-  frames_[frame] = InFlight{now, spec, std::move(renderers), std::move(compositors), {}, {}};
+  frames_[frame] = InFlight{now, epoch, spec, std::move(renderers), std::move(compositors), {}, {}};
 }
 
 size_t CreditWindow::cancelBelow(uint64_t first_wanted) {
@@ -16,9 +16,9 @@ size_t CreditWindow::cancelBelow(uint64_t first_wanted) {
   return n;
 }
 
-void CreditWindow::stats(proto::Role role, uint32_t rank, uint64_t frame) {
+void CreditWindow::stats(proto::Role role, uint32_t rank, uint64_t frame, uint32_t epoch) {
   auto it = frames_.find(frame);
-  if (it == frames_.end()) return;
+  if (it == frames_.end() || it->second.epoch != epoch) return;
   if (role == proto::Role::Renderer) it->second.renderers_in.insert(rank);
   if (role == proto::Role::Compositor) it->second.compositors_in.insert(rank);
 }

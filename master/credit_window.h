@@ -30,6 +30,7 @@ class CreditWindow {
 
   struct InFlight {
     Clock::time_point issued;
+    uint32_t epoch = 0;  // Stats of another epoch are for an earlier issue of the frame
     FrameSpec spec;
     std::set<uint32_t> renderers, compositors;  // expected to report Stats
     std::set<uint32_t> renderers_in, compositors_in;  // reported
@@ -49,13 +50,15 @@ class CreditWindow {
   int inFlight() const { return in_flight_; }
   bool empty() const { return frames_.empty(); }
   // Issues `frame` (again, under a new epoch: its deliveries start over).
-  void issue(uint64_t frame, const FrameSpec& spec, std::set<uint32_t> renderers, std::set<uint32_t> compositors,
+  void issue(uint64_t frame, uint32_t epoch, const FrameSpec& spec, std::set<uint32_t> renderers, std::set<uint32_t> compositors,
              Clock::time_point now);
   // Frames below `first_wanted` leave the window without being done (an interaction made them
   // stale); returns how many.
   size_t cancelBelow(uint64_t first_wanted);
-  // A stage's Stats for `frame` (ignored when the frame is not in flight).
-  void stats(proto::Role role, uint32_t rank, uint64_t frame);
+  // A stage's Stats for `frame` (ignored when the frame is not in flight, or when they report
+  // an earlier issue of it: a stage that finished under the old roster has not delivered
+  // what the new one waits for).
+  void stats(proto::Role role, uint32_t rank, uint64_t frame, uint32_t epoch);
   // The display's FrameDone: the frame and its latency in ms, or nothing if it is not in
   // flight. Only full frames set the deadline: interactive ones are cheaper by design.
   std::optional<std::pair<FrameSpec, double>> done(uint64_t frame, Clock::time_point now);

@@ -263,7 +263,7 @@ class Master {
     p.display_endpoint = opt_.endpoints.display();
     std::set<uint32_t> renderers = proto::renderersWithWork(p), compositors;
     for (const auto& r : p.regions) compositors.insert(r.compositor);
-    window_.issue(frame, spec, renderers, compositors, Clock::now());
+    window_.issue(frame, p.epoch, spec, renderers, compositors, Clock::now());
     metrics_.issued(frame, p.epoch, (int)w.renderers.size(), (int)p.regions.size(), spec);
     sendBytes(pub_, proto::encode(p, kMasterRank));
   }
@@ -335,7 +335,7 @@ class Master {
   }
 
   void onStats(const proto::StageStats& s) {
-    window_.stats(s.role, s.rank, s.frame);
+    window_.stats(s.role, s.rank, s.frame, s.epoch);
     plan_->stats(s, workers());
     metrics_.stats(s);
   }

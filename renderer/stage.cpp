@@ -102,6 +102,7 @@ class Stage {
     st.role = proto::Role::Renderer;
     st.rank = link_.rank();
     st.frame = p.frame;
+    st.epoch = p.epoch;
     if (const proto::SortFirstWork* work = p.sortFirst()) return renderTiles(p, *work, st);
     renderBricks(p, *p.sortLast(), st);
   }

@@ -274,6 +274,7 @@ std::vector<std::byte> encode(const StageStats& m, uint32_t sender) {
   return encodeStructured(Type::Stats, m.frame, sender, [&](ByteWriter& w) {
     w.u8(static_cast<uint8_t>(m.role));
     w.u32(m.rank);
+    w.u32(m.epoch);
     w.f64(m.work_ms);
     w.f64(m.encode_ms);
     w.f64(m.decode_ms);
@@ -302,6 +303,7 @@ Result<StageStats> decodeStageStats(std::span<const std::byte> msg) {
     m.frame = h.frame;
     m.role = readRole(r);
     m.rank = r.u32("rank");
+    m.epoch = r.u32("epoch");
     m.work_ms = detail::readFinite(r, "work_ms");
     m.encode_ms = detail::readFinite(r, "encode_ms");
     m.decode_ms = detail::readFinite(r, "decode_ms");

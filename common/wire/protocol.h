@@ -41,9 +41,10 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 5;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
+inline constexpr uint16_t kVersion = 6;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
                                          // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms);
-                                         // 5: time steps (FrameParams step, Stats step cache, Input time keys)
+                                         // 5: time steps (FrameParams step, Stats step cache, Input time keys);
+                                         // 6: Stats carry the epoch of the FrameParams they answer
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -265,6 +266,7 @@ struct Framebuffer {                           // renderer -> compositor (router
 // StageStats (type Stats, header frame = frame):
 //   role                                         u8      1   1..Role::Last
 //   rank                                         u32     4
+//   epoch                                        u32     4
 //   work_ms, encode_ms, decode_ms                f64 x3  24  finite
 //   bytes_raw, bytes_encoded, active_pixels      u64 x3  24
 //   active                                       rect    16  sane
@@ -279,6 +281,7 @@ struct Framebuffer {                           // renderer -> compositor (router
 //   prefetch_ms                                  f64     8   finite
 struct StageStats {                            // renderer/compositor -> master, per frame
   Role role = Role::Renderer; uint32_t rank = 0; uint64_t frame = 0;
+  uint32_t epoch = 0;  // of the FrameParams answered: a frame issued again waits for the new issue's
   // What the stage sends: its output before (raw) and after (encoded) the codec, the time
   // spent encoding it, and the time spent decoding what it received (compositors).
   double work_ms = 0, encode_ms = 0, decode_ms = 0;

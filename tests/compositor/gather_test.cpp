@@ -125,6 +125,28 @@ TEST(Gather, NewEpochReissuesFramesInFlight) {
   EXPECT_EQ(r->params.epoch, 1u);
 }
 
+// A stage came back right after its loss: epoch 2 re-issues frame 0 while epoch 1's issue
+// is still arriving, and a renderer's epoch-2 piece overtakes the epoch-2 FrameParams (they
+// travel on different sockets). The newer piece replaces the held one; the frame completes
+// once, under epoch 2, with epoch 2's pieces only.
+TEST(Gather, ANewerEpochsPieceBeforeItsParamsReplacesTheStaleOne) {
+  Gather g(0);
+  EXPECT_EQ(g.addParams(params(0, 2, 1)), "");
+  EXPECT_EQ(g.addPiece(piece(0, 0, 1)), "");
+  EXPECT_EQ(g.addPiece(piece(0, 0, 2)), "") << "not a duplicate: a newer epoch";
+  EXPECT_NE(g.addPiece(piece(0, 0, 1)), "") << "the stale epoch's piece comes too late";
+  EXPECT_EQ(g.addPiece(piece(0, 1, 1)), "");
+  EXPECT_FALSE(g.pop()) << "epoch 1's FrameParams must not complete with an epoch-2 piece";
+  EXPECT_EQ(g.addParams(params(0, 2, 2)), "");
+  EXPECT_FALSE(g.pop()) << "epoch 1's brick 1 was stale";
+  EXPECT_EQ(g.addPiece(piece(0, 1, 2)), "");
+  auto r = g.pop();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->params.epoch, 2u);
+  for (const auto& p : r->pieces) EXPECT_EQ(p.epoch, 2u);
+  EXPECT_TRUE(g.takeLateDrops().empty());
+}
+
 // Compositing follows the master's visibility order, never arrival order: every arrival
 // permutation gives the same, exactly known image.
 TEST(Gather, ResultIsIndependentOfArrivalOrder) {

@@ -14,8 +14,8 @@ const Clock::time_point t0 = Clock::now();
 TEST(CreditWindow, AtMostInFlightFrames) {
   CreditWindow w(2, {});
   EXPECT_TRUE(w.hasRoom());
-  w.issue(0, {}, {0}, {0}, t0);
-  w.issue(1, {}, {0}, {0}, t0);
+  w.issue(0, 0, {}, {0}, {0}, t0);
+  w.issue(1, 0, {}, {0}, {0}, t0);
   EXPECT_FALSE(w.hasRoom());
   EXPECT_FALSE(w.done(7, t0)) << "a frame not in flight";
   ASSERT_TRUE(w.done(0, t0 + 40ms));
@@ -28,13 +28,13 @@ TEST(CreditWindow, DeadlineStartsGenerousThenFollowsTheMedian) {
   CreditWindow w(1, d);
   EXPECT_DOUBLE_EQ(w.deadlineMs(), 30000);
   for (int i = 0; i < 5; ++i) {
-    w.issue(i, {}, {0}, {0}, t0);
+    w.issue(i, 0, {}, {0}, {0}, t0);
     w.done(i, t0 + std::chrono::milliseconds(i == 4 ? 9000 : 100));  // one outlier
   }
   EXPECT_DOUBLE_EQ(w.typicalMs(), 100);
   EXPECT_DOUBLE_EQ(w.deadlineMs(), 2000) << "the floor";
   for (int i = 5; i < 40; ++i) {
-    w.issue(i, {}, {0}, {0}, t0);
+    w.issue(i, 0, {}, {0}, {0}, t0);
     w.done(i, t0 + 1s);
   }
   EXPECT_DOUBLE_EQ(w.deadlineMs(), 8000) << "k x median of the recent frames only";
@@ -42,32 +42,37 @@ TEST(CreditWindow, DeadlineStartsGenerousThenFollowsTheMedian) {
 
 TEST(CreditWindow, WaitingNamesRenderersThenCompositorsThenTheDisplay) {
   CreditWindow w(3, {});
-  w.issue(5, {}, {0, 1}, {0, 1}, t0);
-  w.stats(Role::Renderer, 0, 5);
+  w.issue(5, 0, {}, {0, 1}, {0, 1}, t0);
+  w.stats(Role::Renderer, 0, 5, 0);
   auto a = w.waiting(5);
   EXPECT_EQ(a.renderers, std::vector<uint32_t>{1});
   EXPECT_EQ(a.compositors, (std::vector<uint32_t>{0, 1}));
   EXPECT_FALSE(a.display);
-  w.stats(Role::Renderer, 1, 5);
-  w.stats(Role::Compositor, 1, 5);
+  w.stats(Role::Renderer, 1, 5, 0);
+  w.stats(Role::Compositor, 1, 5, 0);
   auto b = w.waiting(5);
   EXPECT_TRUE(b.renderers.empty());
   EXPECT_EQ(b.compositors, std::vector<uint32_t>{0});
-  w.stats(Role::Compositor, 0, 5);
+  w.stats(Role::Compositor, 0, 5, 0);
   EXPECT_TRUE(w.waiting(5).display);
   // Issued again (new epoch): deliveries start over.
-  w.issue(5, {}, {0}, {0}, t0 + 1s);
+  w.issue(5, 1, {}, {0}, {0}, t0 + 1s);
   EXPECT_EQ(w.waiting(5).renderers, std::vector<uint32_t>{0});
   EXPECT_DOUBLE_EQ(w.oldest(t0 + 3s)->second, 2000);
+  // Stats of the earlier issue (a stage that finished under the old roster) deliver nothing.
+  w.stats(Role::Renderer, 0, 5, 0);
+  EXPECT_EQ(w.waiting(5).renderers, std::vector<uint32_t>{0});
+  w.stats(Role::Renderer, 0, 5, 1);
+  EXPECT_TRUE(w.waiting(5).renderers.empty());
 }
 
 TEST(CreditWindow, CancelledFramesLeaveAtOnceAndOnlyFullFramesSetTheDeadline) {
   CreditWindow w(3, {30.0, 0.001, 1.0});
   FrameSpec full, quick;
   quick.interactive = true;
-  w.issue(0, full, {0}, {0}, t0);
-  w.issue(1, full, {0}, {0}, t0);
-  w.issue(2, quick, {0}, {0}, t0);
+  w.issue(0, 0, full, {0}, {0}, t0);
+  w.issue(1, 0, full, {0}, {0}, t0);
+  w.issue(2, 0, quick, {0}, {0}, t0);
   EXPECT_FALSE(w.hasRoom());
   EXPECT_FALSE(w.hasRoom(5));
   EXPECT_EQ(w.cancelBelow(2), 2u);

@@ -1,0 +1,117 @@
+#include "display/assembly.h"
+
+#include <algorithm>
+
+namespace tessera::display {
+namespace {
+
+std::string checkMember(const proto::FrameParams& p, const proto::Strips& s) {
+  if (s.epoch != p.epoch) return "strips epoch differs from FrameParams";
+  for (const auto& r : p.regions)
+    if (r.compositor == s.compositor) return "";
+  return "strips from compositor " + std::to_string(s.compositor) + " that has no region in the frame";
+}
+
+}  // namespace
+
+void Assembly::addParams(proto::FrameParams p) {
+  if (p.epoch < epoch_) return;  // stale: its frames were issued again
+  if (p.epoch > epoch_) {        // frames in flight were issued again: forget their old strips
+    epoch_ = p.epoch;
+    for (auto& [f, frame] : frames_) std::erase_if(frame.strips, [&](auto& kv) { return kv.second.epoch < epoch_; });
+  }
+  if (p.first_wanted > next_) {  // an interaction made the frames before it stale: never shown
+    frames_.erase(frames_.begin(), frames_.lower_bound(p.first_wanted));
+    cancelled_.add(next_, p.first_wanted);
+    next_ = p.first_wanted;
+  }
+  if (p.frame < next_) return;
+  if (!newest_ || p.epoch > newest_->epoch || p.frame > newest_->frame) newest_ = p;
+  Frame& frame = frames_[p.frame];
+  frame.params = std::move(p);
+  for (auto it = frame.strips.begin(); it != frame.strips.end();) {  // strips that came first
+    std::string why = checkMember(*frame.params, it->second);
+    if (!why.empty()) late_drops_.emplace_back(it->first, why);
+    it = why.empty() ? std::next(it) : frame.strips.erase(it);
+  }
+  for (auto it = frames_.upper_bound(newest_->frame + kAheadWithoutParams); it != frames_.end();)
+    it = it->second.params ? std::next(it) : dropWaiting(it, "strips waited too far ahead of the newest FrameParams");
+}
+
+std::string Assembly::addStrips(proto::Strips s, size_t bytes) {
+  if (s.epoch < epoch_) return "";  // stale, not malformed
+  if (cancelled_.contains(s.frame)) return "";
+  if (s.frame < next_) return "strips for a frame already shown";
+  auto it = frames_.find(s.frame);
+  if (it != frames_.end()) {
+    auto held = it->second.strips.find(s.compositor);
+    if (held != it->second.strips.end()) {
+      if (held->second.epoch == s.epoch) return "duplicate strips";
+      if (held->second.epoch > s.epoch) return "strips of an older epoch than the ones held";
+      it->second.strips.erase(held);  // a newer epoch's strips may beat its FrameParams
+    }
+  }
+  const bool described = it != frames_.end() && it->second.params && it->second.params->epoch == s.epoch;
+  std::string why = described ? checkMember(*it->second.params, s) : admitWaiting(s);
+  if (!why.empty()) return why;
+  Frame& frame = frames_[s.frame];
+  frame.bytes += bytes;
+  frame.strips.emplace(s.compositor, std::move(s));
+  return "";
+}
+
+std::string Assembly::admitWaiting(const proto::Strips& s) {
+  if (newest_ && s.frame > newest_->frame + kAheadWithoutParams) return "strips for a frame too far ahead";
+  if (newest_ && s.epoch == newest_->epoch) {
+    if (auto why = checkMember(*newest_, s); !why.empty()) return why + " (waiting for its FrameParams)";
+  }
+  size_t held = waitingBytes();
+  while (held + s.stream.size() > waiting_budget_) {
+    auto far = frames_.end();
+    for (auto it = frames_.upper_bound(s.frame); it != frames_.end(); ++it)
+      if (!it->second.params) far = it;
+    if (far == frames_.end()) return "strips waiting for FrameParams would exceed the budget";
+    for (const auto& [c, st] : far->second.strips) held -= st.stream.size();
+    dropWaiting(far, "strips evicted while waiting for FrameParams: a nearer frame needed the room");
+  }
+  return "";
+}
+
+size_t Assembly::waitingBytes() const {
+  size_t n = 0;
+  for (const auto& [f, frame] : frames_)
+    if (!frame.params)
+      for (const auto& [c, st] : frame.strips) n += st.stream.size();
+  return n;
+}
+
+std::map<uint64_t, Assembly::Frame>::iterator Assembly::dropWaiting(std::map<uint64_t, Frame>::iterator it,
+                                                                    const std::string& why) {
+  for (const auto& [c, st] : it->second.strips) late_drops_.emplace_back(c, "frame " + std::to_string(it->first) + ": " + why);
+  return frames_.erase(it);
+}
+
+bool Assembly::complete(const Frame& f) const {
+  if (!f.params) return false;
+  for (const auto& r : f.params->regions) {
+    auto it = f.strips.find(r.compositor);
+    if (it == f.strips.end() || it->second.epoch != f.params->epoch) return false;  // newer: its FrameParams come
+  }
+  return true;
+}
+
+std::optional<Assembly::Frame> Assembly::popNext() {
+  auto it = frames_.find(next_);
+  if (it == frames_.end() || !complete(it->second)) return std::nullopt;
+  Frame f = std::move(it->second);
+  frames_.erase(it);
+  ++next_;
+  return f;
+}
+
+bool Assembly::nextHasParams() const {
+  auto it = frames_.find(next_);
+  return it != frames_.end() && it->second.params;
+}
+
+}  // namespace tessera::display

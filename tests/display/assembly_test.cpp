@@ -1,0 +1,119 @@
+#include "display/assembly.h"
+
+#include <gtest/gtest.h>
+
+namespace tessera::display {
+namespace {
+
+using proto::FrameParams;
+using proto::Strips;
+
+FrameParams params(uint64_t frame, int compositors, uint32_t epoch = 0) {
+  FrameParams p;
+  p.frame = frame;
+  p.epoch = epoch;
+  p.width = 8;
+  p.height = 4;
+  for (int c = 0; c < compositors; ++c) p.regions.push_back({(uint32_t)c, {0, 2 * c, 8, 2}, ""});
+  return p;
+}
+
+Strips strips(uint64_t frame, uint32_t compositor, uint32_t epoch = 0, size_t bytes = 16) {
+  Strips s;
+  s.frame = frame;
+  s.epoch = epoch;
+  s.compositor = compositor;
+  s.stream.assign(bytes, uint8_t(compositor + 1));
+  return s;
+}
+
+TEST(Assembly, FramesAreShownInOrderOnlyWithParamsAndEveryRegion) {
+  Assembly a(1 << 20);
+  EXPECT_EQ(a.addStrips(strips(0, 0), 100), "") << "strips may beat their FrameParams";
+  EXPECT_FALSE(a.popNext());
+  EXPECT_FALSE(a.nextHasParams());
+  a.addParams(params(0, 2));
+  a.addParams(params(1, 1));
+  EXPECT_TRUE(a.nextHasParams());
+  EXPECT_EQ(a.addStrips(strips(1, 0), 50), "");
+  EXPECT_FALSE(a.popNext()) << "frame 1 is complete but frame 0 is not: frames are shown in order";
+  EXPECT_EQ(a.addStrips(strips(0, 1), 100), "");
+  auto f0 = a.popNext();
+  ASSERT_TRUE(f0);
+  EXPECT_EQ(f0->params->frame, 0u);
+  EXPECT_EQ(f0->strips.size(), 2u);
+  EXPECT_EQ(f0->bytes, 200u);
+  auto f1 = a.popNext();
+  ASSERT_TRUE(f1);
+  EXPECT_EQ(f1->params->frame, 1u);
+  EXPECT_FALSE(a.popNext());
+  EXPECT_TRUE(a.takeLateDrops().empty());
+}
+
+TEST(Assembly, RejectsDuplicatesStrangersAndShownFramesQuietlySkipsStaleEpochs) {
+  Assembly a(1 << 20);
+  a.addParams(params(0, 2, 1));
+  EXPECT_EQ(a.addStrips(strips(0, 0, 1), 16), "");
+  EXPECT_EQ(a.addStrips(strips(0, 0, 1), 16), "duplicate strips");
+  EXPECT_NE(a.addStrips(strips(0, 5, 1), 16), "") << "no region of the frame";
+  EXPECT_EQ(a.addStrips(strips(0, 1, 0), 16), "") << "an older epoch: stale, not malformed";
+  EXPECT_FALSE(a.popNext()) << "the stale strips completed the frame";
+  EXPECT_EQ(a.addStrips(strips(0, 1, 1), 16), "");
+  ASSERT_TRUE(a.popNext());
+  EXPECT_EQ(a.addStrips(strips(0, 1, 1), 16), "strips for a frame already shown");
+}
+
+// A compositor came back right after its loss: epoch 2 re-issues frame 0 while epoch 1's
+// issue is still arriving, and a compositor's epoch-2 strips overtake the epoch-2 FrameParams.
+// The newer strips replace the held ones; the frame is shown once, under epoch 2, with epoch
+// 2's strips only.
+TEST(Assembly, ANewerEpochsStripsBeforeTheirParamsReplaceTheStaleOnes) {
+  Assembly a(1 << 20);
+  a.addParams(params(0, 2, 1));
+  EXPECT_EQ(a.addStrips(strips(0, 0, 1), 16), "");
+  EXPECT_EQ(a.addStrips(strips(0, 0, 2), 16), "") << "not a duplicate: a newer epoch";
+  EXPECT_NE(a.addStrips(strips(0, 0, 1), 16), "") << "the stale epoch's strips come too late";
+  EXPECT_EQ(a.addStrips(strips(0, 1, 1), 16), "");
+  EXPECT_FALSE(a.popNext()) << "epoch 1's FrameParams must not complete with epoch-2 strips";
+  a.addParams(params(0, 2, 2));
+  EXPECT_FALSE(a.popNext()) << "epoch 1's strips of compositor 1 were stale";
+  EXPECT_EQ(a.addStrips(strips(0, 1, 2), 16), "");
+  auto f = a.popNext();
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->params->epoch, 2u);
+  for (const auto& [c, s] : f->strips) EXPECT_EQ(s.epoch, 2u);
+  EXPECT_TRUE(a.takeLateDrops().empty());
+}
+
+TEST(Assembly, CancelledFramesAreSkippedAndTheirLateStripsQuietlyDiscarded) {
+  Assembly a(1 << 20);
+  a.addParams(params(0, 1));
+  a.addParams(params(1, 1));
+  FrameParams moved = params(2, 1);
+  moved.first_wanted = 2;
+  a.addParams(moved);
+  EXPECT_EQ(a.addStrips(strips(0, 0), 16), "");
+  EXPECT_EQ(a.addStrips(strips(1, 0), 16), "");
+  EXPECT_FALSE(a.popNext());
+  EXPECT_EQ(a.addStrips(strips(2, 0), 16), "");
+  auto f = a.popNext();
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->params->frame, 2u);
+  EXPECT_TRUE(a.takeLateDrops().empty());
+}
+
+TEST(Assembly, StripsWithoutParamsAreBoundedAheadAndByBytes) {
+  Assembly a(100);
+  a.addParams(params(0, 1));
+  EXPECT_NE(a.addStrips(strips(Assembly::kAheadWithoutParams + 1, 0), 16), "") << "too far ahead";
+  EXPECT_NE(a.addStrips(strips(1, 3), 16), "") << "not a member of the newest FrameParams' epoch";
+  EXPECT_EQ(a.addStrips(strips(5, 0, 0, 60), 60), "");
+  EXPECT_EQ(a.addStrips(strips(2, 0, 0, 60), 60), "") << "a nearer frame evicts a farther one";
+  const auto late = a.takeLateDrops();
+  ASSERT_EQ(late.size(), 1u);
+  EXPECT_NE(late[0].second.find("frame 5"), std::string::npos) << late[0].second;
+  EXPECT_NE(a.addStrips(strips(3, 0, 0, 60), 60), "") << "nothing farther to evict: over budget";
+}
+
+}  // namespace
+}  // namespace tessera::display
