@@ -34,8 +34,11 @@ struct Builder {
   int build(const BrickBox& b, int k) {
     int id = (int)tree.nodes.size();
     tree.nodes.emplace_back();
-    int axis = 0;
-    for (int a = 1; a < 3; ++a)
+    // The longest axis; of equal ones the slowest in the file (z, then y): a brick that spans
+    // whole rows and slices is one contiguous read, while cutting x leaves every file page
+    // half wanted (measured on a 256^3 float32 step from a cold cache: 4x the system time).
+    int axis = 2;
+    for (int a = 1; a >= 0; --a)
       if (b.hi[a] - b.lo[a] > b.hi[axis] - b.lo[axis]) axis = a;
     const int len = b.hi[axis] - b.lo[axis];
     if (k <= 1 || len < 2) {

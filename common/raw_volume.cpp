@@ -94,16 +94,23 @@ class RawFile {
   RawFile& operator=(const RawFile&) = delete;
 
   // count voxels starting at linear voxel index `first`, converted to float into out, in
-  // pieces of at most 16 MiB of file bytes; non-finite values are refused naming the voxel.
-  void read(size_t first, size_t count, float* out) {
-    const size_t piece = (16u << 20) / ts_;
-    for (size_t done = 0; done < count; done += piece) readPiece(first + done, std::min(piece, count - done), out + done);
+  // pieces of at most 256 KiB of file bytes; non-finite values are refused naming the voxel.
+  // Each piece then goes through then(piece, n) while it is still in cache: a time step's
+  // samples cross memory once on their way in, not once per pass.
+  template <class Then>
+  void read(size_t first, size_t count, float* out, Then&& then) {
+    const size_t piece = kPieceBytes / ts_;
+    for (size_t done = 0; done < count; done += piece) {
+      const size_t n = std::min(piece, count - done);
+      readPiece(first + done, n, out + done);
+      then(out + done, n);
+    }
   }
 
   // The data's min and max, streaming the file.
   std::array<double, 2> scanRange() {
     const size_t total = (size_t)spec_.dims[0] * spec_.dims[1] * spec_.dims[2];
-    const size_t chunk = (16u << 20) / ts_;
+    const size_t chunk = kPieceBytes / ts_;
     std::vector<float> vals(std::min(chunk, total));
     float mn = INFINITY, mx = -INFINITY;
     for (size_t first = 0; first < total; first += chunk) {
@@ -176,6 +183,7 @@ class RawFile {
                          "outside the data's range (e.g. numpy.nan_to_num(v, nan=v_min)) and give range: to map it");
   }
 
+  static constexpr size_t kPieceBytes = 256u << 10;  // well inside a core's L2
   const RawVolumeSpec& spec_;
   size_t ts_;
   int fd_ = -1;
@@ -201,30 +209,35 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box) {
   v.whole_dims = n;
   v.spacing = spec.spacing;
   v.values.resize(v.voxelCount());
+  // The range to normalise with: declared, else the whole volume's (every window normalises
+  // alike; streamed first), else, for the whole volume, its values' once read.
+  std::array<double, 2> data{INFINITY, -INFINITY};
+  if (v.isWindow() && !spec.has_range) data = file.scanRange();
+  const bool known = spec.has_range || v.isWindow();
+  // Like ParaView: with no declared range, colours and opacity span the data's own values.
+  double lo = spec.has_range ? spec.range[0] : data[0], hi = spec.has_range ? spec.range[1] : data[1];
+  float mn = INFINITY, mx = -INFINITY;
+  auto normalise = [&](float* x, size_t count) {  // in double; a constant volume (lo == hi) maps to 0
+    const double scale = hi > lo ? 1.0 / (hi - lo) : 0.0;
+    for (size_t i = 0; i < count; ++i) {
+      mn = std::min(mn, x[i]), mx = std::max(mx, x[i]);
+      x[i] = (float)std::clamp((x[i] - lo) * scale, 0.0, 1.0);
+    }
+  };
   // Rows of the window; whole rows (and whole slices) are contiguous in the file and read at once.
   const bool full_x = v.dims[0] == n[0], full_xy = full_x && v.dims[1] == n[1];
   const int rows_per_read = full_xy ? v.dims[1] * v.dims[2] : full_x ? v.dims[1] : 1;
   const size_t per_read = (size_t)v.dims[0] * rows_per_read;
   for (size_t row = 0; row < (size_t)v.dims[1] * v.dims[2]; row += rows_per_read) {
     const int y = box.lo[1] + (int)(row % v.dims[1]), z = box.lo[2] + (int)(row / v.dims[1]);
-    file.read(box.lo[0] + (size_t)n[0] * (y + (size_t)n[1] * z), per_read, &v.values[row * v.dims[0]]);
+    file.read(box.lo[0] + (size_t)n[0] * (y + (size_t)n[1] * z), per_read, &v.values[row * v.dims[0]], [&](float* x, size_t k) {
+      if (known) normalise(x, k);
+    });
   }
-  // With a declared range (a renderer's window, a time step) one pass finds the window's
-  // values and normalises them; without, the range must be known first.
-  std::array<double, 2> data{INFINITY, -INFINITY};
-  if (v.isWindow() && !spec.has_range) {
-    data = file.scanRange();  // the whole volume's, so every window normalises alike
-  } else if (!spec.has_range) {
+  if (!known) {  // the whole volume without a declared range: its own values set it
     for (float x : v.values) data[0] = std::min(data[0], (double)x), data[1] = std::max(data[1], (double)x);
-  }
-  // Like ParaView: with no declared range, colours and opacity span the data's own values.
-  const double lo = spec.has_range ? spec.range[0] : data[0], hi = spec.has_range ? spec.range[1] : data[1];
-  // Normalise in double; a constant volume (lo == hi) maps to 0 everywhere.
-  const double scale = hi > lo ? 1.0 / (hi - lo) : 0.0;
-  float mn = INFINITY, mx = -INFINITY;
-  for (float& x : v.values) {
-    mn = std::min(mn, x), mx = std::max(mx, x);
-    x = (float)std::clamp((x - lo) * scale, 0.0, 1.0);
+    lo = data[0], hi = data[1];
+    normalise(v.values.data(), v.values.size());
   }
   v.data_range = spec.has_range ? std::array<double, 2>{mn, mx} : data;  // a declared range: the window's own values
   v.mapped_range = {lo, hi};

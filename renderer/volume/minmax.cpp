@@ -37,12 +37,23 @@ void octantDistance(const std::array<int, 3>& d, const std::vector<uint8_t>& emp
 }
 }  // namespace
 
+std::array<int, 3> MinMaxHierarchy::blockDims(const std::array<int, 3>& n) {
+  return {blocksOnAxis(n[0]), blocksOnAxis(n[1]), blocksOnAxis(n[2])};
+}
+
+MinMaxHierarchy::MinMaxHierarchy(const std::array<int, 3>& block_dims, std::vector<float> mn, std::vector<float> mx) {
+  if (mn.size() != (size_t)block_dims[0] * block_dims[1] * block_dims[2] || mx.size() != mn.size())
+    throw std::invalid_argument("MinMaxHierarchy: level 0 size differs from its block dims");
+  levels_.push_back(Level{block_dims, std::move(mn), std::move(mx)});
+  buildCoarserLevels();
+}
+
 MinMaxHierarchy::MinMaxHierarchy(const Volume& v) {
   const auto& n = v.dims;
   if (v.values.size() != v.voxelCount() || v.voxelCount() == 0)
     throw std::invalid_argument("MinMaxHierarchy: volume has no voxels or wrong value count");
   Level l0;
-  l0.dims = {blocksOnAxis(n[0]), blocksOnAxis(n[1]), blocksOnAxis(n[2])};
+  l0.dims = blockDims(n);
   const size_t count = (size_t)l0.dims[0] * l0.dims[1] * l0.dims[2];
   l0.mn.assign(count, 0);
   l0.mx.assign(count, 0);
@@ -75,7 +86,11 @@ MinMaxHierarchy::MinMaxHierarchy(const Volume& v) {
   const bool big = nz >= 4 && v.voxelCount() >= (1u << 18);  // threads cost more than small volumes
   parallelRanges(nz, big ? 2 : 1, [&](long long z0, long long z1) { work((int)z0, (int)z1); });
   levels_.push_back(std::move(l0));
-  // Octree levels: each node covers 2x2x2 nodes of the finer level.
+  buildCoarserLevels();
+}
+
+// Octree levels: each node covers 2x2x2 nodes of the finer level.
+void MinMaxHierarchy::buildCoarserLevels() {
   while (levels_.back().dims != std::array<int, 3>{1, 1, 1}) {
     const Level& f = levels_.back();
     Level c;

@@ -19,6 +19,11 @@ class MinMaxHierarchy {
   static constexpr int kBlock = 8;  // cells per block edge at level 0
 
   explicit MinMaxHierarchy(const Volume& v);
+  // From level 0 computed elsewhere (VolumeAccel gets it in the pass that bricks the values):
+  // `mn`, `mx` hold blockDims(voxel dims) blocks, x fastest.
+  MinMaxHierarchy(const std::array<int, 3>& block_dims, std::vector<float> mn, std::vector<float> mx);
+  // Level-0 blocks per axis for a volume of `voxel_dims`.
+  static std::array<int, 3> blockDims(const std::array<int, 3>& voxel_dims);
 
   int levels() const { return (int)levels_.size(); }
   std::array<int, 3> dims(int level) const { return levels_[level].dims; }
@@ -53,6 +58,7 @@ class MinMaxHierarchy {
     std::array<int, 3> dims{1, 1, 1};
     std::vector<float> mn, mx;
   };
+  void buildCoarserLevels();
   std::vector<Level> levels_;
 };
 

@@ -46,12 +46,13 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, 
   // 32-bit gather indices (AVX2) address at most 2^31 voxels.
   if (v.voxelCount() >= (size_t{1} << 31)) throw std::invalid_argument("Raycaster: volume larger than 2^31 voxels");
   if (tf.points().empty()) throw std::invalid_argument("Raycaster: transfer function has no points");
-  for (size_t i = 0; i < v.values.size(); ++i)
-    if (!std::isfinite(v.values[i]))
-      throw std::invalid_argument("Raycaster: non-finite volume value at linear index " + std::to_string(i));
+  impl_->accel = VolumeAccel::forVolume(volume);  // one pass over the values, which also finds non-finite ones
+  if (!impl_->accel->all_finite)
+    for (size_t i = 0; i < v.values.size(); ++i)
+      if (!std::isfinite(v.values[i]))
+        throw std::invalid_argument("Raycaster: non-finite volume value at linear index " + std::to_string(i));
   impl_->volume = std::move(volume);
   impl_->tf = std::move(tf);
-  impl_->accel = VolumeAccel::forVolume(impl_->volume);
   impl_->shading = shading;
   impl_->light = light;
   if (shading.on) impl_->gradients = std::make_unique<const GradientVolume>(v);

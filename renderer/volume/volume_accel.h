@@ -2,7 +2,10 @@
 // the min-max hierarchy and a bricked uint16 copy of the normalised values: 8^3-cell
 // bricks with their +1 apron (9^3 voxels), so the eight corners of any sample lie in one
 // brick at fixed offsets (+1, +9, +81) and a ray's samples stay within few cache lines;
-// one 32-bit read fetches an x-neighbour pair. Immutable; thread-safe.
+// one 32-bit read fetches an x-neighbour pair. Both come from one pass over the values
+// (a brick's 9^3 voxels are exactly what its hierarchy block ranges over), which also finds
+// non-finite values: a time step is prepared with one read of its samples. Immutable;
+// thread-safe.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -28,6 +31,11 @@ struct VolumeAccel {
   // kBrickSize * (bx + nb[0] * (by + nb[1] * bz)); voxel (lx,ly,lz) inside at lx + 9*(ly + 9*lz).
   std::vector<uint16_t> bricked;
   std::array<int, 3> nb{1, 1, 1};
+  bool all_finite = true;  // false: some value is NaN or infinite (its bricked value is meaningless)
+
+ private:
+  struct Pass;  // the bricked copy and level 0 of the hierarchy, from one pass
+  explicit VolumeAccel(Pass&& p);
 };
 
 }  // namespace tessera::renderer

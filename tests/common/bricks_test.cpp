@@ -57,6 +57,18 @@ TEST(Bricks, BalancesNonEmptyVoxels) {
   EXPECT_EQ(splitBricks(box(16, 4, 4), 2, &kStep).nodes[0].split, 8);
 }
 
+// Of equally long axes the one slowest in memory and in the file is cut: z, then y. Two
+// bricks of a cube are then two contiguous slabs of the file.
+TEST(Bricks, EqualAxesAreCutSlowestFirst) {
+  const BrickTree two = splitBricks(box(8, 8, 8), 2);
+  EXPECT_EQ(two.nodes[0].axis, 2);
+  EXPECT_EQ(two.bricks[0].hi, (std::array<int, 3>{8, 8, 4}));
+  const BrickTree four = splitBricks(box(8, 8, 8), 4);
+  EXPECT_EQ(four.nodes[four.nodes[0].left].axis, 1) << "the halves are 8x8x4: y before x";
+  EXPECT_EQ(splitBricks(box(8, 8, 4), 2).nodes[0].axis, 1);
+  EXPECT_EQ(splitBricks(box(9, 8, 8), 2).nodes[0].axis, 0) << "a longer axis still wins";
+}
+
 TEST(Bricks, VisibilityOrderPutsTheEyeSideFirst) {
   Volume v = box(10, 14, 6);
   v.spacing = {1, 0.5, 2};
