@@ -197,7 +197,7 @@ Volume loadRawVolume(const RawVolumeSpec& spec) {
   return loadRawVolume(spec, VoxelBox{{0, 0, 0}, spec.dims});
 }
 
-Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box) {
+Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector<float> storage) {
   RawFile file(spec);
   const auto& n = spec.dims;
   if (std::string p = windowProblem(n, box); !p.empty()) fail(spec.file, p);
@@ -208,7 +208,8 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box) {
   v.origin = box.lo;
   v.whole_dims = n;
   v.spacing = spec.spacing;
-  v.values.resize(v.voxelCount());
+  v.values = std::move(storage);
+  v.values.resize(v.voxelCount());  // no work when the storage has that size: every sample is read
   // The range to normalise with: declared, else the whole volume's (every window normalises
   // alike; streamed first), else, for the whole volume, its values' once read.
   std::array<double, 2> data{INFINITY, -INFINITY};

@@ -119,7 +119,8 @@ std::string farmAccuracyProblem(const Quality& q, int renderers);
 Volume loadVolume(const Scene& scene);
 // Only the voxels of `box` (a renderer's bricks and their ghost voxels) of time step `step`:
 // see loadRawVolume and stepVolume.
-Volume loadVolume(const Scene& scene, const VoxelBox& box, int step = 0);
+// `storage`: memory a file's samples may be read into (see loadRawVolume).
+Volume loadVolume(const Scene& scene, const VoxelBox& box, int step = 0, std::vector<float> storage = {});
 // Where step `step` of the scene's volume is: its file (a series), its offset (a 4-D file)
 // or its generator time. A step's own header is read and checked against step 0's: throws
 // std::runtime_error naming the file, the field and both values when they differ, or the

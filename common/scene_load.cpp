@@ -53,11 +53,11 @@ std::array<int, 3> volumeDims(const Scene& scene) {
   return {n, n, n};
 }
 
-Volume loadVolume(const Scene& scene, const VoxelBox& box, int step) {
+Volume loadVolume(const Scene& scene, const VoxelBox& box, int step, std::vector<float> storage) {
   const std::string name = scene.path.empty() ? "<default scene>" : scene.path;
   try {
     const auto spec = stepVolume(scene, step);
-    if (const auto* raw = std::get_if<RawVolumeSpec>(&spec)) return loadRawVolume(*raw, box);
+    if (const auto* raw = std::get_if<RawVolumeSpec>(&spec)) return loadRawVolume(*raw, box, std::move(storage));
     return generateVolume(std::get<GeneratorSpec>(spec), box);
   } catch (const SceneError&) {
     throw;

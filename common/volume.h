@@ -103,7 +103,8 @@ Volume loadRawVolume(const RawVolumeSpec& spec);
 // box, not the file. With no `range`, the data's min..max is found by streaming the whole
 // file once in slabs (the normalisation must be the whole volume's); non-finite values
 // anywhere in the file are refused as loadRawVolume refuses them.
-Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box);
+// `storage`: memory to read into (a freed window of the same size: no page faults, no zeroing).
+Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector<float> storage = {});
 // Throws std::invalid_argument for an unknown name or size < 2. A box gives a window:
 // each voxel is computed from its position in the whole volume, so windows equal the
 // matching part of the whole.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <utility>
 
 #include "common/net/log.h"
 #include "renderer/volume/volume_accel.h"
@@ -74,15 +75,26 @@ bool StepCache::makeRoom(uint64_t need, uint64_t keep_within) {
           (far == held_.end() || distance(it->first) > distance(far->first)))
         far = it;
     if (far == held_.end()) return false;
+    recycle(std::move(far->second));
     held_.erase(far);
   }
   return true;
 }
 
-StepCache::Entry StepCache::load(int step, double& ms) {
+void StepCache::recycle(Entry&& e) {
+  e.caster.reset();  // it holds the volume too
+  // Only when nothing else holds it (a frame being rendered keeps its step whole); references
+  // are only taken from held_ under mu_, so a count of one stays one.
+  if (spare_.empty() && e.volume.use_count() == 1)
+    spare_ = std::move(std::const_pointer_cast<Volume>(e.volume)->values);  // made non-const by load()
+}
+
+std::vector<float> StepCache::takeSpare() { return std::exchange(spare_, {}); }
+
+StepCache::Entry StepCache::load(int step, double& ms, std::vector<float> storage) {
   const auto t0 = std::chrono::steady_clock::now();
   Entry e;
-  auto v = std::make_shared<Volume>(loadVolume(scene_, box_, step));
+  auto v = std::make_shared<Volume>(loadVolume(scene_, box_, step, std::move(storage)));
   if (step > 0 && (v->data_range[0] < v->mapped_range[0] || v->data_range[1] > v->mapped_range[1]))
     spdlog::warn("step {}: values {} .. {} lie outside the range [{}, {}] fixed for the series (step 0's, or "
                  "volume.range): they show as its ends; give volume.range to cover every step",
@@ -100,6 +112,7 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
   std::unique_lock lock(mu_);
   if (!(box == box_)) {
     held_.clear();  // the bricks moved: every held step is of the old window
+    spare_ = {};
     box_ = box;
     ++generation_;
   }
@@ -113,11 +126,12 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
   } else {
     if (scene_.series.steps > 1) ++stats_.misses;
     loading_ = step;
+    std::vector<float> storage = takeSpare();
     lock.unlock();
     Entry e;
     double ms = 0;
     try {
-      e = load(step, ms);
+      e = load(step, ms, std::move(storage));
     } catch (const std::exception& ex) {
       lock.lock();
       loading_ = -1;
@@ -162,12 +176,13 @@ void StepCache::prefetchLoop() {
     }
     prefetching_ = next;
     const uint64_t generation = generation_;
+    std::vector<float> storage = takeSpare();
     lock.unlock();
     Entry e;
     double ms = 0;
     bool ok = true;
     try {
-      e = load(next, ms);
+      e = load(next, ms, std::move(storage));
     } catch (const std::exception&) {
       ok = false;  // said (and counted) by get() when the step is shown
     }

@@ -60,8 +60,13 @@ class StepCache {
     uint64_t file_bytes = 0;  // read from the file for it
   };
   void prefetchLoop();
-  // Loads step `step` of box_ (unlocked while reading); throws what loadVolume throws.
-  Entry load(int step, double& ms);
+  // Loads step `step` of box_ into `storage` (unlocked while reading); throws what
+  // loadVolume throws.
+  Entry load(int step, double& ms, std::vector<float> storage);
+  // A freed step's samples, for the next load: a step's window costs no page faults and no
+  // zeroing (measured: ~5% of a playing renderer's time). Under mu_.
+  void recycle(Entry&& e);
+  std::vector<float> takeSpare();
   // Frees held steps farther along playback than `keep_within` (and never `current_`) until
   // `need` more bytes fit the budget; false if they still do not.
   bool makeRoom(uint64_t need, uint64_t keep_within);
@@ -82,6 +87,7 @@ class StepCache {
   int current_ = -1, direction_ = 1, last_good_ = -1;
   int loading_ = -1, prefetching_ = -1;  // the step being read by get() and by the prefetch thread
   std::vector<int> wanted_;
+  std::vector<float> spare_;  // at most one window's samples: taken by the next load
   StepCacheStats stats_;
   bool stop_ = false;
   std::thread thread_;  // last: started once everything above is ready

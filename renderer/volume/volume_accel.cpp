@@ -16,7 +16,7 @@ namespace tessera::renderer {
 
 struct VolumeAccel::Pass {
   std::array<int, 3> nb;
-  std::vector<uint16_t> bricked;
+  decltype(VolumeAccel::bricked) bricked;
   std::vector<float> mn, mx;
   bool all_finite = true;
 };
@@ -60,7 +60,8 @@ VolumeAccel::VolumeAccel(const Volume& v) : VolumeAccel([&v] {
   Pass p;
   p.nb = MinMaxHierarchy::blockDims(v.dims);
   const size_t blocks = (size_t)p.nb[0] * p.nb[1] * p.nb[2];
-  p.bricked.assign((size_t)kBrickSize * blocks + 8, 0);
+  p.bricked.resize((size_t)kBrickSize * blocks + 8);  // uninitialised: the pass writes every brick
+  std::fill(p.bricked.end() - 8, p.bricked.end(), uint16_t{0});
   p.mn.resize(blocks);
   p.mx.resize(blocks);
   std::atomic<bool> finite{true};

@@ -10,12 +10,31 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "common/volume.h"
 #include "renderer/volume/minmax.h"
 
 namespace tessera::renderer {
+
+// Leaves new elements uninitialised: the bricked copy is written whole by its one pass, so
+// zeroing it first would be one more pass over a time step's memory.
+template <class T>
+struct UninitAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UninitAllocator<U>;
+  };
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
 
 struct VolumeAccel {
   static constexpr float kQuantScale = 65535.0f;  // q = round(value * kQuantScale)
@@ -29,7 +48,7 @@ struct VolumeAccel {
   static constexpr int kBrickSize = kEdge * kEdge * kEdge;        // 729
   // Brick (bx,by,bz) (the hierarchy's level-0 blocks) starts at
   // kBrickSize * (bx + nb[0] * (by + nb[1] * bz)); voxel (lx,ly,lz) inside at lx + 9*(ly + 9*lz).
-  std::vector<uint16_t> bricked;
+  std::vector<uint16_t, UninitAllocator<uint16_t>> bricked;  // + 8 zeros: reads past the last brick
   std::array<int, 3> nb{1, 1, 1};
   bool all_finite = true;  // false: some value is NaN or infinite (its bricked value is meaningless)
 
