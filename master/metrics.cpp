@@ -137,6 +137,14 @@ nlohmann::json Metrics::summarize(const std::vector<proto::StageStats>& renderer
     j["render_step_misses"] = misses;
     j["render_bytes_read"] = read;
     j["render_prefetch_ms_max"] = prefetch;
+    // Each renderer's cache by rank: which one reads slowly or misses is seen, not averaged away.
+    std::vector<const proto::StageStats*> by_rank;
+    for (const auto& s : renderers) by_rank.push_back(&s);
+    std::sort(by_rank.begin(), by_rank.end(), [](auto* a, auto* b) { return a->rank < b->rank; });
+    auto& per = j["render_step_cache"] = nlohmann::json::array();
+    for (const auto* s : by_rank)
+      per.push_back({{"rank", s->rank}, {"hits", s->step_hits}, {"misses", s->step_misses}, {"bytes_read", s->bytes_read},
+                     {"load_ms", s->load_ms}, {"prefetch_ms", s->prefetch_ms}});
   }
   if (chunks > 0) {  // only geometry frames have them
     j["overlap_factor"] = drawn / chunks;

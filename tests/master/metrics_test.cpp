@@ -52,6 +52,24 @@ TEST(Metrics, AFrameOfReusedImagesHasNoRenderTime) {
   EXPECT_EQ(j["render_images_made"], 1);
 }
 
+TEST(Metrics, ATimeSeriesFrameShowsEachRenderersStepCacheByRank) {
+  proto::FrameDone d;
+  auto r1 = stats(proto::Role::Renderer, 1, 0, 10), r0 = stats(proto::Role::Renderer, 0, 0, 10);
+  r1.step_hits = 9, r1.step_misses = 1, r1.bytes_read = 4096, r1.prefetch_ms = 30, r1.load_ms = 0;
+  r0.step_hits = 8, r0.step_misses = 2, r0.bytes_read = 2048, r0.prefetch_ms = 12, r0.load_ms = 7;
+  auto j = Metrics::summarize({r1, r0}, {}, d, 5);
+  EXPECT_EQ(j["render_step_hits"], 17);
+  EXPECT_DOUBLE_EQ(j["render_prefetch_ms_max"].get<double>(), 30);
+  ASSERT_EQ(j["render_step_cache"].size(), 2u) << j.dump();
+  EXPECT_EQ(j["render_step_cache"][0]["rank"], 0);
+  EXPECT_EQ(j["render_step_cache"][0]["misses"], 2);
+  EXPECT_DOUBLE_EQ(j["render_step_cache"][0]["load_ms"].get<double>(), 7);
+  EXPECT_EQ(j["render_step_cache"][1]["bytes_read"], 4096);
+  EXPECT_DOUBLE_EQ(j["render_step_cache"][1]["prefetch_ms"].get<double>(), 30);
+  EXPECT_FALSE(Metrics::summarize({stats(proto::Role::Renderer, 0, 0, 10)}, {}, d, 5).contains("render_step_cache"))
+      << "a volume without time has none";
+}
+
 TEST(Metrics, LineWrittenOnceDoneAndAllStatsAreInWithTheFaultCounters) {
   auto path = std::filesystem::temp_directory_path() / ("tessera_metrics_test_" + std::to_string(::getpid()) + ".jsonl");
   {
