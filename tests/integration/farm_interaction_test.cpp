@@ -223,8 +223,12 @@ TEST_F(FarmTimeKeys, ArrowsHomeEndAndSpaceMoveThroughTheSteps) {
   const size_t paused = metricsLines(dir_).size();
   std::this_thread::sleep_for(500ms);
   EXPECT_EQ(metricsLines(dir_).size(), paused) << "no frames while paused";
-  user_->key(XK_Home);
   uint64_t after = metricsLines(dir_).back()["frame"].get<uint64_t>();
+  if (metricsLines(dir_).back()["step"].get<int>() == 0) {  // the small steps play fast: it may have wrapped to 0
+    user_->key(XK_Right);
+    ASSERT_TRUE(shows(1, after));
+  }
+  user_->key(XK_Home);  // from a step other than the first: Home must show the first
   ASSERT_TRUE(shows(0, after));
 }
 
