@@ -10,6 +10,7 @@
 # Writes OUT/time-series.csv and prints Markdown tables. Runs anywhere; root is not needed.
 # Every run turns the camera (an orbit), so every frame is rendered, static or playing.
 # Usage: tests/bench/time_series_bench.sh [SIZE=256] [STEPS=100] [FRAMES=200] [LONG=1000] [OUT=bench-out/time] [BUILD=build]
+# LONG=0 skips the long loop and the long series; RENDERERS="2" plays with 2 renderers only.
 set -euo pipefail
 SIZE=${1:-256}
 STEPS=${2:-100}
@@ -71,13 +72,13 @@ print(f"{fps:.2f} {rate:.3f} {read:.1f} {held:.0f} {peak:.0f} {m[0]['done_ms']:.
 EOF
 }
 
-step_mib=$(( SIZE * SIZE * SIZE * 4 / 1048576 ))
+step_mib=$(awk -v s="$SIZE" 'BEGIN { printf "%g", s * s * s * 4 / 1048576 }')
 echo "config,renderers,size,steps,frames,fps,hit_rate,read_mib_per_renderer_step,cache_held_mib,renderer_peak_mib,first_frame_ms" >"$OUT/time-series.csv"
 echo "## Playback vs a static volume: ${SIZE}^3 float32 (${step_mib} MiB a step), $STEPS steps, 1024x1024, cold cache ($cpu)"
 echo
 echo "| renderers | static fps | playing fps (ratio) | backwards fps (ratio) | prefetch hits fwd / back | read per renderer per step (its share) | cache held | renderer peak |"
 echo "|---|---|---|---|---|---|---|---|"
-for n in 2 4; do
+for n in ${RENDERERS:-2 4}; do
   scene "$OUT/static.yaml" "{play: false}" 1024 60
   scene "$OUT/forward.yaml" "{play: true}" 1024 "$FRAMES"
   scene "$OUT/backward.yaml" "{play: true, stride: -1, step: $((STEPS - 1))}" 1024 "$FRAMES"
@@ -95,6 +96,7 @@ for n in 2 4; do
     -v pk="$(( fpeak > bpeak ? fpeak : bpeak ))" -v share="$step_mib" 'BEGIN { printf "| %d | %.2f | %.2f (%.2f) | %.2f (%.2f) | %.1f%% / %.1f%% | %.1f MiB (%.2fx) | %d MiB | %d MiB |\n", n, sf, ff, ff / sf, bf, bf / sf, 100 * fh, 100 * bh, rd, rd / (share / n), held, pk }'
 done
 
+[ "$LONG" -gt 0 ] || exit 0
 echo
 echo "## Memory over a long loop: 2 renderers, 256x256, default cache budget"
 echo
