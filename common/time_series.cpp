@@ -72,6 +72,7 @@ std::variant<RawVolumeSpec, GeneratorSpec> stepVolume(const Scene& scene, int st
     return s;
   }
   RawVolumeSpec s = std::get<RawVolumeSpec>(scene.volume);
+  s.read_once = t.steps > 1;
   if (step == 0) return s;
   if (t.files.empty()) {  // a 4-D file: step t's samples follow step t-1's
     s.offset += (uint64_t)step * t.step_bytes;
@@ -91,6 +92,7 @@ std::variant<RawVolumeSpec, GeneratorSpec> stepVolume(const Scene& scene, int st
   h.spacing = s.spacing;
   h.has_range = s.has_range;
   h.range = s.range;
+  h.read_once = true;
   return h;
 }
 

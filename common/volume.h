@@ -59,6 +59,7 @@ struct RawVolumeSpec {
   bool big_endian = false, gzip = false;
   uint64_t gzip_start = 0;              // file byte where the gzip stream starts (after an attached header)
   double slope = 1, inter = 0;          // value = slope * stored + inter (NIfTI scl_slope, scl_inter)
+  bool read_once = false;               // a series' step: what is not in the page cache bypasses it
   const std::string& samples() const { return data_file.empty() ? file : data_file; }
 };
 

@@ -5,8 +5,11 @@
 #include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
+#include <fcntl.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -18,6 +21,18 @@ namespace fs = std::filesystem;
 
 namespace {
 using test::TempDir;
+
+// Pages of the file in the page cache.
+size_t cachedPages(const std::string& file) {
+  const size_t len = fs::file_size(file), page = (size_t)::sysconf(_SC_PAGESIZE);
+  const int fd = ::open(file.c_str(), O_RDONLY);
+  void* map = ::mmap(nullptr, len, PROT_READ, MAP_SHARED, fd, 0);
+  ::close(fd);
+  std::vector<unsigned char> in((len + page - 1) / page);
+  ::mincore(map, len, in.data());
+  ::munmap(map, len);
+  return (size_t)std::count_if(in.begin(), in.end(), [](unsigned char c) { return c & 1; });
+}
 
 std::string errorOf(const RawVolumeSpec& s) {
   try {
@@ -219,6 +234,43 @@ TEST(Volume, ARawWindowHoldsOnlyItsBoxAndEqualsThatPartOfTheWhole) {
   expectWindowOfWhole(loadRawVolume(s, VoxelBox{{1, 1, 1}, {12, 4, 8}}), ranged, VoxelBox{{1, 1, 1}, {12, 4, 8}});
   EXPECT_THROW(loadRawVolume(s, VoxelBox{{0, 0, 0}, {14, 11, 9}}), std::runtime_error);
   EXPECT_THROW(loadRawVolume(s, VoxelBox{{3, 0, 0}, {3, 11, 9}}), std::runtime_error);
+}
+
+namespace {
+// Drops a file from the page cache; false where that cannot be done (tmpfs).
+bool dropFromPageCache(const std::string& file) {
+  const int fd = ::open(file.c_str(), O_RDONLY);
+  const bool ok = fd >= 0 && ::fdatasync(fd) == 0 && ::posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED) == 0;
+  if (fd >= 0) ::close(fd);
+  return ok && cachedPages(file) == 0;
+}
+}  // namespace
+
+// Normalising (four voxels at a time) is the double formula for every voxel, pieces' tails
+// included; a series step not in the page cache is read past it (O_DIRECT through an aligned
+// buffer) with the same samples, for a header offset and windows that align to nothing.
+TEST(Volume, AStepReadPastThePageCacheHasTheBufferedReadsExactSamples) {
+  TempDir t("volume");
+  const std::array<int, 3> n{70, 65, 33};  // 600 KiB: several 256 KiB pieces
+  std::vector<float> f(3 + (size_t)n[0] * n[1] * n[2]);  // 12 header bytes first
+  uint32_t seed = 5;
+  for (float& x : f) seed = seed * 1664525u + 1013904223u, x = (float)((seed >> 8) / 16777216.0 * 14 - 2);
+  RawVolumeSpec s = test::rawSpec(t.write("s.raw", f.data(), f.size() * 4), n, VoxelType::Float32, {1, 1, 1}, true, {0, 10});
+  s.offset = 12;
+  const Volume whole = loadRawVolume(s);
+  for (size_t i = 0; i < whole.values.size(); ++i)
+    ASSERT_EQ(whole.values[i], (float)std::clamp((f[3 + i] - 0.0) * (1.0 / 10), 0.0, 1.0)) << i;
+  EXPECT_EQ(whole.data_range[0], *std::min_element(f.begin() + 3, f.end()));
+  EXPECT_EQ(whole.data_range[1], *std::max_element(f.begin() + 3, f.end()));
+  s.read_once = true;
+  for (const VoxelBox& box : {VoxelBox{{0, 0, 0}, n}, VoxelBox{{3, 5, 7}, {61, 64, 30}}, VoxelBox{{0, 0, 11}, {70, 65, 20}}}) {
+    expectWindowOfWhole(loadRawVolume(s, box), whole, box);  // cached: buffered
+    if (!dropFromPageCache(s.file)) continue;                 // a file system without a page cache to bypass
+    expectWindowOfWhole(loadRawVolume(s, box), whole, box);
+    if (box.hi[0] - box.lo[0] == n[0]) {  // whole rows (a renderer's slab); short rows are read buffered
+      EXPECT_EQ(cachedPages(s.file), 0u) << "the read went through the page cache";
+    }
+  }
 }
 
 TEST(Volume, AWindowWithoutARangeStillRefusesANonFiniteValueAnywhere) {

@@ -57,9 +57,13 @@ TEST(VolumeAccel, OnePassGivesTheVolumesOwnHierarchyAndEveryVoxelBricked) {
 TEST(VolumeAccel, FindsNonFiniteValues) {
   for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
                     -std::numeric_limits<float>::infinity()}) {
-    Volume v = randomVolume({20, 17, 9}, 3);
-    v.values[v.index(19, 16, 8)] = bad;  // the last voxel: only the far bricks' aprons reach it
-    EXPECT_FALSE(VolumeAccel(v).all_finite) << bad;
+    // The last voxel (only the far bricks' aprons reach it), one in each half of a brick's
+    // row and its ninth (apron) voxel.
+    for (const auto& [x, y, z] : {std::array<int, 3>{19, 16, 8}, {2, 5, 1}, {6, 3, 4}, {8, 9, 0}}) {
+      Volume v = randomVolume({20, 17, 9}, 3);
+      v.values[v.index(x, y, z)] = bad;
+      EXPECT_FALSE(VolumeAccel(v).all_finite) << bad << " at " << x << " " << y << " " << z;
+    }
   }
 }
 
