@@ -273,16 +273,17 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector
   auto normalise = [&](float* x, size_t count) {  // in double; a constant volume (lo == hi) maps to 0
     const double scale = hi > lo ? 1.0 / (hi - lo) : 0.0;
     using lanes::D4, lanes::F4;
-    const D4 dlo = {lo, lo, lo, lo}, dscale = {scale, scale, scale, scale}, zero{}, one = zero + 1;
+    const D4 dlo = {lo, lo, lo, lo}, dscale = {scale, scale, scale, scale};
+    const F4 zero = lanes::splat(0), one = lanes::splat(1);
     F4 vmn = lanes::splat(mn), vmx = lanes::splat(mx);
     size_t i = 0;
     for (; i + 4 <= count; i += 4) {  // as the scalar loop below, four at a time
       const F4 f = lanes::load(x + i);
       vmn = lanes::min(vmn, f), vmx = lanes::max(vmx, f);
-      D4 d = (__builtin_convertvector(f, D4) - dlo) * dscale;
-      d = d < zero ? zero : d;
-      d = one < d ? one : d;
-      lanes::store(x + i, __builtin_convertvector(d, F4));
+      // Clamped after rounding to float, which is the same (0 and 1 are floats; only a -0
+      // can come out +0) and stays in four-lane registers.
+      const F4 g = __builtin_convertvector((__builtin_convertvector(f, D4) - dlo) * dscale, F4);
+      lanes::store(x + i, g > zero ? (g < one ? g : one) : zero);
     }
     mn = lanes::hmin(vmn), mx = lanes::hmax(vmx);
     for (; i < count; ++i) {

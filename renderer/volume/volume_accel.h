@@ -40,6 +40,10 @@ struct VolumeAccel {
   static constexpr float kQuantScale = 65535.0f;  // q = round(value * kQuantScale)
 
   explicit VolumeAccel(const Volume& v);
+  // Leaves its bricked copy to the next one built (see volume_accel.cpp).
+  ~VolumeAccel();
+  VolumeAccel(const VolumeAccel&) = delete;
+  VolumeAccel& operator=(const VolumeAccel&) = delete;
   // Returns the shared instance for this volume, building it on first use.
   static std::shared_ptr<const VolumeAccel> forVolume(const std::shared_ptr<const Volume>& v);
 
