@@ -118,17 +118,18 @@ BENCHMARK_CAPTURE(BM_BlockClassify, tfTable, true)->Unit(benchmark::kMillisecond
 
 // Float "over" of a second 1024^2 image onto a first (dst reset by copy, timed separately).
 // What a time step costs a renderer before it can ray cast it, besides reading the file:
-// the caster for a 128x256x256 float window (one of two renderers' share of a 256^3 step):
-// the bricked uint16 copy, the min-max hierarchy, the non-finite check and the classification.
-// Counter: bytes_per_second = float input bytes.
+// the caster for one of two renderers' share of an N^3 step (N/2 x N x N floats, N = 256 and
+// 512): the bricked uint16 copy, the min-max hierarchy, the non-finite check and the
+// classification. Counter: bytes_per_second = float input bytes.
 void BM_PrepareStep(benchmark::State& state) {
-  const auto whole = shell(256);
+  const int n = (int)state.range(0);
+  const auto whole = shell(n);
   auto half = std::make_shared<Volume>();
-  half->dims = {128, 256, 256};
+  half->dims = {n / 2, n, n};
   half->values.resize(half->voxelCount());
-  for (int z = 0; z < 256; ++z)
-    for (int y = 0; y < 256; ++y)
-      for (int x = 0; x < 128; ++x) half->values[half->index(x, y, z)] = whole->at(x, y, z);
+  for (int z = 0; z < n; ++z)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n / 2; ++x) half->values[half->index(x, y, z)] = whole->at(x, y, z);
   const TransferFunction tf = defaultScene().tf;
   for (auto _ : state) {
     renderer::Raycaster rc(half, tf);
@@ -136,7 +137,7 @@ void BM_PrepareStep(benchmark::State& state) {
   }
   state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(half->values.size() * sizeof(float)));
 }
-BENCHMARK(BM_PrepareStep)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PrepareStep)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond);
 
 void BM_CompositeOverF32(benchmark::State& state) {
   ImageF dst = front();
