@@ -109,7 +109,7 @@ class RawFile {
   template <class Then>
   void read(size_t first, size_t count, float* out, Then&& then) {
     const size_t piece = kPieceBytes / ts_;
-    run_end_ = spec_.offset + (first + count) * ts_;
+    run_end_ = spec_.offset + (first + count) * ts_, run_bytes_ = count * ts_;
     for (size_t done = 0; done < count; done += piece) {
       const size_t n = std::min(piece, count - done);
       readPiece(first + done, n, out + done);
@@ -123,7 +123,7 @@ class RawFile {
     const size_t chunk = kPieceBytes / ts_;
     std::vector<float> vals(std::min(chunk, total));
     float mn = INFINITY, mx = -INFINITY;
-    run_end_ = spec_.offset + total * ts_;
+    run_end_ = spec_.offset + total * ts_, run_bytes_ = total * ts_;
     for (size_t first = 0; first < total; first += chunk) {
       const size_t n = std::min(chunk, total - first);
       readPiece(first, n, vals.data());
@@ -169,17 +169,21 @@ class RawFile {
   }
 
   void readPlain(uint64_t at, unsigned char* dst, size_t bytes) {
-    if (direct_fd_ >= 0 && bytes >= kAlign && (inChunk(at, bytes) || !cached(at, bytes))) return readDirect(at, dst, bytes);
+    // Direct only for long runs (a renderer's slab): short rows would each wait for the device.
+    if (direct_fd_ >= 0 && (inChunk(at, bytes) || (run_bytes_ >= kPieceBytes && !cached(at, bytes))))
+      return readDirect(at, dst, bytes);
     preadAll(fd_, at, dst, bytes, bytes);
   }
 
   // Reads up to `bytes` at `at` into dst until at least `need` arrived (a direct read may ask
-  // past the end of the file); returns how many did.
+  // past the end of the file); returns how many did, or 0 when a direct read is refused for
+  // its alignment (EINVAL).
   size_t preadAll(int fd, uint64_t at, unsigned char* dst, size_t bytes, size_t need) {
     size_t done = 0;
     while (done < need) {
       const ssize_t r = ::pread(fd, dst + done, bytes - done, (off_t)(at + done));
       if (r < 0 && errno == EINTR) continue;
+      if (r < 0 && errno == EINVAL && fd == direct_fd_) return 0;
       if (r <= 0) fail(spec_.samples(), r < 0 ? std::string("read failed: ") + std::strerror(errno) : "read failed: file shrank");
       done += (size_t)r;
     }
@@ -187,6 +191,8 @@ class RawFile {
   }
 
   // Whether every page of the range is in the page cache (then a buffered read is a copy).
+  // mincore answers only for files the caller owns or may write (else: never cached, so
+  // read directly); preadv2's RWF_NOWAIT would start readahead into the cache on a miss.
   bool cached(uint64_t at, size_t bytes) const {
     const uint64_t page = (uint64_t)::sysconf(_SC_PAGESIZE), start = at / page * page;
     const size_t len = (size_t)(at + bytes - start);
@@ -213,9 +219,17 @@ class RawFile {
     if (chunk.filled_by != this || !inChunk(at, bytes)) {
       const uint64_t start = at / kAlign * kAlign, want = std::max<uint64_t>(run_end_, at + bytes);
       const size_t len = (size_t)std::min<uint64_t>((want + kAlign - 1) / kAlign * kAlign - start, kChunkBytes);
+      chunk.filled_by = nullptr;  // until the read succeeds
+      const size_t got = preadAll(direct_fd_, start, chunk.bytes.get(), len, (size_t)(at + bytes - start));
+      if (got == 0) {  // an alignment this file system refuses: buffered reads from now on
+        ::close(direct_fd_);
+        direct_fd_ = -1;
+        preadAll(fd_, at, dst, bytes, bytes);
+        return;
+      }
       chunk.filled_by = this;
       chunk_lo_ = start;
-      chunk_hi_ = start + preadAll(direct_fd_, start, chunk.bytes.get(), len, (size_t)(at + bytes - start));
+      chunk_hi_ = start + got;
     }
     std::memcpy(dst, chunk.bytes.get() + (at - chunk_lo_), bytes);
   }
@@ -251,7 +265,7 @@ class RawFile {
   const RawVolumeSpec& spec_;
   size_t ts_;
   int fd_ = -1, direct_fd_ = -1;
-  uint64_t run_end_ = 0;                // file byte after the samples being read
+  uint64_t run_end_ = 0, run_bytes_ = 0;  // file byte after the samples being read, and their size
   uint64_t chunk_lo_ = 0, chunk_hi_ = 0;  // file bytes in this thread's chunk, when this filled it last
   gzFile gz_ = nullptr;
   std::vector<unsigned char> buf_;

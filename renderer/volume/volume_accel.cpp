@@ -30,9 +30,13 @@ using lanes::F4;
 using lanes::I4;
 using lanes::U4;
 
-// Same arithmetic as the scalar (uint16_t)(std::clamp(x, 0, 1) * kQuantScale + 0.5f).
+// (uint16_t)(std::clamp(x, 0, 1) * kQuantScale + 0.5f) for every finite x; NaN maps to 0
+// (converting it to an integer would be undefined; its volume is refused anyway).
+uint16_t quantize(float x) { return (uint16_t)((x > 0 ? (x < 1 ? x : 1) : 0) * VolumeAccel::kQuantScale + 0.5f); }
+
 void quantize4(F4 x, uint16_t* dst) {
-  x = lanes::min(lanes::max(x, lanes::splat(0)), lanes::splat(1));
+  const F4 zero = lanes::splat(0), one = lanes::splat(1);
+  x = x > zero ? (x < one ? x : one) : zero;
   const U4 q = __builtin_convertvector(__builtin_convertvector(x * VolumeAccel::kQuantScale + 0.5f, I4), U4);
   std::memcpy(dst, &q, sizeof q);
 }
@@ -67,7 +71,7 @@ bool fillBrick(const Volume& v, int bx, int by, int bz, uint16_t* dst, float& mn
       const float x = src[B];
       bad[0] |= -!(std::abs(x) <= std::numeric_limits<float>::max());  // NaN and inf
       lo_last = std::min(lo_last, x), hi_last = std::max(hi_last, x);
-      dst[B] = (uint16_t)(std::clamp(x, 0.0f, 1.0f) * VolumeAccel::kQuantScale + 0.5f);
+      dst[B] = quantize(x);
       dst += E;
     }
   }
@@ -81,9 +85,14 @@ bool fillBrick(const Volume& v, int bx, int by, int bz, uint16_t* dst, float& mn
 std::mutex spare_mu;
 decltype(VolumeAccel::bricked) spare_bricks;
 
-decltype(VolumeAccel::bricked) takeSpareBricks() {
+// The spare, if it is not more than twice the size wanted (a smaller volume's steps should
+// not keep a larger one's memory); empty, so growing it copies nothing.
+decltype(VolumeAccel::bricked) takeSpareBricks(size_t wanted) {
   std::lock_guard lock(spare_mu);
-  return std::exchange(spare_bricks, {});
+  auto spare = std::exchange(spare_bricks, {});
+  if (spare.capacity() > 2 * wanted) return {};
+  spare.clear();
+  return spare;
 }
 
 }  // namespace
@@ -101,7 +110,7 @@ VolumeAccel::VolumeAccel(const Volume& v) : VolumeAccel([&v] {
   Pass p;
   p.nb = MinMaxHierarchy::blockDims(v.dims);
   const size_t blocks = (size_t)p.nb[0] * p.nb[1] * p.nb[2];
-  p.bricked = takeSpareBricks();
+  p.bricked = takeSpareBricks((size_t)kBrickSize * blocks + 8);
   p.bricked.resize((size_t)kBrickSize * blocks + 8);  // uninitialised: the pass writes every brick
   std::fill(p.bricked.end() - 8, p.bricked.end(), uint16_t{0});
   p.mn.resize(blocks);
