@@ -92,7 +92,7 @@ std::variant<RawVolumeSpec, GeneratorSpec> stepVolume(const Scene& scene, int st
   h.spacing = s.spacing;
   h.has_range = s.has_range;
   h.range = s.range;
-  h.read_once = true;
+  h.read_once = s.read_once;
   return h;
 }
 

@@ -69,7 +69,7 @@ bool fillBrick(const Volume& v, int bx, int by, int bz, uint16_t* dst, float& mn
         quantize4(x, dst + h);
       }
       const float x = src[B];
-      bad[0] |= -!(std::abs(x) <= std::numeric_limits<float>::max());  // NaN and inf
+      bad |= lanes::nonFinite(lanes::splat(x));
       lo_last = std::min(lo_last, x), hi_last = std::max(hi_last, x);
       dst[B] = quantize(x);
       dst += E;
