@@ -21,9 +21,9 @@ class PngSink final : public Sink {
   }
 
   // The status line is not burnt into files: they stay comparable with reference images.
-  void present(const Image8& frame, uint64_t id, const std::string& /*status*/, bool /*moving*/) override {
+  void present(const Image8& frame, const Shown& shown) override {
     char name[40];
-    std::snprintf(name, sizeof name, "frame_%06llu", (unsigned long long)id);
+    std::snprintf(name, sizeof name, "frame_%06llu", (unsigned long long)shown.id);
     const std::filesystem::path stem = std::filesystem::path(dir_) / name;
     writePng(stem.string() + ".png", frame, background_);
     if (premultiplied_) writePam(stem.string() + ".pam", frame);

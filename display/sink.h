@@ -29,6 +29,20 @@ struct InputEvent {
   int width = 0, height = 0;          // the window's new size (0: unchanged)
   proto::TimeKey time = proto::TimeKey::None;  // Space, arrows, Home, End: a time series' playback
   std::chrono::steady_clock::time_point at;  // when the (first merged) event reached the display
+  // From a web page: the page's number for its load and the number it gave this (first merged)
+  // input, so that the page can time input-to-present itself (page 0: not from a page).
+  uint32_t page = 0;
+  uint64_t page_input = 0;
+};
+
+// What the display knows of a frame it presents.
+struct Shown {
+  uint64_t id = 0;
+  std::string status;   // the fps/latency/per-stage line drawn on screen
+  bool moving = false;  // a reduced frame while the camera moves (the web view sends it lossy)
+  // The first input this frame answers, if it came from a web page (InputEvent::page, page_input).
+  uint32_t page = 0;
+  uint64_t page_input = 0;
 };
 
 // A drag and nothing else: consecutive ones collapse into one (the master needs the sum).
@@ -39,10 +53,9 @@ inline bool isDrag(const InputEvent& ev) {
 class Sink {
  public:
   virtual ~Sink() = default;
-  // Shows or writes frame `id`; `status` is the fps/latency/per-stage line drawn on screen;
-  // `moving`: a reduced frame while the camera moves (the web view sends it lossy).
-  // A window scales the frame to fit it (bilinear, centred, the same shape); files keep its size.
-  virtual void present(const Image8& frame, uint64_t id, const std::string& status, bool moving) = 0;
+  // Shows or writes `frame`. A window scales it to fit (bilinear, centred, the same shape);
+  // files keep its size.
+  virtual void present(const Image8& frame, const Shown& shown) = 0;
   // Input since the last call (windows and the web view).
   virtual std::vector<InputEvent> poll() { return {}; }
   virtual bool interactive() const { return false; }  // a window: it takes input

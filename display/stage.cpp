@@ -122,12 +122,17 @@ class Stage {
                                                                       : std::string("sharp"),
                                      fps, msSince(p.first_seen), render_ms, composite_ms, last_display_ms_);
     if (opt_.steps > 1) status += fmt::format("  step {}/{}", params.step, opt_.steps - 1);
-    const auto input_at = inputShown(params);
-    if (input_at) status += fmt::format("  input {:.0f} ms", msSince(*input_at));  // up to now, before presenting
+    const auto input = inputShown(params);
+    if (input) status += fmt::format("  input {:.0f} ms", msSince(input->at));  // up to now, before presenting
     if (sink_->interactive()) status += "  h: help";
-    sink_->present(image_, params.frame, status, params.interactive);
+    Shown shown{params.frame, status, params.interactive};
+    if (input) {
+      shown.page = input->page;
+      shown.page_input = input->page_input;
+    }
+    sink_->present(image_, shown);
     last_display_ms_ = msSince(t0);
-    const double input_ms = input_at ? msSince(*input_at) : 0;
+    const double input_ms = input ? msSince(input->at) : 0;
     ++presented_;
     if (msSince(last_status_) > 1000) {
       spdlog::info("{}", status);
@@ -146,13 +151,13 @@ class Stage {
 
   // When a frame is the first to show input: the time the first input it answers (the first
   // that changed the view after the frame before it was issued) reached the display.
-  std::optional<Clock::time_point> inputShown(const proto::FrameParams& p) {
+  std::optional<InputEvent> inputShown(const proto::FrameParams& p) {
     if (p.input_seq <= shown_input_) return {};
     shown_input_ = p.input_seq;
-    std::optional<Clock::time_point> at;
-    if (auto it = input_at_.find(p.input_first); p.input_first && it != input_at_.end()) at = it->second;
-    input_at_.erase(input_at_.begin(), input_at_.upper_bound(p.input_seq));
-    return at;
+    std::optional<InputEvent> first;
+    if (auto it = inputs_.find(p.input_first); p.input_first && it != inputs_.end()) first = it->second;
+    inputs_.erase(inputs_.begin(), inputs_.upper_bound(p.input_seq));
+    return first;
   }
 
   void openSink(const proto::FrameParams& p) {
@@ -194,8 +199,8 @@ class Stage {
       in.width = e.width;
       in.height = e.height;
       in.time = e.time;
-      input_at_[in.seq] = e.at;
-      if (input_at_.size() > 4096) input_at_.erase(input_at_.begin());  // inputs no frame showed
+      inputs_[in.seq] = e;
+      if (inputs_.size() > 4096) inputs_.erase(inputs_.begin());  // inputs no frame showed
       link_.report(proto::encode(in, 0));
     }
     return false;
@@ -215,7 +220,7 @@ class Stage {
   Assembly frames_;
   uint64_t presented_ = 0, rejected_ = 0;
   uint64_t input_seq_ = 0, shown_input_ = 0;      // inputs sent; the newest one shown
-  std::map<uint64_t, Clock::time_point> input_at_;  // inputs not shown yet: when they arrived
+  std::map<uint64_t, InputEvent> inputs_;  // inputs not shown yet (when they arrived, from which page)
   bool shutdown_ = false;
   Image8 image_;
   std::deque<Clock::time_point> fps_times_;

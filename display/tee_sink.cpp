@@ -7,8 +7,8 @@ namespace {
 class TeeSink final : public Sink {
  public:
   explicit TeeSink(std::vector<std::unique_ptr<Sink>> sinks) : sinks_(std::move(sinks)) {}
-  void present(const Image8& frame, uint64_t id, const std::string& status, bool moving) override {
-    for (auto& s : sinks_) s->present(frame, id, status, moving);
+  void present(const Image8& frame, const Shown& shown) override {
+    for (auto& s : sinks_) s->present(frame, shown);
   }
   std::vector<InputEvent> poll() override {
     std::vector<InputEvent> all;

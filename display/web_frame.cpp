@@ -42,8 +42,9 @@ std::vector<uint8_t> encodeJpeg(const Image8& region, const std::array<double, 3
 
 }  // namespace
 
-WebFrame encodeWebFrame(const Image8& frame, uint64_t id, bool lossless, const std::string& status,
-                        const std::array<double, 3>& background, int jpeg_quality) {
+WebFrame encodeWebFrame(const Image8& frame, const Shown& shown, const std::array<double, 3>& background,
+                        int jpeg_quality) {
+  const bool lossless = !shown.moving;
   const Rect r = activeRegion(frame);  // pixels with alpha > 0
   std::vector<uint8_t> image;
   if (r.w > 0) {
@@ -52,16 +53,17 @@ WebFrame encodeWebFrame(const Image8& frame, uint64_t id, bool lossless, const s
   }
   // The colour outside the region: a transparent pixel over the background, as pngPixels makes it.
   const std::vector<uint8_t> outside = pngPixels(Image8(1, 1), background);
-  const nlohmann::json header = {{"id", id},
+  nlohmann::json header = {{"id", shown.id},
                                  {"kind", r.w == 0 ? "empty" : (lossless ? "png" : "jpeg")},
                                  {"moving", !lossless},
                                  {"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h},
                                  {"fw", frame.width}, {"fh", frame.height},
                                  {"bg", {outside[0], outside[1], outside[2]}},
-                                 {"status", status}};
+                                 {"status", shown.status}};
+  if (shown.page) header["input"] = {{"page", shown.page}, {"n", shown.page_input}};
   const std::string text = header.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   WebFrame f;
-  f.id = id;
+  f.id = shown.id;
   f.lossless = lossless;
   f.image_bytes = image.size();
   const uint32_t n = (uint32_t)text.size();

@@ -24,8 +24,15 @@ struct WebServer::Viewer {
   mg_connection* conn = nullptr;
   std::mutex m;
   std::condition_variable cv;
+  struct Sent {
+    uint64_t id;
+    bool lossless;
+    std::chrono::steady_clock::time_point shown_at;
+  };
+  uint32_t page = 0;  // the page's number for its load (0: none given)
+  std::chrono::steady_clock::time_point connected_at;
   std::shared_ptr<const WebFrame> pending;  // the newest frame not yet sent
-  std::deque<uint64_t> unacked;             // ids sent and not acknowledged yet
+  std::deque<Sent> unacked;                 // sent and not acknowledged yet
   bool closing = false;
   bool dead = false;  // a write failed or was cut short: the connection is closed on its next read
   std::thread sender;
@@ -56,6 +63,7 @@ std::string badInput(const nlohmann::json& msg, const std::string& type) {
   if (type == "drag" && !(number("dx", 1e4) && number("dy", 1e4))) return "a drag without numbers dx, dy within 10000";
   if (type == "wheel" && !number("notches", 100)) return "a wheel without a number of notches within 100";
   if (type == "key" && !(msg.contains("key") && msg["key"].is_string())) return "a key without a key";
+  if (msg.contains("n") && !msg["n"].is_number_unsigned()) return "an input number n that is not a whole number";
   return "";
 }
 
@@ -67,19 +75,20 @@ WebServer* self(const mg_connection* conn) {
 // mg_websocket_write takes the connection's lock itself. A write that fails or is cut short
 // (a viewer that stopped reading past the write timeout) would leave half a frame in the
 // stream: the viewer is dead, and civetweb's ping (no pong) or its next message closes it.
-void sendLoop(WebServer::Viewer& v, std::atomic<uint64_t>& sent) {
+void sendLoop(WebServer::Viewer& v, std::atomic<uint64_t>& sent, std::atomic<uint64_t>& cut_short) {
   std::unique_lock lock(v.m);
   while (true) {
     v.cv.wait(lock, [&] { return v.closing || (v.pending && (int)v.unacked.size() < WebServer::kMaxUnacked); });
     if (v.closing) return;
     auto frame = std::move(v.pending);
     v.pending.reset();
-    v.unacked.push_back(frame->id);
+    v.unacked.push_back({frame->id, frame->lossless, frame->shown_at});
     lock.unlock();
     const int n = mg_websocket_write(v.conn, MG_WEBSOCKET_OPCODE_BINARY, reinterpret_cast<const char*>(frame->message.data()),
                                      frame->message.size());
     lock.lock();
     if (n < 0 || (size_t)n < frame->message.size()) {
+      cut_short.fetch_add(1);
       v.dead = true;
       return;
     }
@@ -165,6 +174,9 @@ WebCounters WebServer::counters() const {
   WebCounters c = counters_;
   c.viewers = viewers_.size();
   c.frames_sent = sent_.load();
+  c.cut_short = cut_short_.load();
+  c.lossless_ms.assign(lossless_ms_.begin(), lossless_ms_.end());
+  c.moving_ms.assign(moving_ms_.begin(), moving_ms_.end());
   return c;
 }
 
@@ -195,10 +207,15 @@ void WebServer::onReady(mg_connection* conn, void*) {
   WebServer& s = *self(conn);
   auto v = std::make_shared<Viewer>();
   v->conn = conn;
+  v->connected_at = std::chrono::steady_clock::now();
+  // The page's number for its load: up to 9 digits (anything else: none; it only labels input).
+  if (const std::string page = queryValue(mg_get_request_info(conn)->query_string, "page");
+      !page.empty() && page.size() <= 9 && page.find_first_not_of("0123456789") == std::string::npos)
+    v->page = (uint32_t)std::stoul(page);
   std::lock_guard lock(s.mutex_);
   v->pending = s.latest_;  // a viewer that (re)connects sees the current frame at once
   mg_set_user_connection_data(conn, v.get());
-  v->sender = std::thread(sendLoop, std::ref(*v), std::ref(s.sent_));
+  v->sender = std::thread(sendLoop, std::ref(*v), std::ref(s.sent_), std::ref(s.cut_short_));
   s.viewers_.push_back(v);
   ++s.counters_.connections;
   if (s.on_viewer_) s.on_viewer_();
@@ -233,15 +250,22 @@ int WebServer::onData(mg_connection* conn, int bits, char* data, size_t size, vo
     bool known = false;
     if (v) {
       std::lock_guard vl(v->m);
-      const auto it = std::find(v->unacked.begin(), v->unacked.end(), id);
+      const auto it = std::find_if(v->unacked.begin(), v->unacked.end(), [&](const auto& f) { return f.id == id; });
       known = it != v->unacked.end();
+      // A frame presented while this viewer watched: how long until it was on the page.
+      if (known && it->shown_at >= v->connected_at) {
+        auto& times = it->lossless ? s.lossless_ms_ : s.moving_ms_;
+        times.push_back(std::chrono::duration<double, std::milli>(arrived - it->shown_at).count());
+        if (times.size() > 1000) times.pop_front();
+      }
       if (known) v->unacked.erase(v->unacked.begin(), it + 1);  // and any older ones it passed
       v->cv.notify_one();
     }
     if (!known) s.badMessage("an acknowledgement of a frame this connection has not been sent");
   } else if (type == "drag" || type == "release" || type == "wheel" || type == "key") {
     if (const std::string why = badInput(msg, type); !why.empty()) s.badMessage(why);
-    else if (s.input_.size() < kMaxQueuedInput) s.input_.push_back({msg, arrived});
+    else if (s.input_.size() < kMaxQueuedInput)
+      s.input_.push_back({msg, arrived, v ? v->page : 0u, msg.contains("n") ? msg["n"].get<uint64_t>() : 0u});
     else s.badMessage("input beyond " + std::to_string(kMaxQueuedInput) + " messages before the display read them");
   } else {
     s.badMessage("an unknown message type");

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -36,11 +37,17 @@ struct WebCounters {
   uint64_t bad_requests = 0;     // HTTP errors: unknown paths, garbage on the port
   uint64_t frames_sent = 0;
   uint64_t frames_replaced = 0;  // replaced by a newer one before a viewer could take it
+  uint64_t cut_short = 0;        // frames a viewer did not take within the write timeout (closed)
+  // For the latest (at most 1000) lossless and moving frames viewers acknowledged: ms from the
+  // display presenting the frame to the acknowledgement (sent once the page has drawn it).
+  std::vector<double> lossless_ms, moving_ms;
 };
 
 struct WebInput {
   nlohmann::json msg;  // {"t": "drag", ...}, checked
   std::chrono::steady_clock::time_point at;  // when it arrived
+  uint32_t page = 0;  // the page's number for its load (page=... when it connected; 0: none)
+  uint64_t n = 0;     // the page's number for this input (0: none)
 };
 
 class WebServer {
@@ -87,7 +94,8 @@ class WebServer {
   std::vector<WebInput> input_;
   std::function<void()> on_viewer_;
   WebCounters counters_;
-  std::atomic<uint64_t> sent_{0};
+  std::atomic<uint64_t> sent_{0}, cut_short_{0};
+  std::deque<double> lossless_ms_, moving_ms_;
   std::vector<std::string> logged_;  // kinds of bad input already logged
 };
 

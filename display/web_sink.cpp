@@ -1,6 +1,7 @@
 // The web view as a display sink: frames are encoded on the sink's own thread (the newest
 // wins, so encoding never holds the display loop up), and only while someone watches, and
 // handed to the server; viewers' input becomes the same InputEvents the window makes.
+#include <algorithm>
 #include <cmath>
 #include <condition_variable>
 #include <mutex>
@@ -40,18 +41,25 @@ class WebSink final : public Sink {
     }
     cv_.notify_one();
     encoder_.join();
-    const WebCounters c = server_.counters();
+    WebCounters c = server_.counters();
     spdlog::info("web view: {} connections, {} frames sent, {} replaced before sending, {} refused, "
                  "{} bad messages, {} bad requests",
                  c.connections, c.frames_sent, c.frames_replaced, c.refused, c.bad_messages, c.bad_requests);
+    if (c.cut_short) spdlog::info("web view: {} viewers stopped reading in the middle of a frame (closed)", c.cut_short);
+    for (auto [kind, ms] : {std::pair{"lossless", &c.lossless_ms}, std::pair{"moving", &c.moving_ms}}) {
+      if (ms->empty()) continue;
+      std::sort(ms->begin(), ms->end());
+      spdlog::info("web view: {} frames on the page {:.0f} ms (median), {:.0f} ms (max) after the display presented "
+                   "them ({} frames)", kind, (*ms)[(ms->size() - 1) / 2], ms->back(), ms->size());
+    }
   }
 
   // Lock order: the server's mutex (its viewer callback) before m_; never the reverse.
-  void present(const Image8& frame, uint64_t id, const std::string& status, bool moving) override {
+  void present(const Image8& frame, const Shown& shown) override {
     const bool watched = server_.viewers() > 0;
     {
       std::lock_guard lock(m_);
-      last_ = Next{frame, id, status, moving};
+      last_ = Next{frame, shown, std::chrono::steady_clock::now()};
       if (watched) next_ = last_;
     }
     cv_.notify_one();
@@ -62,6 +70,8 @@ class WebSink final : public Sink {
     for (const auto& in : server_.takeInput()) {
       InputEvent ev;
       ev.at = in.at;
+      ev.page = in.page;
+      ev.page_input = in.n;
       if (!translate(in.msg, ev)) continue;
       // Consecutive drags collapse into one, as the window's do: the master needs the sum.
       if (!out.empty() && isDrag(out.back()) && isDrag(ev)) {
@@ -79,9 +89,8 @@ class WebSink final : public Sink {
  private:
   struct Next {
     Image8 frame;
-    uint64_t id;
-    std::string status;
-    bool moving;
+    Shown shown;
+    std::chrono::steady_clock::time_point at;  // presented
   };
 
   void encodeLoop() {
@@ -93,10 +102,11 @@ class WebSink final : public Sink {
       next_.reset();
       lock.unlock();
       try {
-        server_.publish(std::make_shared<const WebFrame>(
-            encodeWebFrame(n.frame, n.id, !n.moving, n.status, background_, kJpegQuality)));
+        auto f = std::make_shared<WebFrame>(encodeWebFrame(n.frame, n.shown, background_, kJpegQuality));
+        f->shown_at = n.at;
+        server_.publish(std::move(f));
       } catch (const std::exception& e) {
-        spdlog::warn("web view: frame {} not sent: {}", n.id, e.what());
+        spdlog::warn("web view: frame {} not sent: {}", n.shown.id, e.what());
       }
       lock.lock();
     }

@@ -100,12 +100,12 @@ class WindowSink final : public Sink {
   WindowSink(const WindowSink&) = delete;
   WindowSink& operator=(const WindowSink&) = delete;
 
-  void present(const Image8& frame, uint64_t /*id*/, const std::string& status, bool /*moving*/) override {
+  void present(const Image8& frame, const Shown& shown) override {
     if (frame.width <= 0 || frame.height <= 0) return;
     if (frame.px.size() != (size_t)frame.width * frame.height * 4)
       throw std::invalid_argument("display window: frame pixel buffer has the wrong size");
     frame_ = frame;  // kept to draw again after a resize, an expose or the help key
-    status_ = status;
+    status_ = shown.status;
     draw();
   }
 

@@ -11,8 +11,13 @@
   const token = (() => { try { return decodeURIComponent(location.hash.slice(1)); } catch (e) { return location.hash.slice(1); } })();
   // What the page saw (tests and the benchmark read it): frames shown, input-to-present times,
   // and each frame's time, kind and bytes; the time from the last release to a lossless frame.
-  const state = { shown: -1, kind: 'none', frames: 0, connects: 0, inputAt: 0, latencies: [], log: [],
+  const state = { shown: -1, kind: 'none', frames: 0, connects: 0, latencies: [], log: [],
                   releaseAt: 0, releaseToLossless: 0 };
+  // Input-to-present: each input carries a number; a frame names the first input it answers
+  // (if it came from this page: the page's number for this load), timed to the next paint.
+  const pageId = 1 + Math.floor(Math.random() * 999999998);
+  const sentAt = new Map();  // input number -> when it was sent
+  let inputN = 0;
   let ws = null;
   let retry = 250;
   let failures = 0;  // connection attempts in a row that never opened
@@ -24,18 +29,19 @@
 
   // Each frame is acknowledged on the socket it came by, also when it cannot be shown.
   async function onFrame(buf, sock) {
+    const arrived = performance.now();
     let id = null;
     try {
       const n = new DataView(buf).getUint32(0, true);
       const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buf, 4, n)));
       id = header.id;
-      await show(header, buf, 4 + n, sock);
+      await show(header, buf, 4 + n, sock, arrived);
     } finally {
       if (id !== null && sock.readyState === WebSocket.OPEN) sock.send(JSON.stringify({ t: 'ack', id }));
     }
   }
 
-  async function show(header, buf, offset, sock) {
+  async function show(header, buf, offset, sock, arrived) {
     let bitmap = null;
     if (header.kind === 'png' || header.kind === 'jpeg') {
       const blob = new Blob([new Uint8Array(buf, offset)], { type: 'image/' + header.kind });
@@ -55,16 +61,21 @@
       state.kind = header.moving ? 'moving' : 'lossless';
       state.frames++;
       const now = performance.now();
-      state.log.push({ t: now, id: header.id, kind: header.kind, bytes: buf.byteLength });
+      state.log.push({ t: now, id: header.id, kind: header.kind, bytes: buf.byteLength, decode: now - arrived,
+                       input: header.input && header.input.page === pageId ? header.input.n : 0 });
       if (state.log.length > 10000) state.log.shift();
       if (state.kind === 'lossless' && state.releaseAt) {
         state.releaseToLossless = now - state.releaseAt;
         state.releaseAt = 0;
       }
-      if (state.inputAt) {  // input-to-present: the first input since the last frame shown
-        state.latencies.push(performance.now() - state.inputAt);
-        if (state.latencies.length > 10000) state.latencies.shift();
-        state.inputAt = 0;
+      const t = header.input && header.input.page === pageId ? sentAt.get(header.input.n) : undefined;
+      if (t !== undefined) {
+        for (const n of sentAt.keys()) if (n <= header.input.n) sentAt.delete(n); else break;
+        requestAnimationFrame(() => {
+          const painted = performance.now();
+          state.latencies.push([painted, painted - t]);  // when, and how long after the input
+          if (state.latencies.length > 10000) state.latencies.shift();
+        });
       }
       setKind(state.kind === 'moving' ? 'moving (JPEG)' : 'lossless', state.kind);
       statusEl.textContent = header.status;
@@ -78,7 +89,7 @@
       statusEl.textContent = 'open the URL the display logged, with its #token';
       return;
     }
-    const sock = new WebSocket(`ws://${location.host}/ws?token=${encodeURIComponent(token)}`);
+    const sock = new WebSocket(`ws://${location.host}/ws?token=${encodeURIComponent(token)}&page=${pageId}`);
     ws = sock;
     sock.binaryType = 'arraybuffer';
     let opened = false;
@@ -103,8 +114,11 @@
   let drag = null;
   let pending = { dx: 0, dy: 0 };
   function send(msg) {
-    if (!state.inputAt) state.inputAt = performance.now();
-    if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg));
+    if (!ws || ws.readyState !== WebSocket.OPEN) return;
+    msg.n = ++inputN;
+    sentAt.set(msg.n, performance.now());
+    if (sentAt.size > 1000) sentAt.delete(sentAt.keys().next().value);  // inputs no frame answered
+    ws.send(JSON.stringify(msg));
   }
   function flushDrag() {
     if (pending.dx || pending.dy) send({ t: 'drag', dx: pending.dx, dy: pending.dy });

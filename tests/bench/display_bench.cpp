@@ -29,7 +29,7 @@ void presentBench(benchmark::State& state, const char* driver) {
   for (size_t i = 3; i < frame.px.size(); i += 4) frame.px[i] = 255;
   uint64_t k = 0;
   for (auto _ : state) {
-    sink->present(frame, k++, "fps 10.0 latency 120 ms render 50 composite 8 display 6", false);
+    sink->present(frame, {k++, "fps 10.0 latency 120 ms render 50 composite 8 display 6"});
     sink->poll();
   }
 }

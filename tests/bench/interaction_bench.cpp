@@ -5,7 +5,9 @@
 // measures it from the event reaching its loop to the frame on screen), and the time from the
 // release to the sharp frame against that frame's own issue-to-display time. One run per
 // image size and frames-in-flight setting; writes interaction.csv and prints a table.
-// A benchmark, not a timed test.
+// With --web, each round also drags in the web view (chromium, tests/web/bench.mjs) on the
+// same farm; run under tests/web/viewer_link.sh RATE, the browser is on its own emulated host
+// behind a link of that rate. A benchmark, not a timed test.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -31,16 +33,27 @@ using tessera::display::testing::XUser;
 namespace {
 
 struct Result {
-  int image = 0, in_flight = 0, drag_frames = 0;
+  int image = 0, in_flight = 0, round = 0, drag_frames = 0;
   double fps = 0, input_median = 0, input_p95 = 0, sharp_ms = 0, full_ms = 0;
   std::string widths;  // the interactive frames' widths (the rungs chosen)
   nlohmann::json web;  // --web: what the page measured during the same kind of drag
+  double farm_fps_web = 0;  // --web: the farm's frames per second during the page's drag
+  std::string lossless_on_page;  // --web: the display's figure for the whole run (median / max ms)
 };
+
+// Where the web view listens and the browser runs: loopback, or the viewer's emulated host
+// (tests/web/viewer_link.sh).
+std::string webHost() {
+  const char* s = std::getenv("TESSERA_VIEWER_SERVER");
+  return s && *s ? s : "127.0.0.1";
+}
 
 // The same drag in the web view (tests/web/bench.mjs in chromium), on the same farm.
 nlohmann::json dragInPage(int port, double drag_s, const fs::path& dir) {
-  const std::string cmd = fmt::format("node {}/tests/web/bench.mjs 'http://127.0.0.1:{}/#bench-token' {} {} 2>&1",
-                                      TESSERA_SOURCE_DIR, port, drag_s, dir.string());
+  const char* ns = std::getenv("TESSERA_VIEWER_NETNS");
+  const std::string cmd = fmt::format("{}node {}/tests/web/bench.mjs 'http://{}:{}/#bench-token' {} {} 2>&1",
+                                      ns && *ns ? fmt::format("ip netns exec {} ", ns) : "", TESSERA_SOURCE_DIR,
+                                      webHost(), port, drag_s, dir.string());
   std::string out;
   if (FILE* p = popen(cmd.c_str(), "r")) {
     char buf[4096];
@@ -75,7 +88,43 @@ bool waitUntil(F ok, std::chrono::seconds limit) {
   return false;
 }
 
-Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight, double drag_s, int web_port) {
+// The window's drag of one round: metrics lines [from, to) are its interactive frames, `sharp`
+// the full frame after the release.
+void windowStats(Result& r, const std::vector<nlohmann::json>& all, size_t from, size_t to,
+                 const std::optional<nlohmann::json>& sharp) {
+  std::vector<double> input, done;
+  std::vector<int> widths;
+  for (size_t i = from; i < to && i < all.size(); ++i) {
+    const auto& l = all[i];
+    if (!l["interactive"].get<bool>()) continue;
+    done.push_back(l["done_ms"].get<double>());
+    if (l.contains("input_ms")) input.push_back(l["input_ms"].get<double>());
+    widths.push_back(l["width"].get<int>());
+  }
+  r.drag_frames = (int)done.size();
+  if (done.empty()) throw std::runtime_error("no interactive frame: the drag did not reach the window");
+  if (done.size() > 1) r.fps = (double)(done.size() - 1) * 1000 / (done.back() - done.front());
+  r.input_median = percentile(input, 0.5);
+  r.input_p95 = percentile(input, 0.95);
+  if (sharp) {
+    r.sharp_ms = sharp->value("input_ms", 0.0);
+    r.full_ms = (*sharp)["latency_ms"].get<double>();
+  }
+  std::sort(widths.begin(), widths.end());
+  widths.erase(std::unique(widths.begin(), widths.end()), widths.end());
+  for (int w : widths) r.widths += (r.widths.empty() ? "" : " ") + std::to_string(w);
+}
+
+// The farm's frames per second over metrics lines [from, to) (its interactive frames).
+double farmFps(const std::vector<nlohmann::json>& all, size_t from, size_t to) {
+  std::vector<double> done;
+  for (size_t i = from; i < to && i < all.size(); ++i)
+    if (all[i]["interactive"].get<bool>()) done.push_back(all[i]["done_ms"].get<double>());
+  return done.size() > 1 ? (double)(done.size() - 1) * 1000 / (done.back() - done.front()) : 0;
+}
+
+std::vector<Result> runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight, double drag_s, int web_port,
+                           int rounds) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   {
@@ -91,7 +140,7 @@ Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight
       "{}/tessera-up {}/compose.yaml --env TESSERA_SCENE={}/scene.yaml --env TESSERA_FRAMES=0 --env TESSERA_WINDOW=on "
       "--env TESSERA_IN_FLIGHT={} --env TESSERA_OUT={} --env TESSERA_ENDPOINTS=ipc://{}/sockets {} > {}/farm.log 2>&1",
       bin.string(), TESSERA_SOURCE_DIR, dir.string(), in_flight, dir.string(), dir.string(),
-      web_port ? fmt::format("--env TESSERA_WEB=127.0.0.1:{} --env TESSERA_WEB_TOKEN=bench-token", web_port) : "",
+      web_port ? fmt::format("--env TESSERA_WEB={}:{} --env TESSERA_WEB_TOKEN=bench-token", webHost(), web_port) : "",
       dir.string());
   auto farm = std::async(std::launch::async, [&] { return std::system(cmd.c_str()); });
   XUser user(xvfb.display());
@@ -99,11 +148,6 @@ Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight
   const fs::path metrics = dir / "metrics.jsonl";
   if (!waitUntil([&] { return (win = user.find("Tessera")) && !lines(metrics).empty(); }, 120s))
     throw std::runtime_error("the farm's window did not show a frame; see " + (dir / "farm.log").string());
-  const size_t before = lines(metrics).size();
-  const int steps = (int)(drag_s * 60);
-  // Back and forth across the middle of the window, 3 px an event (0.9 degree of orbit).
-  const int x0 = win->x + win->width / 4, y0 = win->y + win->height / 2;
-  user.press(x0, y0);
   // What the user sees: the window's pixels during the drag and once it is sharp.
   auto shot = [&](const std::string& name) {
     std::string why;
@@ -113,51 +157,95 @@ Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight
       for (int x = 0; x < w.width; ++x) std::copy_n(screen.at(win->x + x, win->y + y), 4, w.at(x, y));
     tessera::writePng((dir / name).string(), w);
   };
-  for (int i = 0; i < steps; ++i) {
-    const int phase = i % 200;
-    user.moveTo(x0 + 3 * (phase < 100 ? phase : 200 - phase), y0 + (i % 2));
-    std::this_thread::sleep_for(16ms);
-    if (i == steps / 2) shot("moving.png");
+  struct Span { size_t from, to, web_from, web_to; std::optional<nlohmann::json> sharp; nlohmann::json web; };
+  std::vector<Span> spans;
+  for (int round = 0; round < rounds; ++round) {
+    Span sp{lines(metrics).size(), 0, 0, 0, {}, {}};
+    const int steps = (int)(drag_s * 60);
+    // Back and forth across the middle of the window, 3 px an event (0.9 degree of orbit).
+    const int x0 = win->x + win->width / 4, y0 = win->y + win->height / 2;
+    user.press(x0, y0);
+    for (int i = 0; i < steps; ++i) {
+      const int phase = i % 200;
+      user.moveTo(x0 + 3 * (phase < 100 ? phase : 200 - phase), y0 + (i % 2));
+      std::this_thread::sleep_for(16ms);
+      if (i == steps / 2 && round == 0) shot("moving.png");
+    }
+    user.button(1, false);
+    waitUntil([&] {
+      auto v = lines(metrics);
+      for (size_t i = sp.from; i < v.size(); ++i)
+        if (!v[i]["interactive"].get<bool>()) {
+          sp.sharp = v[i];
+          sp.to = i;
+          return true;
+        }
+      return false;
+    }, 60s);
+    std::this_thread::sleep_for(300ms);
+    if (round == 0) shot("sharp.png");
+    if (web_port) {
+      sp.web_from = lines(metrics).size();
+      sp.web = dragInPage(web_port, drag_s, dir);
+      sp.web_to = lines(metrics).size();
+    }
+    spans.push_back(sp);
   }
-  user.button(1, false);
-  std::optional<nlohmann::json> sharp;
-  waitUntil([&] {
-    auto v = lines(metrics);
-    if (v.size() > before && !v.back()["interactive"].get<bool>()) sharp = v.back();
-    return sharp.has_value();
-  }, 60s);
-  const size_t sharp_frame = sharp ? (*sharp)["frame"].get<size_t>() : SIZE_MAX;
-  std::this_thread::sleep_for(300ms);
-  shot("sharp.png");
-  Result r;
-  if (web_port) r.web = dragInPage(web_port, drag_s, dir);
   user.key(XK_Escape);
   farm.wait();
   unsetenv("DISPLAY");
 
-  r.image = image;
-  r.in_flight = in_flight;
-  std::vector<double> input, done;
-  std::vector<int> widths;
-  for (const auto& l : lines(metrics)) {
-    if (!l["interactive"].get<bool>() || l["frame"].get<size_t>() >= sharp_frame) continue;  // the window's drag
-    done.push_back(l["done_ms"].get<double>());
-    if (l.contains("input_ms")) input.push_back(l["input_ms"].get<double>());
-    widths.push_back(l["width"].get<int>());
+  std::string lossless;  // the display's closing figure for the lossless frames on the page
+  {
+    std::ifstream log(dir / "farm.log");
+    for (std::string l; std::getline(log, l);)
+      for (const char* kind : {"lossless", "moving"})
+        if (auto at = l.find(std::string(kind) + " frames on the page "); at != std::string::npos)
+          lossless += (lossless.empty() ? "" : "; ") + l.substr(at);
   }
-  r.drag_frames = (int)done.size();
-  if (done.empty()) throw std::runtime_error("no interactive frame: the drag did not reach the window; see " + (dir / "farm.log").string());
-  if (done.size() > 1) r.fps = (double)(done.size() - 1) * 1000 / (done.back() - done.front());
-  r.input_median = percentile(input, 0.5);
-  r.input_p95 = percentile(input, 0.95);
-  if (sharp) {
-    r.sharp_ms = sharp->value("input_ms", 0.0);
-    r.full_ms = (*sharp)["latency_ms"].get<double>();
+  const auto all = lines(metrics);
+  std::vector<Result> out;
+  for (int round = 0; round < rounds; ++round) {
+    const Span& sp = spans[(size_t)round];
+    Result r;
+    r.image = image;
+    r.in_flight = in_flight;
+    r.round = round;
+    windowStats(r, all, sp.from, sp.sharp ? sp.to : all.size(), sp.sharp);
+    r.web = sp.web;
+    if (web_port) r.farm_fps_web = farmFps(all, sp.web_from, sp.web_to);
+    r.lossless_on_page = lossless;
+    out.push_back(r);
   }
-  std::sort(widths.begin(), widths.end());
-  widths.erase(std::unique(widths.begin(), widths.end()), widths.end());
-  for (int w : widths) r.widths += (r.widths.empty() ? "" : " ") + std::to_string(w);
-  return r;
+  return out;
+}
+
+// The page's drags beside the window's, one row per round; web.csv.
+void webTable(const std::vector<Result>& results, const fs::path& path) {
+  const char* rate = std::getenv("TESSERA_VIEWER_NETNS") ? "emulated link" : "loopback";
+  std::ofstream wcsv(path);
+  wcsv << "image,in_flight,round,viewer_link,window_fps,page_fps,farm_fps_page_drag,window_input_ms,page_input_ms,"
+          "page_input_ms_p95,page_input_ms_first_quarter,page_input_ms_last_quarter,moving_bytes,lossless_bytes,"
+          "window_release_to_sharp_ms,page_release_to_lossless_ms,lossless_on_page_after_display_ms\n";
+  std::printf("\n| image | in flight | round | fps window / page (farm during page drag) | input-to-present median ms, "
+              "window / page (p95; first / last quarter) | bytes per moving frame | bytes per lossless frame | release "
+              "to sharp ms, window / page |\n|---|---:|---:|---|---|---:|---:|---|\n");
+  for (const Result& r : results) {
+    const auto& w = r.web;
+    auto num = [&](const char* k) { return w.value(k, 0.0); };
+    wcsv << fmt::format("{},{},{},{},{:.2f},{:.2f},{:.2f},{:.1f},{:.1f},{:.1f},{:.1f},{:.1f},{},{},{:.1f},{:.1f},\"{}\"\n",
+                        r.image, r.in_flight, r.round, rate, r.fps, num("fps"), r.farm_fps_web, r.input_median,
+                        num("input_ms_median"), num("input_ms_p95"), num("input_ms_first_quarter"),
+                        num("input_ms_last_quarter"), num("moving_bytes_median"), num("lossless_bytes"), r.sharp_ms,
+                        num("release_to_lossless_ms"), r.lossless_on_page);
+    std::printf("| %d² | %d | %d | %.1f / %.1f (%.1f) | %.0f / %.0f (%.0f; %.0f / %.0f) | %.0f | %.0f | %.0f / %.0f |\n",
+                r.image, r.in_flight, r.round, r.fps, num("fps"), r.farm_fps_web, r.input_median, num("input_ms_median"),
+                num("input_ms_p95"), num("input_ms_first_quarter"), num("input_ms_last_quarter"),
+                num("moving_bytes_median"), num("lossless_bytes"), r.sharp_ms, num("release_to_lossless_ms"));
+  }
+  for (const Result& r : results)
+    if (r.round == 0)
+      std::printf("%d², %d in flight: %s\n", r.image, r.in_flight, r.lossless_on_page.c_str());
 }
 
 }  // namespace
@@ -165,12 +253,13 @@ Result runOne(const fs::path& bin, const fs::path& dir, int image, int in_flight
 int main(int argc, char** argv) {
   CLI::App app{"tessera-interaction-bench: fps and input-to-present latency while dragging in the farm's window"};
   std::vector<int> images{512, 1024}, in_flight{1, 3};
-  int web_port = 0;
+  int web_port = 0, rounds = 1;
   double drag_s = 5;
   std::string out = "bench-out/interaction";
   app.add_option("--image", images, "image sizes (square)")->capture_default_str();
   app.add_option("--in-flight", in_flight, "frames-in-flight settings")->capture_default_str();
   app.add_option("--drag-seconds", drag_s, "length of the drag")->capture_default_str()->check(CLI::Range(0.5, 120.0));
+  app.add_option("--rounds", rounds, "drags per farm (window, then page, in turn)")->capture_default_str()->check(CLI::Range(1, 20));
   app.add_option("--out", out, "folder for the runs and interaction.csv")->capture_default_str();
   app.add_option("--web", web_port, "also serve the web view on this port and drag in it after the window "
                                     "(chromium, tests/web/bench.mjs)");
@@ -184,42 +273,25 @@ int main(int argc, char** argv) {
   try {
     for (int image : images)
       for (int k : in_flight) {
-        std::fprintf(stderr, "image %dx%d, %d in flight: dragging for %.1f s...\n", image, image, k, drag_s);
-        results.push_back(runOne(bin, fs::absolute(out) / fmt::format("{}-{}", image, k), image, k, drag_s, web_port));
+        std::fprintf(stderr, "image %dx%d, %d in flight: %d rounds of %.1f s drags...\n", image, image, k, rounds, drag_s);
+        auto rs = runOne(bin, fs::absolute(out) / fmt::format("{}-{}", image, k), image, k, drag_s, web_port, rounds);
+        results.insert(results.end(), rs.begin(), rs.end());
       }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "tessera-interaction-bench: %s\n", e.what());
     return 1;
   }
   std::ofstream csv(fs::absolute(out) / "interaction.csv");
-  csv << "image,in_flight,drag_frames,fps,input_ms_median,input_ms_p95,release_to_sharp_ms,sharp_frame_ms,widths\n";
-  std::printf("| image | in flight | frames during drag | fps | input-to-present median ms | p95 ms | release to sharp ms "
-              "| sharp frame's own ms | ratio | interactive widths |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+  csv << "image,in_flight,round,drag_frames,fps,input_ms_median,input_ms_p95,release_to_sharp_ms,sharp_frame_ms,widths\n";
+  std::printf("| image | in flight | round | frames during drag | fps | input-to-present median ms | p95 ms | release to sharp ms "
+              "| sharp frame's own ms | ratio | interactive widths |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
   for (const Result& r : results) {
-    csv << fmt::format("{},{},{},{:.2f},{:.1f},{:.1f},{:.1f},{:.1f},{}\n", r.image, r.in_flight, r.drag_frames, r.fps,
-                       r.input_median, r.input_p95, r.sharp_ms, r.full_ms, r.widths);
-    std::printf("| %d² | %d | %d | %.1f | %.0f | %.0f | %.0f | %.0f | %.2f | %s |\n", r.image, r.in_flight, r.drag_frames,
-                r.fps, r.input_median, r.input_p95, r.sharp_ms, r.full_ms, r.full_ms > 0 ? r.sharp_ms / r.full_ms : 0,
-                r.widths.c_str());
+    csv << fmt::format("{},{},{},{},{:.2f},{:.1f},{:.1f},{:.1f},{:.1f},{}\n", r.image, r.in_flight, r.round, r.drag_frames,
+                       r.fps, r.input_median, r.input_p95, r.sharp_ms, r.full_ms, r.widths);
+    std::printf("| %d² | %d | %d | %d | %.1f | %.0f | %.0f | %.0f | %.0f | %.2f | %s |\n", r.image, r.in_flight, r.round,
+                r.drag_frames, r.fps, r.input_median, r.input_p95, r.sharp_ms, r.full_ms,
+                r.full_ms > 0 ? r.sharp_ms / r.full_ms : 0, r.widths.c_str());
   }
-  if (web_port) {
-    std::ofstream wcsv(fs::absolute(out) / "web.csv");
-    wcsv << "image,in_flight,window_fps,page_fps,window_input_ms,page_input_ms,page_input_ms_p95,moving_bytes,"
-            "lossless_bytes,window_release_to_sharp_ms,page_release_to_lossless_ms\n";
-    std::printf("\n| image | in flight | fps window / page | input-to-present median ms, window / page (p95) | "
-                "bytes per moving frame | bytes per lossless frame | release to sharp ms, window / page |\n"
-                "|---|---:|---|---|---:|---:|---|\n");
-    for (const Result& r : results) {
-      const auto& w = r.web;
-      wcsv << fmt::format("{},{},{:.2f},{:.2f},{:.1f},{:.1f},{:.1f},{},{},{:.1f},{:.1f}\n", r.image, r.in_flight, r.fps,
-                          w["fps"].get<double>(), r.input_median, w["input_ms_median"].get<double>(),
-                          w["input_ms_p95"].get<double>(), w["moving_bytes_median"].get<double>(),
-                          w["lossless_bytes"].get<double>(), r.sharp_ms, w["release_to_lossless_ms"].get<double>());
-      std::printf("| %d² | %d | %.1f / %.1f | %.0f / %.0f (%.0f) | %.0f | %.0f | %.0f / %.0f |\n", r.image, r.in_flight,
-                  r.fps, w["fps"].get<double>(), r.input_median, w["input_ms_median"].get<double>(),
-                  w["input_ms_p95"].get<double>(), w["moving_bytes_median"].get<double>(),
-                  w["lossless_bytes"].get<double>(), r.sharp_ms, w["release_to_lossless_ms"].get<double>());
-    }
-  }
+  if (web_port) webTable(results, fs::absolute(out) / "web.csv");
   return 0;
 }

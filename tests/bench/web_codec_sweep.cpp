@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
     const std::string size = std::to_string(frame.width) + "x" + std::to_string(frame.height);
     const std::string reg = std::to_string(r.w) + "x" + std::to_string(r.h);
     auto t0 = Clock::now();
-    const auto png = tessera::display::encodeWebFrame(frame, 0, true, "", kBg, 80);
+    const auto png = tessera::display::encodeWebFrame(frame, {}, kBg, 80);
     const double png_ms = msSince(t0);
     csv << size << "," << frame.width << "," << frame.height << "," << r.w << "," << r.h << ",png,100,"
         << png.image_bytes << "," << png_ms << ",inf,0\n";

@@ -48,13 +48,7 @@ hosts=(master display)
 for ((i = 1; i <= renderers; i++)); do hosts+=("renderer-$i"); done
 for ((i = 1; i <= compositors; i++)); do hosts+=("compositor-$i"); done
 
-# tbf needs a bucket of at least one timer tick of traffic; 64 KiB keeps short bursts whole.
-limit() {  # limit NS DEV
-  [ "$rate" = unlimited ] && return 0
-  local bits; bits=$(numfmt --from=si "$(echo "${rate%bit}" | tr a-z A-Z)")
-  local burst=$((bits / 8 / 250)); [ "$burst" -ge 65536 ] || burst=65536
-  ip netns exec "$1" tc qdisc add dev "$2" root tbf rate "$rate" burst "$burst" latency 50ms
-}
+. "$root/tests/cluster/tbf.sh"
 sw="$tag-sw"
 ip netns add "$sw"
 ip -n "$sw" link add br0 type bridge
@@ -71,8 +65,8 @@ for h in "${hosts[@]}"; do
   ip -n "$ns" addr add "$addr/24" dev eth0
   ip -n "$ns" link set eth0 up
   ip -n "$ns" link set lo up
-  limit "$ns" eth0          # what the host sends
-  limit "$sw" "${tag}s$n"   # what the host receives
+  tbf_limit "$rate" "$ns" eth0          # what the host sends
+  tbf_limit "$rate" "$sw" "${tag}s$n"   # what the host receives
   echo "$addr" > "$state/hosts/$h.ip"
   echo "$ns" > "$state/hosts/$h.ns"
   echo "${tag}s$n" > "$state/hosts/$h.link"

@@ -46,8 +46,8 @@ TEST(PngSink, WritesNumberedFilesThatReadBackExactly) {
   const fs::path dir = freshDir("png") / "nested" / "out";  // folder must be created
   auto sink = makePngSink(dir.string());
   const Image8 a = testFrame(1), b = testFrame(2);
-  sink->present(a, 0, "status is not burnt into files", false);
-  sink->present(b, 123456, "", false);
+  sink->present(a, {0, "status is not burnt into files"});
+  sink->present(b, {123456, ""});
   ASSERT_TRUE(fs::exists(dir / "frame_000000.png"));
   ASSERT_TRUE(fs::exists(dir / "frame_123456.png"));
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 2);
@@ -62,7 +62,7 @@ TEST(PngSink, PremultipliedWritesExactPamBesideEachPng) {
   const fs::path dir = freshDir("pam");
   auto sink = makePngSink(dir.string(), std::nullopt, true);
   const Image8 a = testFrame(3);
-  sink->present(a, 5, "", false);
+  sink->present(a, {5, ""});
   ASSERT_TRUE(fs::exists(dir / "frame_000005.png"));
   ASSERT_TRUE(fs::exists(dir / "frame_000005.pam"));
   EXPECT_EQ(readPam((dir / "frame_000005.pam").string()), a);
@@ -76,7 +76,7 @@ TEST(PngSink, CompositesOverBackground) {
   Image8 img(2, 1);
   setPx(img, 0, 0, 100, 50, 0, 100);  // partly transparent
   setPx(img, 1, 0, 0, 0, 0, 0);       // fully transparent: background shows
-  sink->present(img, 7, "", false);
+  sink->present(img, {7, ""});
   const Image8 got = readPng((dir / "frame_000007.png").string());
   ASSERT_EQ(got.width, 2);
   // Exact: expected values c + (1 - a) * bg are computed in the same double arithmetic and
@@ -179,7 +179,7 @@ TEST_F(WindowSinkXvfb, ShowsFrameQuadrantsAndStatusLine) {
       setPx(frame, x, y, c[0], c[1], c[2], c[3]);
     }
   const std::string status = "FPS 9";
-  sink->present(frame, 1, status, false);
+  sink->present(frame, {1, status});
   // The window maps asynchronously; let expose events arrive, then present again.
   for (int i = 0; i < 10; ++i) {
     sink->poll();
@@ -205,7 +205,7 @@ TEST_F(WindowSinkXvfb, ShowsFrameQuadrantsAndStatusLine) {
   // machine; CI runs other tests beside this one): present and look again until the screen
   // shows the frame, at most ~10 s. A correct frame ends the loop at once.
   for (int attempt = 0; attempt < 20; ++attempt) {
-    sink->present(frame, 2 + attempt, status, false);
+    sink->present(frame, {uint64_t(2 + attempt), status});
     std::this_thread::sleep_for(std::chrono::milliseconds(50 + 450 * (attempt > 0)));
     std::string err;
     shot = testing::screenshotRoot(xvfb_.display(), err);

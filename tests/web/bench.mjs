@@ -2,9 +2,12 @@
 // window): opens URL in Debian's chromium, waits for the lossless frame, drags across the
 // canvas at 60 events a second for SECONDS, releases, waits for the lossless frame, and
 // prints one JSON line of what the page measured: frames shown while dragging and their rate,
-// input-to-present times (the page's input event to the frame drawn), bytes per moving and
+// input-to-present times (the page sending an input to the paint after the first frame that
+// answers it; over the drag and in its first and last quarter), bytes per moving and
 // per lossless frame, and the time from the release to the lossless frame.
 //   node bench.mjs URL SECONDS OUTDIR
+import fs from 'node:fs';
+import path from 'node:path';
 import { launch } from './browser.mjs';
 
 const [url, seconds, outdir] = process.argv.slice(2);
@@ -18,7 +21,7 @@ try {
   const lossless = (after) => page.waitForFunction((i) => window.tessera && window.tessera.state.kind === 'lossless' &&
                                                    window.tessera.state.shown > i, { timeout: 60000, polling: 10 }, after);
   await lossless(-1);
-  const start = await page.evaluate(() => { const s = window.tessera.state; s.latencies = []; return { n: s.log.length, shown: s.shown, t: performance.now() }; });
+  const start = await page.evaluate(() => { const s = window.tessera.state; return { n: s.log.length, shown: s.shown, t: performance.now() }; });
   const box = await (await page.$('canvas')).boundingBox();
   const x0 = box.x + box.width / 4, y0 = box.y + box.height / 2;
   await page.mouse.move(x0, y0);
@@ -34,13 +37,21 @@ try {
   await lossless(released.shown);
   await new Promise((r) => setTimeout(r, 200));
   const s = await page.evaluate(() => window.tessera.state);
+  fs.writeFileSync(path.join(outdir, 'page-state.json'), JSON.stringify({ start, released, state: s }));
+  // Input-to-present over the drag, and in its first and last quarter (does it grow?).
+  const lat = s.latencies.filter(([t]) => t >= start.t && t <= released.t + 1);
+  const quarter = (released.t - start.t) / 4;
+  const first = lat.filter(([t]) => t < start.t + quarter).map(([, ms]) => ms);
+  const last = lat.filter(([t]) => t > released.t - quarter).map(([, ms]) => ms);
   const during = s.log.slice(start.n).filter((f) => f.t <= released.t + 1);
   const moving = s.log.slice(start.n).filter((f) => f.kind === 'jpeg');
   const still = s.log.slice(start.n).filter((f) => f.kind === 'png');
   console.log(JSON.stringify({
     drag_frames: during.length,
     fps: during.length > 1 ? (during.length - 1) * 1000 / (during[during.length - 1].t - during[0].t) : 0,
-    input_ms_median: median(s.latencies), input_ms_p95: p95(s.latencies),
+    input_ms_median: median(lat.map(([, ms]) => ms)), input_ms_p95: p95(lat.map(([, ms]) => ms)),
+    input_ms_first_quarter: median(first), input_ms_last_quarter: median(last),
+    moving_decode_ms_median: median(moving.map((f) => f.decode)),
     moving_bytes_median: median(moving.map((f) => f.bytes)), lossless_bytes: still.length ? still[still.length - 1].bytes : 0,
     release_to_lossless_ms: s.releaseToLossless,
   }));
