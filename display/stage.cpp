@@ -177,10 +177,10 @@ class Stage {
       sink_ = makePngSink(opt_.out_dir, opt_.background, opt_.premultiplied);
       spdlog::info("display writing PNG frames to {}/", opt_.out_dir);
     }
-    if (web_) {
+    if (web_) {  // the web view first: it encodes on its own thread while the window draws
       std::vector<std::unique_ptr<Sink>> both;
-      both.push_back(std::move(sink_));
       both.push_back(std::move(web_));
+      both.push_back(std::move(sink_));
       sink_ = makeTeeSink(std::move(both));
     }
   }

@@ -65,10 +65,13 @@ class WebView : public ::testing::Test {
                           << "  - [0.10, 0.6, 0.7, 0.9, 0.05]\n  - [0.40, 0.9, 0.9, 1.0, 0.2]\n  - [1.00, 1.0, 1.0, 1.0, 0.6]\n"
                           << "camera: {eye: [1.6, 0.8, 1.6], target: [0, 0, 0], up: [0, 1, 0], fov: 30}\n"
                           << "image: [160, 120]\nquality: default\n";
-    const std::string env = "--env TESSERA_WEB=127.0.0.1:" + std::to_string(port_) + " --env TESSERA_WEB_TOKEN=" + kToken +
-                            " --env TESSERA_BACKGROUND=" + kBackground;
-    farm_ = std::async(std::launch::async, [this, env] { return dir_.runFarm(scene_, 2, 1, 0, 200, env); });
+    env_ = "--env TESSERA_WEB=127.0.0.1:" + std::to_string(port_) + " --env TESSERA_WEB_TOKEN=" + kToken +
+           " --env TESSERA_BACKGROUND=" + kBackground;
+    startFarm();
     ASSERT_TRUE(waitUntil([&] { return !metricsLines(dir_).empty(); }, 90s)) << dir_.farmLog();
+  }
+  void startFarm() {
+    farm_ = std::async(std::launch::async, [this] { return dir_.runFarm(scene_, 2, 1, 0, 200, env_); });
   }
   void TearDown() override {
     if (!farm_.valid()) return;
@@ -114,6 +117,7 @@ class WebView : public ::testing::Test {
 
   FarmDir dir_{"web"};
   int port_ = 0;
+  std::string env_;
   fs::path scene_;
   std::future<CommandResult> farm_;
   std::string log_;
@@ -182,6 +186,25 @@ TEST_F(WebView, AReloadOrADroppedConnectionShowsTheCurrentFrameWithinASecond) {
     EXPECT_LT(out[k]["ms"].get<int>(), 1000) << out[k].dump();
     EXPECT_EQ(out[k]["state"]["kind"], "lossless");
   }
+}
+
+// A restarted display numbers its frames from 0 again: the open page reconnects by itself and
+// shows the new display's frames, though their ids are below those it showed before.
+TEST_F(WebView, APageReconnectsToARestartedDisplayAndShowsItsFramesFromZero) {
+  auto page = std::async(std::launch::async, [&] {
+    return browse("wait-lossless:0 drag:20 wait-lossless:+ signal:restart-now wait-reconnect pixels:after");
+  });
+  ASSERT_TRUE(waitUntil([&] { return fs::exists(dir_.path() / "restart-now"); }, 90s)) << "the page never got ready";
+  TearDown();  // the display stops with its farm...
+  startFarm();  // ...and a new farm's display listens on the same port
+  const auto out = page.get();
+  ASSERT_EQ(out.size(), 6u);
+  const int64_t before = out[2]["state"]["shown"].get<int64_t>();
+  const int64_t after = out[4]["state"]["shown"].get<int64_t>();
+  EXPECT_GT(before, 0) << "the drag made new frames";
+  EXPECT_EQ(out[4]["state"]["connects"], 2);
+  EXPECT_LT(after, before) << "the new display's frames are numbered from 0";
+  EXPECT_TRUE(dir_.matches(pagePixels("after", out[5]), pngFrame((uint64_t)after), 0, "restarted_page_vs_png_sink"));
 }
 
 TEST_F(WebView, WithoutTheTokenThePageGetsNoFrameAndTheRefusalIsCounted) {

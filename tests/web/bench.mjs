@@ -23,14 +23,18 @@ try {
   await lossless(-1);
   const start = await page.evaluate(() => { const s = window.tessera.state; return { n: s.log.length, shown: s.shown, t: performance.now() }; });
   const box = await (await page.$('canvas')).boundingBox();
-  const x0 = box.x + box.width / 4, y0 = box.y + box.height / 2;
+  const x0 = box.x + box.width / 8, y0 = box.y + box.height / 2;
   await page.mouse.move(x0, y0);
   await page.mouse.down();
   const steps = Math.round(Number(seconds) * 60);
-  for (let i = 0; i < steps; ++i) {
-    const phase = i % 200;
-    await page.mouse.move(x0 + 3 * (phase < 100 ? phase : 200 - phase), y0 + (i % 2));
-    await new Promise((r) => setTimeout(r, 16));
+  // Back and forth a whole number of times, 3 px an event: the camera turns through the same
+  // views as in the window's drag and ends where it began.
+  const half = Math.max(1, Math.floor(steps / (2 * Math.max(1, Math.round(steps / 200)))));
+  const began = Date.now();
+  for (let i = 0; i < steps; ++i) {  // 60 events a second on the clock, whatever a move costs
+    const p = (i + 1) % (2 * half);
+    await page.mouse.move(x0 + 3 * (p < half ? p : 2 * half - p), y0 + (i % 2));
+    await new Promise((r) => setTimeout(r, Math.max(0, began + (i + 1) * 1000 / 60 - Date.now())));
   }
   const released = await page.evaluate(() => ({ t: performance.now(), shown: window.tessera.state.shown }));
   await page.mouse.up();

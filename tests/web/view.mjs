@@ -15,6 +15,9 @@
 //   extras-same         until every extra page shows the main page's frame (lossless); their ids
 //   drop                closes the page's connection as a lost link would; prints the ms
 //                       until it has reconnected and shows a frame again
+//   signal:NAME         creates OUTDIR/NAME (the test waits for it to act, e.g. restart the display)
+//   wait-reconnect      until the page has connected again and shown a frame on the new
+//                       connection (90 s at most: a restarted farm takes a while to start)
 //   sleep:MS, state     wait; print the page's state
 import fs from 'node:fs';
 import path from 'node:path';
@@ -103,6 +106,15 @@ try {
       const before = await page.evaluate(() => { const s = window.tessera.state; const b = { c: s.connects, f: s.frames }; window.tessera.drop(); return b; });
       await page.waitForFunction((b) => window.tessera.state.connects > b.c && window.tessera.state.frames > b.f,
                                  { timeout: 30000, polling: 10 }, before);
+      say({ action, ms: Date.now() - t0, state: await state() });
+    } else if (name === 'signal') {
+      fs.writeFileSync(path.join(outdir, arg), '');
+      say({ action });
+    } else if (name === 'wait-reconnect') {
+      const c = (await state()).connects;
+      await page.waitForFunction((n) => window.tessera.state.connects > n && window.tessera.state.shown >= 0 &&
+                                 window.tessera.state.kind === 'lossless',
+                                 { timeout: 90000, polling: 20 }, c);
       say({ action, ms: Date.now() - t0, state: await state() });
     } else if (name === 'sleep') {
       await new Promise((r) => setTimeout(r, Number(arg)));
