@@ -230,7 +230,7 @@ std::vector<Result> runOne(const fs::path& bin, const fs::path& dir, int image, 
 
 // The page's drags beside the window's, one row per round; web.csv.
 void webTable(const std::vector<Result>& results, const fs::path& path) {
-  const char* rate = std::getenv("TESSERA_VIEWER_NETNS") ? "emulated link" : "loopback";
+  const char* rate = std::getenv("TESSERA_VIEWER_RATE") ? std::getenv("TESSERA_VIEWER_RATE") : "loopback";
   std::ofstream wcsv(path);
   wcsv << "image,in_flight,round,viewer_link,window_fps,page_fps,farm_fps_page_drag,window_input_ms,page_input_ms,"
           "page_input_ms_p95,page_input_ms_first_quarter,page_input_ms_last_quarter,moving_bytes,lossless_bytes,"

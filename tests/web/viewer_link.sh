@@ -37,6 +37,6 @@ ip -n "$ns" link set "${tag}v" up
 ip -n "$ns" link set lo up
 tbf_limit "$rate" - "${tag}h"            # to the viewer
 tbf_limit "$rate" "$ns" "${tag}v"        # from the viewer
-export TESSERA_VIEWER_NETNS="$ns" TESSERA_VIEWER_SERVER=10.78.0.1
+export TESSERA_VIEWER_NETNS="$ns" TESSERA_VIEWER_SERVER=10.78.0.1 TESSERA_VIEWER_RATE="$rate"
 echo "viewer link: $rate, the viewer in namespace $ns, this host at $TESSERA_VIEWER_SERVER"
 "$@"
