@@ -18,7 +18,7 @@ PKGS=(
   libosmesa6-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev
   libpng-dev libsdl2-dev nlohmann-json3-dev libfftw3-dev zlib1g-dev libnifti2-dev
   libgtest-dev libgmock-dev libbenchmark-dev libteem-dev libxtst-dev
-  libcivetweb-dev libturbojpeg0-dev
+  libcivetweb-dev libturbojpeg0-dev libwebsockets-dev
 )
 # optional: python3-vtk9 python3-yaml for tests/bench/vtk_compare.py
 # Tests, fuzzing, benchmarks' plots, the window test under Xvfb, compose validation, the

@@ -122,11 +122,12 @@ WebServer::WebServer(const std::string& given, std::string token) : token_(std::
   // A WebSocket holds a worker thread while it is open: the viewers, plus some for pages.
   const std::string threads = std::to_string(kMaxViewers + 8);
   // Pings every 3 s: a viewer whose link died (a laptop asleep, a dropped NAT entry) is
-  // closed instead of holding its slot until TCP gives up.
+  // closed instead of holding its slot until TCP gives up. A write that makes no progress for
+  // 5 s (request_timeout_ms; any progress restarts it, so a slow link is fine) is cut short.
   // tcp_nodelay: a frame goes out as civetweb writes it (its header, then the payload);
   // with Nagle's algorithm the payload waited for the viewer's delayed ACK, ~20 ms a frame.
   const char* options[] = {"listening_ports", address.c_str(), "num_threads", threads.c_str(), "tcp_nodelay", "1",
-                           "request_timeout_ms", "10000", "enable_keep_alive", "no",
+                           "request_timeout_ms", "5000", "enable_keep_alive", "no",
                            "websocket_timeout_ms", "3000", "enable_websocket_ping_pong", "yes", nullptr};
   ctx_ = mg_start(&callbacks, this, options);
   if (!ctx_) throw std::runtime_error("--web " + address + ": cannot listen there (in use, or not this host's address?)");

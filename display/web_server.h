@@ -4,8 +4,9 @@
 // sent, so a slow or stalled viewer holds at most two frames (shared with the other viewers)
 // and never slows the farm or the other viewers: each viewer has its own sending thread.
 // Every refused connection and bad message is counted and logged once per kind. civetweb
-// 1.15 reads a whole incoming message before the size check: the 4 KiB limit protects the
-// display from a viewer with the token only after that read.
+// 1.15 reads a whole incoming message (up to 2 GiB) before the size check: the 4 KiB limit
+// protects the display from a viewer with the token only after that read
+// (tessera-web-server-bench measures it; libwebsockets refuses after the first 4 KiB).
 #pragma once
 #include <atomic>
 #include <chrono>

@@ -39,6 +39,8 @@ struct Result {
   std::string widths;  // the interactive frames' widths (the rungs chosen)
   nlohmann::json web;  // --web: what the page measured during the same kind of drag
   double farm_fps_web = 0;  // --web: the farm's frames per second during the page's drag
+  double fps_watched = 0;   // --web: the window's drag while a page watches (does not steer)
+  nlohmann::json watch;     // --web: what that page saw
   std::string lossless_on_page;  // --web: the display's figure for the whole run (median / max ms)
 };
 
@@ -49,14 +51,15 @@ std::string webHost() {
   return s && *s ? s : "127.0.0.1";
 }
 
-// The same drag in the web view (tests/web/bench.mjs in chromium), on the same farm.
-nlohmann::json dragInPage(int port, double drag_s, const fs::path& dir) {
+// The same drag in the web view (tests/web/bench.mjs in chromium), on the same farm; or, with
+// `watch`, a page that only watches until dir/stop-watching appears.
+nlohmann::json dragInPage(int port, double drag_s, const fs::path& dir, bool watch = false) {
   const char* ns = std::getenv("TESSERA_VIEWER_NETNS");
   const char* nice = std::getenv("TESSERA_VIEWER_NICE");
-  const std::string cmd = fmt::format("{}{}node {}/tests/web/bench.mjs 'http://{}:{}/#bench-token' {} {} 2>&1",
+  const std::string cmd = fmt::format("{}{}node {}/tests/web/bench.mjs 'http://{}:{}/#bench-token' {} {} {} 2>&1",
                                       ns && *ns ? fmt::format("ip netns exec {} ", ns) : "",
                                       nice && *nice ? fmt::format("nice -n {} ", nice) : "", TESSERA_SOURCE_DIR,
-                                      webHost(), port, drag_s, dir.string());
+                                      webHost(), port, drag_s, dir.string(), watch ? "watch" : "drag");
   std::string out;
   if (FILE* p = popen(cmd.c_str(), "r")) {
     char buf[4096];
@@ -160,12 +163,10 @@ std::vector<Result> runOne(const fs::path& bin, const fs::path& dir, int image, 
       for (int x = 0; x < w.width; ++x) std::copy_n(screen.at(win->x + x, win->y + y), 4, w.at(x, y));
     tessera::writePng((dir / name).string(), w);
   };
-  struct Span { size_t from, to, web_from, web_to; std::optional<nlohmann::json> sharp; nlohmann::json web; };
-  std::vector<Span> spans;
-  // Round -1 warms the farm up (its first frames, the refinement's first drag) and is not kept.
-  for (int round = -1; round < rounds; ++round) {
-    Span sp{lines(metrics).size(), 0, 0, 0, {}, {}};
-    const int steps = (int)((round < 0 ? 1.0 : drag_s) * 60);
+  struct Drag { size_t from = 0, to = 0; std::optional<nlohmann::json> sharp; };
+  // One drag in the window: the metrics lines of its interactive frames and its sharp frame.
+  auto windowDrag = [&](int steps, bool shots) {
+    Drag d{lines(metrics).size(), 0, {}};
     // Back and forth a whole number of times, 3 px an event (0.9 degree of orbit): every drag,
     // in the window or the page, turns the camera through the same views and ends where it began.
     const int half = std::max(1, steps / (2 * std::max(1, (int)std::lround(steps / 200.0))));
@@ -176,23 +177,40 @@ std::vector<Result> runOne(const fs::path& bin, const fs::path& dir, int image, 
       const int p = (i + 1) % (2 * half);
       user.moveTo(x0 + 3 * (p < half ? p : 2 * half - p), y0 + (i % 2));
       std::this_thread::sleep_until(began + (i + 1) * std::chrono::microseconds(16667));
-      if (i == steps / 2 && round == 0) shot("moving.png");
+      if (i == steps / 2 && shots) shot("moving.png");
     }
     user.button(1, false);
     waitUntil([&] {
       auto v = lines(metrics);
-      for (size_t i = sp.from; i < v.size(); ++i)
+      for (size_t i = d.from; i < v.size(); ++i)
         if (!v[i]["interactive"].get<bool>()) {
-          sp.sharp = v[i];
-          sp.to = i;
+          d.sharp = v[i];
+          d.to = i;
           return true;
         }
       return false;
     }, 60s);
+    if (!d.sharp) d.to = lines(metrics).size();
     std::this_thread::sleep_for(300ms);
-    if (round < 0) continue;
-    if (round == 0) shot("sharp.png");
+    if (shots) shot("sharp.png");
+    return d;
+  };
+  struct Span { Drag alone, watched; size_t web_from = 0, web_to = 0; nlohmann::json web, watch; };
+  std::vector<Span> spans;
+  const int steps = (int)(drag_s * 60);
+  windowDrag(60, false);  // warms the farm up (its first frames, the refinement's first drag); not kept
+  for (int round = 0; round < rounds; ++round) {
+    Span sp;
+    sp.alone = windowDrag(steps, round == 0);
     if (web_port) {
+      // The same drag in the window while a page watches, then a drag in the page.
+      fs::remove(dir / "watching");
+      fs::remove(dir / "stop-watching");
+      auto watcher = std::async(std::launch::async, [&] { return dragInPage(web_port, drag_s, dir, true); });
+      if (!waitUntil([&] { return fs::exists(dir / "watching"); }, 60s)) throw std::runtime_error("the watching page did not start");
+      sp.watched = windowDrag(steps, false);
+      std::ofstream(dir / "stop-watching").flush();
+      sp.watch = watcher.get();
       sp.web_from = lines(metrics).size();
       sp.web = dragInPage(web_port, drag_s, dir);
       sp.web_to = lines(metrics).size();
@@ -219,9 +237,13 @@ std::vector<Result> runOne(const fs::path& bin, const fs::path& dir, int image, 
     r.image = image;
     r.in_flight = in_flight;
     r.round = round;
-    windowStats(r, all, sp.from, sp.sharp ? sp.to : all.size(), sp.sharp);
+    windowStats(r, all, sp.alone.from, sp.alone.to, sp.alone.sharp);
     r.web = sp.web;
-    if (web_port) r.farm_fps_web = farmFps(all, sp.web_from, sp.web_to);
+    r.watch = sp.watch;
+    if (web_port) {
+      r.farm_fps_web = farmFps(all, sp.web_from, sp.web_to);
+      r.fps_watched = farmFps(all, sp.watched.from, sp.watched.to);
+    }
     r.lossless_on_page = lossless;
     out.push_back(r);
   }
@@ -232,22 +254,27 @@ std::vector<Result> runOne(const fs::path& bin, const fs::path& dir, int image, 
 void webTable(const std::vector<Result>& results, const fs::path& path) {
   const char* rate = std::getenv("TESSERA_VIEWER_RATE") ? std::getenv("TESSERA_VIEWER_RATE") : "loopback";
   std::ofstream wcsv(path);
-  wcsv << "image,in_flight,round,viewer_link,window_fps,page_fps,farm_fps_page_drag,window_input_ms,page_input_ms,"
+  wcsv << "image,in_flight,round,viewer_link,window_fps,window_fps_page_watching,watching_page_fps,page_fps,"
+          "farm_fps_page_drag,window_input_ms,page_input_ms,"
           "page_input_ms_p95,page_input_ms_first_quarter,page_input_ms_last_quarter,moving_bytes,lossless_bytes,"
           "window_release_to_sharp_ms,page_release_to_lossless_ms,lossless_on_page_after_display_ms\n";
-  std::printf("\n| image | in flight | round | fps window / page (farm during page drag) | input-to-present median ms, "
+  std::printf("\n| image | in flight | round | fps window / window with a page watching / page steering (farm) | "
+              "input-to-present median ms, "
               "window / page (p95; first / last quarter) | bytes per moving frame | bytes per lossless frame | release "
               "to sharp ms, window / page |\n|---|---:|---:|---|---|---:|---:|---|\n");
   for (const Result& r : results) {
     const auto& w = r.web;
     auto num = [&](const char* k) { return w.value(k, 0.0); };
-    wcsv << fmt::format("{},{},{},{},{:.2f},{:.2f},{:.2f},{:.1f},{:.1f},{:.1f},{:.1f},{:.1f},{},{},{:.1f},{:.1f},\"{}\"\n",
-                        r.image, r.in_flight, r.round, rate, r.fps, num("fps"), r.farm_fps_web, r.input_median,
+    wcsv << fmt::format("{},{},{},{},{:.2f},{:.2f},{:.2f},{:.2f},{:.2f},{:.1f},{:.1f},{:.1f},{:.1f},{:.1f},{},{},{:.1f},"
+                        "{:.1f},\"{}\"\n",
+                        r.image, r.in_flight, r.round, rate, r.fps, r.fps_watched, r.watch.value("fps", 0.0), num("fps"),
+                        r.farm_fps_web, r.input_median,
                         num("input_ms_median"), num("input_ms_p95"), num("input_ms_first_quarter"),
                         num("input_ms_last_quarter"), num("moving_bytes_median"), num("lossless_bytes"), r.sharp_ms,
                         num("release_to_lossless_ms"), r.lossless_on_page);
-    std::printf("| %d² | %d | %d | %.1f / %.1f (%.1f) | %.0f / %.0f (%.0f; %.0f / %.0f) | %.0f | %.0f | %.0f / %.0f |\n",
-                r.image, r.in_flight, r.round, r.fps, num("fps"), r.farm_fps_web, r.input_median, num("input_ms_median"),
+    std::printf("| %d² | %d | %d | %.1f / %.1f / %.1f (%.1f) | %.0f / %.0f (%.0f; %.0f / %.0f) | %.0f | %.0f | %.0f / %.0f |\n",
+                r.image, r.in_flight, r.round, r.fps, r.fps_watched, num("fps"), r.farm_fps_web, r.input_median,
+                num("input_ms_median"),
                 num("input_ms_p95"), num("input_ms_first_quarter"), num("input_ms_last_quarter"),
                 num("moving_bytes_median"), num("lossless_bytes"), r.sharp_ms, num("release_to_lossless_ms"));
   }

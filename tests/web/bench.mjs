@@ -5,22 +5,30 @@
 // input-to-present times (the page sending an input to the paint after the first frame that
 // answers it; over the drag and in its first and last quarter), bytes per moving and
 // per lossless frame, and the time from the release to the lossless frame.
-//   node bench.mjs URL SECONDS OUTDIR
+// With MODE "watch" the page only watches: it writes OUTDIR/watching once it shows the lossless
+// frame, and when OUTDIR/stop-watching appears prints the frames it showed and their rate.
+//   node bench.mjs URL SECONDS OUTDIR [drag|watch]
 import fs from 'node:fs';
 import path from 'node:path';
 import { launch } from './browser.mjs';
 
-const [url, seconds, outdir] = process.argv.slice(2);
+const [url, seconds, outdir, mode] = process.argv.slice(2);
 const { browser, close } = await launch(outdir, 1100);
 const median = (v) => (v.length ? [...v].sort((a, b) => a - b)[Math.floor((v.length - 1) / 2)] : 0);
 const p95 = (v) => (v.length ? [...v].sort((a, b) => a - b)[Math.round(0.95 * (v.length - 1))] : 0);
-try {
-  const page = await browser.newPage();
-  await page.setViewport({ width: 1100, height: 1100 });
-  await page.goto(url, { waitUntil: 'load', timeout: 30000 });
-  const lossless = (after) => page.waitForFunction((i) => window.tessera && window.tessera.state.kind === 'lossless' &&
-                                                   window.tessera.state.shown > i, { timeout: 60000, polling: 10 }, after);
-  await lossless(-1);
+
+async function watch(page) {
+  const from = await page.evaluate(() => window.tessera.state.log.length);
+  fs.writeFileSync(path.join(outdir, 'watching'), '');
+  for (let i = 0; i < 4 * Number(seconds) * 20 + 1200 && !fs.existsSync(path.join(outdir, 'stop-watching')); ++i)
+    await new Promise((r) => setTimeout(r, 50));
+  const log = (await page.evaluate(() => window.tessera.state.log)).slice(from);
+  const moving = log.filter((f) => f.kind === 'jpeg');
+  console.log(JSON.stringify({ frames: log.length,
+                               fps: moving.length > 1 ? (moving.length - 1) * 1000 / (moving[moving.length - 1].t - moving[0].t) : 0 }));
+}
+
+async function drag(page, lossless) {
   const start = await page.evaluate(() => { const s = window.tessera.state; return { n: s.log.length, shown: s.shown, t: performance.now() }; });
   const box = await (await page.$('canvas')).boundingBox();
   const x0 = box.x + box.width / 8, y0 = box.y + box.height / 2;
@@ -59,6 +67,17 @@ try {
     moving_bytes_median: median(moving.map((f) => f.bytes)), lossless_bytes: still.length ? still[still.length - 1].bytes : 0,
     release_to_lossless_ms: s.releaseToLossless,
   }));
+}
+
+try {
+  const page = await browser.newPage();
+  await page.setViewport({ width: 1100, height: 1100 });
+  await page.goto(url, { waitUntil: 'load', timeout: 30000 });
+  const lossless = (after) => page.waitForFunction((i) => window.tessera && window.tessera.state.kind === 'lossless' &&
+                                                   window.tessera.state.shown > i, { timeout: 60000, polling: 10 }, after);
+  await lossless(-1);
+  if (mode === 'watch') await watch(page);
+  else await drag(page, lossless);
 } catch (e) {
   console.log(JSON.stringify({ error: String(e && e.message || e) }));
   process.exitCode = 1;
