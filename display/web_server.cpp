@@ -1,18 +1,17 @@
-// civetweb handlers of the web view. See web_server.h.
+// libwebsockets callbacks of the web view. See web_server.h. Every callback runs on the
+// service thread; publish() and the display's calls come from other threads, so the state is
+// under mutex_ and publish() wakes the service thread with lws_cancel_service.
 #include "display/web_server.h"
 
-#include <civetweb.h>
+#include <libwebsockets.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <random>
-#include <condition_variable>
-#include <deque>
 #include <cstring>
+#include <random>
 #include <stdexcept>
-#include <thread>
 
 #include <spdlog/spdlog.h>
 
@@ -21,26 +20,32 @@
 namespace tessera::display {
 
 struct WebServer::Viewer {
-  mg_connection* conn = nullptr;
-  std::mutex m;
-  std::condition_variable cv;
   struct Sent {
     uint64_t id;
     bool lossless;
     std::chrono::steady_clock::time_point shown_at;
   };
+  lws* wsi = nullptr;
   uint32_t page = 0;  // the page's number for its load (0: none given)
   std::chrono::steady_clock::time_point connected_at;
   std::shared_ptr<const WebFrame> pending;  // the newest frame not yet sent
   std::deque<Sent> unacked;                 // sent and not acknowledged yet
-  bool closing = false;
-  bool dead = false;  // a write failed or was cut short: the connection is closed on its next read
-  std::thread sender;
+  std::vector<unsigned char> out;           // LWS_PRE bytes, then the frame being written
+  std::string in;                           // the message being received
+  bool in_binary = false;
+  bool draining = false;  // libwebsockets holds part of a frame the socket did not take yet
 };
 
 namespace {
 
 constexpr size_t kMaxQueuedInput = 1024;  // input messages between two display polls
+constexpr int kDrainSeconds = 5;          // a viewer that takes none of a frame for this long is closed
+
+// What a connection is to us: a request for the page or its script, or a viewer.
+struct Session {
+  const WebAsset* asset;
+  WebServer::Viewer* viewer;
+};
 
 bool sameToken(const std::string& a, const std::string& b) {
   unsigned diff = a.size() != b.size();
@@ -48,11 +53,10 @@ bool sameToken(const std::string& a, const std::string& b) {
   return diff == 0;  // time independent of where they differ
 }
 
-std::string queryValue(const char* query, const std::string& key) {
-  if (!query) return {};
-  char value[256];
-  const int n = mg_get_var(query, std::strlen(query), key.c_str(), value, sizeof value);
-  return n >= 0 ? std::string(value, (size_t)n) : std::string();
+std::string urlArg(lws* wsi, const char* name) {
+  char buf[256];
+  const char* v = lws_get_urlarg_by_name(wsi, name, buf, sizeof buf);
+  return v ? std::string(v) : std::string();
 }
 
 // Why a viewer's input message is unusable ("" when it is fine): numbers finite and bounded.
@@ -67,36 +71,25 @@ std::string badInput(const nlohmann::json& msg, const std::string& type) {
   return "";
 }
 
-WebServer* self(const mg_connection* conn) {
-  return static_cast<WebServer*>(mg_get_user_data(mg_get_context(conn)));
-}
-
-// One viewer's sending thread: the newest frame, when fewer than kMaxUnacked are unacknowledged.
-// mg_websocket_write takes the connection's lock itself. A write that fails or is cut short
-// (a viewer that stopped reading past the write timeout) would leave half a frame in the
-// stream: the viewer is dead, and civetweb's ping (no pong) or its next message closes it.
-void sendLoop(WebServer::Viewer& v, std::atomic<uint64_t>& sent, std::atomic<uint64_t>& cut_short) {
-  std::unique_lock lock(v.m);
-  while (true) {
-    v.cv.wait(lock, [&] { return v.closing || (v.pending && (int)v.unacked.size() < WebServer::kMaxUnacked); });
-    if (v.closing) return;
-    auto frame = std::move(v.pending);
-    v.pending.reset();
-    v.unacked.push_back({frame->id, frame->lossless, frame->shown_at});
-    lock.unlock();
-    const int n = mg_websocket_write(v.conn, MG_WEBSOCKET_OPCODE_BINARY, reinterpret_cast<const char*>(frame->message.data()),
-                                     frame->message.size());
-    lock.lock();
-    if (n < 0 || (size_t)n < frame->message.size()) {
-      cut_short.fetch_add(1);
-      v.dead = true;
-      return;
-    }
-    sent.fetch_add(1);
-  }
+void logLibwebsockets(int level, const char* line) {
+  std::string s(line);
+  while (!s.empty() && (s.back() == '\n' || s.back() == '\r')) s.pop_back();
+  if (level & LLL_ERR) spdlog::warn("web view (libwebsockets): {}", s);
 }
 
 }  // namespace
+
+struct WebCallbacks {
+  static int callback(lws* wsi, lws_callback_reasons reason, void* user, void* in, size_t len);
+  static int http(WebServer& s, lws* wsi, Session& session, const char* uri);
+  static int httpBody(lws* wsi, Session& session);
+  static void established(WebServer& s, lws* wsi, Session& session);
+  static int writeable(WebServer& s, lws* wsi, WebServer::Viewer& v);
+  static int receive(WebServer& s, lws* wsi, WebServer::Viewer& v, const char* data, size_t size);
+  static void message(WebServer& s, WebServer::Viewer& v, std::chrono::steady_clock::time_point arrived);
+  static void closed(WebServer& s, WebServer::Viewer* v);
+  static void logOnce(WebServer& s, const std::string& what);
+};
 
 std::string webToken() {
   if (const char* t = std::getenv("TESSERA_WEB_TOKEN"); t && *t) return t;
@@ -115,46 +108,52 @@ WebServer::WebServer(const std::string& given, std::string token) : token_(std::
   // PORT or :PORT listens on loopback: nothing is served beyond this host unless asked.
   const size_t colon = given.rfind(':');
   host_ = colon == std::string::npos || colon == 0 ? "127.0.0.1" : given.substr(0, colon);
-  const std::string address = host_ + ":" + (colon == std::string::npos ? given : given.substr(colon + 1));
-  mg_init_library(0);
-  mg_callbacks callbacks{};
-  callbacks.http_error = &WebServer::onHttpError;
-  // A WebSocket holds a worker thread while it is open: the viewers, plus some for pages.
-  const std::string threads = std::to_string(kMaxViewers + 8);
-  // Pings every 3 s: a viewer whose link died (a laptop asleep, a dropped NAT entry) is
-  // closed instead of holding its slot until TCP gives up. A write that makes no progress for
-  // 5 s (request_timeout_ms; any progress restarts it, so a slow link is fine) is cut short.
-  // tcp_nodelay: a frame goes out as civetweb writes it (its header, then the payload);
-  // with Nagle's algorithm the payload waited for the viewer's delayed ACK, ~20 ms a frame.
-  const char* options[] = {"listening_ports", address.c_str(), "num_threads", threads.c_str(), "tcp_nodelay", "1",
-                           "request_timeout_ms", "5000", "enable_keep_alive", "no",
-                           "websocket_timeout_ms", "3000", "enable_websocket_ping_pong", "yes", nullptr};
-  ctx_ = mg_start(&callbacks, this, options);
+  const std::string port = colon == std::string::npos ? given : given.substr(colon + 1);
+  const std::string address = host_ + ":" + port;
+  char* end = nullptr;
+  const long number = std::strtol(port.c_str(), &end, 10);
+  if (port.empty() || *end || number < 0 || number > 65535)
+    throw std::runtime_error("--web " + given + ": the port must be a number from 0 to 65535");
+  lws_set_log_level(LLL_ERR, &logLibwebsockets);
+  static const lws_protocols protocols[] = {
+      {"tessera", &WebCallbacks::callback, sizeof(Session), kMaxMessage, 0, nullptr, 0}, {nullptr, nullptr, 0, 0, 0, nullptr, 0}};
+  // Pings after 3 s without traffic: a viewer whose link died (a laptop asleep, a dropped NAT
+  // entry) is closed after 10 s instead of holding its slot until TCP gives up.
+  static const lws_retry_bo_t idle = {nullptr, 0, 0, 3, 10, 0};
+  lws_context_creation_info info{};
+  info.port = (int)number;
+  info.iface = host_.c_str();
+  info.protocols = protocols;
+  info.user = this;
+  info.retry_and_idle_policy = &idle;
+  info.options = LWS_SERVER_OPTION_VALIDATE_UTF8;
+  ctx_ = lws_create_context(&info);
   if (!ctx_) throw std::runtime_error("--web " + address + ": cannot listen there (in use, or not this host's address?)");
-  mg_server_port ports[4];
-  if (mg_get_server_ports(ctx_, 4, ports) >= 1) port_ = ports[0].port;
-  mg_set_request_handler(ctx_, "/", &WebServer::onRequest, this);
-  mg_set_websocket_handler(ctx_, "/ws", &WebServer::onConnect, &WebServer::onReady, &WebServer::onData,
-                           &WebServer::onClose, this);
+  port_ = lws_get_vhost_listen_port(lws_get_vhost_by_name(ctx_, "default"));
+  service_ = std::thread([this] {
+    while (!stop_) lws_service(ctx_, 0);
+  });
 }
 
 WebServer::~WebServer() {
-  // Closes every connection; each close handler ends its viewer's thread. A write blocked on
-  // a stalled viewer sees the stop within civetweb's 2 s socket quantum.
-  mg_stop(ctx_);
+  stop_ = true;
+  lws_cancel_service(ctx_);
+  service_.join();
+  lws_context_destroy(ctx_);  // closes every connection (their close callbacks run here)
 }
 
 std::string WebServer::url() const { return "http://" + host_ + ":" + std::to_string(port_) + "/#" + token_; }
 
 void WebServer::publish(std::shared_ptr<const WebFrame> frame) {
-  std::lock_guard lock(mutex_);
-  latest_ = frame;
-  for (auto& v : viewers_) {
-    std::lock_guard vl(v->m);
-    if (v->pending) ++counters_.frames_replaced;
-    v->pending = frame;
-    v->cv.notify_one();
+  {
+    std::lock_guard lock(mutex_);
+    latest_ = frame;
+    for (auto& v : viewers_) {
+      if (v->pending) ++counters_.frames_replaced;
+      v->pending = frame;
+    }
   }
+  lws_cancel_service(ctx_);  // the service thread asks each viewer's connection to write
 }
 
 void WebServer::onViewer(std::function<void()> f) {
@@ -176,8 +175,8 @@ WebCounters WebServer::counters() const {
   std::lock_guard lock(mutex_);
   WebCounters c = counters_;
   c.viewers = viewers_.size();
-  c.frames_sent = sent_.load();
-  c.cut_short = cut_short_.load();
+  c.frames_sent = sent_;
+  c.cut_short = cut_short_;
   c.lossless_ms.assign(lossless_ms_.begin(), lossless_ms_.end());
   c.moving_ms.assign(moving_ms_.begin(), moving_ms_.end());
   return c;
@@ -185,141 +184,202 @@ WebCounters WebServer::counters() const {
 
 void WebServer::badMessage(const std::string& why) {  // with mutex_ held
   ++counters_.bad_messages;
-  if (std::find(logged_.begin(), logged_.end(), why) != logged_.end()) return;
-  logged_.push_back(why);
-  spdlog::warn("web view: refused a viewer message: {} (counted; logged once)", why);
+  WebCallbacks::logOnce(*this, "refused a viewer message: " + why);
 }
 
-int WebServer::onConnect(const mg_connection* conn, void*) {
-  WebServer& s = *self(conn);
-  const std::string token = queryValue(mg_get_request_info(conn)->query_string, "token");
-  std::lock_guard lock(s.mutex_);
-  std::string why;
-  if (!sameToken(token, s.token_)) why = token.empty() ? "a connection without the token" : "a wrong token";
-  else if ((int)s.viewers_.size() >= kMaxViewers) why = "more than " + std::to_string(kMaxViewers) + " viewers";
-  if (why.empty()) return 0;
-  ++s.counters_.refused;
-  if (std::find(s.logged_.begin(), s.logged_.end(), why) == s.logged_.end()) {
-    s.logged_.push_back(why);
-    spdlog::warn("web view: refused {} (counted; logged once)", why);
+void WebCallbacks::logOnce(WebServer& s, const std::string& what) {  // with mutex_ held
+  if (std::find(s.logged_.begin(), s.logged_.end(), what) != s.logged_.end()) return;
+  s.logged_.push_back(what);
+  spdlog::warn("web view: {} (counted; logged once)", what);
+}
+
+int WebCallbacks::callback(lws* wsi, lws_callback_reasons reason, void* user, void* in, size_t len) {
+  auto* s = static_cast<WebServer*>(lws_context_user(lws_get_context(wsi)));
+  auto* session = static_cast<Session*>(user);
+  switch (reason) {
+    case LWS_CALLBACK_SERVER_NEW_CLIENT_INSTANTIATED: {
+      std::lock_guard lock(s->mutex_);
+      s->unrequested_.insert(wsi);
+      return 0;
+    }
+    case LWS_CALLBACK_WSI_DESTROY: {  // a connection that never made a request: garbage, or nothing
+      std::lock_guard lock(s->mutex_);
+      if (s->unrequested_.erase(wsi)) {
+        ++s->counters_.bad_requests;
+        logOnce(*s, "refused a connection that sent no HTTP request (not HTTP, or nothing)");
+      }
+      return 0;
+    }
+    case LWS_CALLBACK_HTTP:
+      return http(*s, wsi, *session, static_cast<const char*>(in));
+    case LWS_CALLBACK_HTTP_WRITEABLE:
+      return httpBody(wsi, *session);
+    case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION: {
+      const std::string token = urlArg(wsi, "token=");
+      std::lock_guard lock(s->mutex_);
+      s->unrequested_.erase(wsi);
+      std::string why;
+      if (!sameToken(token, s->token_)) why = token.empty() ? "a connection without the token" : "a wrong token";
+      else if ((int)s->viewers_.size() >= WebServer::kMaxViewers)
+        why = "more than " + std::to_string(WebServer::kMaxViewers) + " viewers";
+      if (why.empty()) return 0;
+      ++s->counters_.refused;
+      logOnce(*s, "refused " + why);
+      return 1;
+    }
+    case LWS_CALLBACK_ESTABLISHED:
+      established(*s, wsi, *session);
+      return 0;
+    case LWS_CALLBACK_SERVER_WRITEABLE:
+      return session->viewer ? writeable(*s, wsi, *session->viewer) : 0;
+    case LWS_CALLBACK_RECEIVE:
+      return session->viewer ? receive(*s, wsi, *session->viewer, static_cast<const char*>(in), len) : -1;
+    case LWS_CALLBACK_CLOSED:
+      closed(*s, session->viewer);
+      session->viewer = nullptr;
+      return 0;
+    case LWS_CALLBACK_EVENT_WAIT_CANCELLED: {  // publish(): new frames to send
+      std::lock_guard lock(s->mutex_);
+      for (auto& v : s->viewers_)
+        if (v->pending) lws_callback_on_writable(v->wsi);
+      return 0;
+    }
+    default:
+      return lws_callback_http_dummy(wsi, reason, user, in, len);
   }
-  return 1;
 }
 
-void WebServer::onReady(mg_connection* conn, void*) {
-  WebServer& s = *self(conn);
-  auto v = std::make_shared<Viewer>();
-  v->conn = conn;
+int WebCallbacks::http(WebServer& s, lws* wsi, Session& session, const char* uri) {
+  {
+    std::lock_guard lock(s.mutex_);
+    s.unrequested_.erase(wsi);
+  }
+  const std::string path = uri ? uri : "";
+  const bool get = lws_hdr_total_length(wsi, WSI_TOKEN_GET_URI) > 0;
+  session.asset = nullptr;
+  for (const WebAsset& a : webAssets())
+    if (path == a.path || (path == "/" && std::string(a.path) == "/index.html")) session.asset = &a;
+  if (!session.asset || !get) {
+    {
+      std::lock_guard lock(s.mutex_);
+      ++s.counters_.bad_requests;
+      logOnce(s, "refused a request for anything but the page and its script (HTTP 404)");
+    }
+    if (lws_return_http_status(wsi, HTTP_STATUS_NOT_FOUND, "not found: the web view serves / and its script only"))
+      return -1;
+    return lws_http_transaction_completed(wsi) ? -1 : 0;
+  }
+  unsigned char buf[LWS_PRE + 512];
+  unsigned char *start = buf + LWS_PRE, *p = start, *end = buf + sizeof buf - 1;
+  if (lws_add_http_common_headers(wsi, HTTP_STATUS_OK, session.asset->mime, session.asset->size, &p, end) ||
+      lws_finalize_write_http_header(wsi, start, &p, end))
+    return 1;
+  lws_callback_on_writable(wsi);
+  return 0;
+}
+
+int WebCallbacks::httpBody(lws* wsi, Session& session) {
+  if (!session.asset) return -1;
+  std::vector<unsigned char> body(LWS_PRE + session.asset->size);
+  std::memcpy(body.data() + LWS_PRE, session.asset->data, session.asset->size);
+  session.asset = nullptr;
+  if (lws_write(wsi, body.data() + LWS_PRE, body.size() - LWS_PRE, LWS_WRITE_HTTP_FINAL) < 0) return -1;
+  return lws_http_transaction_completed(wsi) ? -1 : 0;
+}
+
+void WebCallbacks::established(WebServer& s, lws* wsi, Session& session) {
+  auto v = std::make_shared<WebServer::Viewer>();
+  v->wsi = wsi;
   v->connected_at = std::chrono::steady_clock::now();
   // The page's number for its load: up to 9 digits (anything else: none; it only labels input).
-  if (const std::string page = queryValue(mg_get_request_info(conn)->query_string, "page");
+  if (const std::string page = urlArg(wsi, "page=");
       !page.empty() && page.size() <= 9 && page.find_first_not_of("0123456789") == std::string::npos)
     v->page = (uint32_t)std::stoul(page);
+  session.viewer = v.get();
   std::lock_guard lock(s.mutex_);
   v->pending = s.latest_;  // a viewer that (re)connects sees the current frame at once
-  mg_set_user_connection_data(conn, v.get());
-  v->sender = std::thread(sendLoop, std::ref(*v), std::ref(s.sent_), std::ref(s.cut_short_));
   s.viewers_.push_back(v);
   ++s.counters_.connections;
+  spdlog::info("web view: a viewer connected ({} watching)", s.viewers_.size());
   if (s.on_viewer_) s.on_viewer_();
+  if (v->pending) lws_callback_on_writable(wsi);
 }
 
-int WebServer::onData(mg_connection* conn, int bits, char* data, size_t size, void*) {
-  WebServer& s = *self(conn);
-  const int opcode = bits & 0x0f;
-  if (opcode == MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE) return 0;
-  if (opcode == MG_WEBSOCKET_OPCODE_PING || opcode == MG_WEBSOCKET_OPCODE_PONG) return 1;
-  auto* v = static_cast<Viewer*>(mg_get_user_connection_data(conn));
-  const auto arrived = std::chrono::steady_clock::now();
+// The newest frame, when fewer than kMaxUnacked are unacknowledged. What the socket does not
+// take libwebsockets keeps, and calls here again once it has sent it.
+int WebCallbacks::writeable(WebServer& s, lws* wsi, WebServer::Viewer& v) {
   std::lock_guard lock(s.mutex_);
-  if (v) {
-    std::lock_guard vl(v->m);
-    if (v->dead) return 0;  // half a frame went out: close, the page reconnects
+  if (v.draining) {
+    v.draining = false;
+    lws_set_timeout(wsi, NO_PENDING_TIMEOUT, 0);
   }
-  if (size > kMaxMessage) {
-    s.badMessage("a message larger than " + std::to_string(kMaxMessage) + " bytes (connection closed)");
-    return 0;
+  if (!v.pending || (int)v.unacked.size() >= WebServer::kMaxUnacked) return 0;
+  const auto frame = std::move(v.pending);
+  v.pending.reset();
+  v.out.resize(LWS_PRE + frame->message.size());
+  std::memcpy(v.out.data() + LWS_PRE, frame->message.data(), frame->message.size());
+  if (lws_write(wsi, v.out.data() + LWS_PRE, frame->message.size(), LWS_WRITE_BINARY) < 0) return -1;
+  v.unacked.push_back({frame->id, frame->lossless, frame->shown_at});
+  ++s.sent_;
+  if (lws_partial_buffered(wsi)) {  // a viewer that stops reading here is closed in kDrainSeconds
+    v.draining = true;
+    lws_set_timeout(wsi, PENDING_TIMEOUT_USER_OK, kDrainSeconds);
+    lws_callback_on_writable(wsi);
   }
-  if (opcode != MG_WEBSOCKET_OPCODE_TEXT) {
-    s.badMessage("a binary or continued message");
-    return 1;
+  return 0;
+}
+
+int WebCallbacks::receive(WebServer& s, lws* wsi, WebServer::Viewer& v, const char* data, size_t size) {
+  const auto arrived = std::chrono::steady_clock::now();
+  if (lws_is_first_fragment(wsi)) {
+    v.in.clear();
+    v.in_binary = lws_frame_is_binary(wsi);
   }
-  const auto msg = nlohmann::json::parse(data, data + size, nullptr, false);
+  std::lock_guard lock(s.mutex_);
+  if (v.in.size() + size > WebServer::kMaxMessage) {
+    s.badMessage("a message larger than " + std::to_string(WebServer::kMaxMessage) + " bytes (connection closed)");
+    return -1;
+  }
+  v.in.append(data, size);
+  if (lws_is_final_fragment(wsi) && lws_remaining_packet_payload(wsi) == 0) message(s, v, arrived);
+  return 0;
+}
+
+void WebCallbacks::message(WebServer& s, WebServer::Viewer& v, std::chrono::steady_clock::time_point arrived) {
+  if (v.in_binary) return s.badMessage("a binary message");
+  const auto msg = nlohmann::json::parse(v.in, nullptr, false);
   const std::string type = msg.is_object() && msg.contains("t") && msg["t"].is_string() ? msg["t"].get<std::string>() : "";
   if (msg.is_discarded()) {
     s.badMessage("a message that is not JSON");
   } else if (type == "ack") {
     const uint64_t id = msg.contains("id") && msg["id"].is_number_unsigned() ? msg["id"].get<uint64_t>() : UINT64_MAX;
-    bool known = false;
-    if (v) {
-      std::lock_guard vl(v->m);
-      const auto it = std::find_if(v->unacked.begin(), v->unacked.end(), [&](const auto& f) { return f.id == id; });
-      known = it != v->unacked.end();
-      // A frame presented while this viewer watched: how long until it was on the page.
-      if (known && it->shown_at >= v->connected_at) {
-        auto& times = it->lossless ? s.lossless_ms_ : s.moving_ms_;
-        times.push_back(std::chrono::duration<double, std::milli>(arrived - it->shown_at).count());
-        if (times.size() > 1000) times.pop_front();
-      }
-      if (known) v->unacked.erase(v->unacked.begin(), it + 1);  // and any older ones it passed
-      v->cv.notify_one();
+    const auto it = std::find_if(v.unacked.begin(), v.unacked.end(), [&](const auto& f) { return f.id == id; });
+    if (it == v.unacked.end()) return s.badMessage("an acknowledgement of a frame this connection has not been sent");
+    // A frame presented while this viewer watched: how long until it was on the page.
+    if (it->shown_at >= v.connected_at) {
+      auto& times = it->lossless ? s.lossless_ms_ : s.moving_ms_;
+      times.push_back(std::chrono::duration<double, std::milli>(arrived - it->shown_at).count());
+      if (times.size() > 1000) times.pop_front();
     }
-    if (!known) s.badMessage("an acknowledgement of a frame this connection has not been sent");
+    v.unacked.erase(v.unacked.begin(), it + 1);  // and any older ones it passed
+    if (v.pending) lws_callback_on_writable(v.wsi);
   } else if (type == "drag" || type == "release" || type == "wheel" || type == "key") {
     if (const std::string why = badInput(msg, type); !why.empty()) s.badMessage(why);
     else if (s.input_.size() < kMaxQueuedInput)
-      s.input_.push_back({msg, arrived, v ? v->page : 0u, msg.contains("n") ? msg["n"].get<uint64_t>() : 0u});
+      s.input_.push_back({msg, arrived, v.page, msg.contains("n") ? msg["n"].get<uint64_t>() : 0u});
     else s.badMessage("input beyond " + std::to_string(kMaxQueuedInput) + " messages before the display read them");
   } else {
     s.badMessage("an unknown message type");
   }
-  return 1;
 }
 
-void WebServer::onClose(const mg_connection* conn, void*) {
-  WebServer& s = *self(conn);
-  auto* raw = static_cast<Viewer*>(mg_get_user_connection_data(conn));
-  std::shared_ptr<Viewer> v;
-  {
-    std::lock_guard lock(s.mutex_);
-    auto it = std::find_if(s.viewers_.begin(), s.viewers_.end(), [&](auto& p) { return p.get() == raw; });
-    if (it == s.viewers_.end()) return;
-    v = *it;
-    s.viewers_.erase(it);
-  }
-  {
-    std::lock_guard vl(v->m);
-    v->closing = true;
-    v->cv.notify_one();
-  }
-  if (v->sender.joinable()) v->sender.join();
-}
-
-int WebServer::onRequest(mg_connection* conn, void*) {
-  const mg_request_info* ri = mg_get_request_info(conn);
-  const std::string path = ri->local_uri ? ri->local_uri : "";
-  const WebAsset* asset = nullptr;
-  for (const WebAsset& a : webAssets())
-    if (path == a.path || (path == "/" && std::string(a.path) == "/index.html")) asset = &a;
-  if (!asset || std::strcmp(ri->request_method, "GET") != 0) {
-    mg_send_http_error(conn, 404, "%s", "not found: the web view serves / and its script only");
-    return 404;
-  }
-  mg_send_http_ok(conn, asset->mime, (long long)asset->size);
-  mg_write(conn, asset->data, asset->size);
-  return 200;
-}
-
-int WebServer::onHttpError(mg_connection* conn, int status, const char*) {
-  WebServer& s = *self(conn);
+void WebCallbacks::closed(WebServer& s, WebServer::Viewer* v) {
+  if (!v) return;
   std::lock_guard lock(s.mutex_);
-  ++s.counters_.bad_requests;
-  const std::string why = "HTTP " + std::to_string(status);
-  if (std::find(s.logged_.begin(), s.logged_.end(), why) == s.logged_.end()) {
-    s.logged_.push_back(why);
-    spdlog::warn("web view: a request ended in {} (unknown path or not HTTP; counted; logged once)", why);
-  }
-  return 1;  // civetweb's own error page
+  if (v->draining) ++s.cut_short_;  // closed with part of a frame unsent: it stopped reading
+  auto it = std::find_if(s.viewers_.begin(), s.viewers_.end(), [&](auto& p) { return p.get() == v; });
+  if (it != s.viewers_.end()) s.viewers_.erase(it);
+  spdlog::info("web view: a viewer left ({} watching)", s.viewers_.size());
 }
 
 }  // namespace tessera::display

@@ -1,12 +1,14 @@
-// The web view's server (civetweb: HTTP and WebSocket): serves the page and its script,
-// which are compiled into the program, and one WebSocket per viewer (/ws?token=...).
-// Per viewer, at most 2 frames are unacknowledged and a newer frame replaces one not yet
-// sent, so a slow or stalled viewer holds at most two frames (shared with the other viewers)
-// and never slows the farm or the other viewers: each viewer has its own sending thread.
-// Every refused connection and bad message is counted and logged once per kind. civetweb
-// 1.15 reads a whole incoming message (up to 2 GiB) before the size check: the 4 KiB limit
-// protects the display from a viewer with the token only after that read
-// (tessera-web-server-bench measures it; libwebsockets refuses after the first 4 KiB).
+// The web view's server (libwebsockets: HTTP and WebSocket, one service thread): serves the
+// page and its script, which are compiled into the program, and one WebSocket per viewer
+// (/ws?token=...). Per viewer, at most 2 frames are unacknowledged and a newer frame replaces
+// one not yet sent, so a slow or stalled viewer holds at most two frames (shared with the
+// other viewers) and never slows the farm or the other viewers: writes never block (what the
+// socket does not take, libwebsockets keeps and sends when it can; a viewer that takes none of
+// it for 5 s is closed). A viewer message is received 4 KiB at a time, so one over the 4 KiB
+// limit is refused after its first 4 KiB. libwebsockets was chosen over civetweb for that by
+// tessera-web-server-bench: civetweb reads a whole message (up to 2 GiB) before it can be
+// refused, and on the web view's traffic both cost well under 0.1 ms of CPU a frame.
+// Every refused connection and bad message is counted and logged once per kind.
 #pragma once
 #include <atomic>
 #include <chrono>
@@ -16,14 +18,16 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
+#include <unordered_set>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "display/web_frame.h"
 
-struct mg_context;
-struct mg_connection;
+struct lws;
+struct lws_context;
 
 namespace tessera::display {
 
@@ -70,7 +74,8 @@ class WebServer {
   void publish(std::shared_ptr<const WebFrame> frame);
   // The viewers' input messages since the last call, oldest first.
   std::vector<WebInput> takeInput();
-  // Called (on a server thread) when a viewer connects; the sink re-sends its newest frame.
+  // Called (on the server's thread, with its lock held) when a viewer connects; the sink
+  // re-sends its newest frame.
   void onViewer(std::function<void()> f);
   size_t viewers() const;
   WebCounters counters() const;
@@ -78,26 +83,24 @@ class WebServer {
   struct Viewer;  // internal
 
  private:
-  static int onConnect(const mg_connection* conn, void* self);
-  static void onReady(mg_connection* conn, void* self);
-  static int onData(mg_connection* conn, int bits, char* data, size_t size, void* self);
-  static void onClose(const mg_connection* conn, void* self);
-  static int onRequest(mg_connection* conn, void* self);
-  static int onHttpError(mg_connection* conn, int status, const char* msg);
+  friend struct WebCallbacks;  // libwebsockets' callbacks (web_server.cpp)
   void badMessage(const std::string& why);
 
   std::string host_, token_;
   int port_ = 0;
-  mg_context* ctx_ = nullptr;
+  lws_context* ctx_ = nullptr;
+  std::atomic<bool> stop_{false};
+  std::thread service_;
   mutable std::mutex mutex_;
   std::vector<std::shared_ptr<Viewer>> viewers_;
   std::shared_ptr<const WebFrame> latest_;
   std::vector<WebInput> input_;
   std::function<void()> on_viewer_;
   WebCounters counters_;
-  std::atomic<uint64_t> sent_{0}, cut_short_{0};
+  uint64_t sent_ = 0, cut_short_ = 0;
   std::deque<double> lossless_ms_, moving_ms_;
   std::vector<std::string> logged_;  // kinds of bad input already logged
+  std::unordered_set<lws*> unrequested_;  // connections that have not sent a request yet
 };
 
 }  // namespace tessera::display
