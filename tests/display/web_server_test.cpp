@@ -55,6 +55,9 @@ TEST(WebServer, PortZeroListensOnAFreePortAndTheUrlCarriesTheToken) {
   EXPECT_NE(get(s.port(), "/viewer.js").find("WebSocket"), std::string::npos);
   EXPECT_NE(get(s.port(), "/etc/passwd").find(" 404 "), std::string::npos);
   EXPECT_EQ(s.counters().bad_requests, 1u);
+  // All addresses (a container's published port): loopback reaches it too.
+  WebServer any("0.0.0.0:0", "tok3n");
+  EXPECT_NE(get(any.port(), "/").find(" 200 "), std::string::npos);
 }
 
 TEST(WebServer, AnAddressInUseOrNotAPortIsRefusedByName) {
