@@ -28,18 +28,23 @@ struct WebServer::Viewer {
   lws* wsi = nullptr;
   uint32_t page = 0;  // the page's number for its load (0: none given)
   std::chrono::steady_clock::time_point connected_at;
-  std::shared_ptr<const WebFrame> pending;  // the newest frame not yet sent
+  std::shared_ptr<const WebFrame> pending;  // the newest frame not yet sent (publish() sets it)
+  // The rest is the service thread's alone.
   std::deque<Sent> unacked;                 // sent and not acknowledged yet
-  std::vector<unsigned char> out;           // LWS_PRE bytes, then the frame being written
+  std::shared_ptr<const WebFrame> sending;  // the frame going out, a piece per writeable callback
+  size_t offset = 0;                        // of its bytes written so far
   std::string in;                           // the message being received
   bool in_binary = false;
-  bool draining = false;  // libwebsockets holds part of a frame the socket did not take yet
 };
 
 namespace {
 
 constexpr size_t kMaxQueuedInput = 1024;  // input messages between two display polls
-constexpr int kDrainSeconds = 5;          // a viewer that takes none of a frame for this long is closed
+constexpr int kDrainSeconds = 5;          // a viewer that takes no piece of a frame for this long is closed
+// A frame goes out in pieces of this size, one per writeable callback: the drain timeout is
+// per piece (a slow link that keeps reading is never cut off), the display's pings go out
+// between pieces, and the server holds one piece per viewer, not a copy of the frame.
+constexpr size_t kPiece = 64 * 1024;
 
 // What a connection is to us: a request for the page or its script, or a viewer.
 struct Session {
@@ -127,6 +132,7 @@ WebServer::WebServer(const std::string& given, std::string token) : token_(std::
   info.user = this;
   info.retry_and_idle_policy = &idle;
   info.options = LWS_SERVER_OPTION_VALIDATE_UTF8;
+  info.fd_limit_per_thread = 256;  // connections at once (viewers, page loads, strangers)
   ctx_ = lws_create_context(&info);
   if (!ctx_) throw std::runtime_error("--web " + address + ": cannot listen there (in use, or not this host's address?)");
   port_ = lws_get_vhost_listen_port(lws_get_vhost_by_name(ctx_, "default"));
@@ -206,7 +212,8 @@ int WebCallbacks::callback(lws* wsi, lws_callback_reasons reason, void* user, vo
       std::lock_guard lock(s->mutex_);
       if (s->unrequested_.erase(wsi)) {
         ++s->counters_.bad_requests;
-        logOnce(*s, "refused a connection that sent no HTTP request (not HTTP, or nothing)");
+        logOnce(*s, "refused a connection that sent no HTTP request (not HTTP, or nothing: browsers' unused "
+                    "pre-connections count too)");
       }
       return 0;
     }
@@ -305,32 +312,39 @@ void WebCallbacks::established(WebServer& s, lws* wsi, Session& session) {
   if (v->pending) lws_callback_on_writable(wsi);
 }
 
-// The newest frame, when fewer than kMaxUnacked are unacknowledged. What the socket does not
-// take libwebsockets keeps, and calls here again once it has sent it.
+// The next piece of the frame going out; else the newest frame, when fewer than kMaxUnacked
+// are unacknowledged. What the socket does not take libwebsockets keeps, and calls here again
+// once it has sent it.
 int WebCallbacks::writeable(WebServer& s, lws* wsi, WebServer::Viewer& v) {
-  std::lock_guard lock(s.mutex_);
-  if (v.draining) {
-    v.draining = false;
-    lws_set_timeout(wsi, NO_PENDING_TIMEOUT, 0);
+  if (!v.sending) {
+    std::lock_guard lock(s.mutex_);
+    if (!v.pending || (int)v.unacked.size() >= WebServer::kMaxUnacked) {
+      lws_set_timeout(wsi, NO_PENDING_TIMEOUT, 0);
+      return 0;
+    }
+    v.sending = std::move(v.pending);
+    v.pending.reset();
+    v.offset = 0;
+    v.unacked.push_back({v.sending->id, v.sending->lossless, v.sending->shown_at});
+    ++s.sent_;
   }
-  if (!v.pending || (int)v.unacked.size() >= WebServer::kMaxUnacked) return 0;
-  const auto frame = std::move(v.pending);
-  v.pending.reset();
-  v.out.resize(LWS_PRE + frame->message.size());
-  std::memcpy(v.out.data() + LWS_PRE, frame->message.data(), frame->message.size());
-  if (lws_write(wsi, v.out.data() + LWS_PRE, frame->message.size(), LWS_WRITE_BINARY) < 0) return -1;
-  v.unacked.push_back({frame->id, frame->lossless, frame->shown_at});
-  ++s.sent_;
-  if (lws_partial_buffered(wsi)) {  // a viewer that stops reading here is closed in kDrainSeconds
-    v.draining = true;
-    lws_set_timeout(wsi, PENDING_TIMEOUT_USER_OK, kDrainSeconds);
-    lws_callback_on_writable(wsi);
-  }
+  const auto& bytes = v.sending->message;
+  const size_t n = std::min(kPiece, bytes.size() - v.offset);
+  unsigned char piece[LWS_PRE + kPiece];
+  std::memcpy(piece + LWS_PRE, bytes.data() + v.offset, n);
+  const bool first = v.offset == 0, last = v.offset + n == bytes.size();
+  if (lws_write(wsi, piece + LWS_PRE, n, (lws_write_protocol)lws_write_ws_flags(LWS_WRITE_BINARY, first, last)) < 0)
+    return -1;
+  v.offset += n;
+  if (last) v.sending.reset();
+  lws_set_timeout(wsi, PENDING_TIMEOUT_USER_OK, kDrainSeconds);  // cleared once nothing is left to send
+  lws_callback_on_writable(wsi);
   return 0;
 }
 
 int WebCallbacks::receive(WebServer& s, lws* wsi, WebServer::Viewer& v, const char* data, size_t size) {
   const auto arrived = std::chrono::steady_clock::now();
+  lws_validity_confirmed(wsi);  // the viewer is there: no ping needed to know it
   if (lws_is_first_fragment(wsi)) {
     v.in.clear();
     v.in_binary = lws_frame_is_binary(wsi);
@@ -376,9 +390,10 @@ void WebCallbacks::message(WebServer& s, WebServer::Viewer& v, std::chrono::stea
 void WebCallbacks::closed(WebServer& s, WebServer::Viewer* v) {
   if (!v) return;
   std::lock_guard lock(s.mutex_);
-  if (v->draining) ++s.cut_short_;  // closed with part of a frame unsent: it stopped reading
+  if (v->sending) ++s.cut_short_;  // closed in the middle of a frame: it stopped reading, or left
   auto it = std::find_if(s.viewers_.begin(), s.viewers_.end(), [&](auto& p) { return p.get() == v; });
   if (it != s.viewers_.end()) s.viewers_.erase(it);
+  if (s.viewers_.empty()) s.latest_.reset();  // not encoded while nobody watched: the next viewer gets a new one
   spdlog::info("web view: a viewer left ({} watching)", s.viewers_.size());
 }
 

@@ -2,9 +2,9 @@
 // page and its script, which are compiled into the program, and one WebSocket per viewer
 // (/ws?token=...). Per viewer, at most 2 frames are unacknowledged and a newer frame replaces
 // one not yet sent, so a slow or stalled viewer holds at most two frames (shared with the
-// other viewers) and never slows the farm or the other viewers: writes never block (what the
-// socket does not take, libwebsockets keeps and sends when it can; a viewer that takes none of
-// it for 5 s is closed). A viewer message is received 4 KiB at a time, so one over the 4 KiB
+// other viewers) and never slows the farm or the other viewers: writes never block (a frame
+// goes out in 64 KiB pieces; a viewer that takes no piece for 5 s is closed, one that is silent
+// for 10 s too). A viewer message is received 4 KiB at a time, so one over the 4 KiB
 // limit is refused after its first 4 KiB. libwebsockets was chosen over civetweb for that by
 // tessera-web-server-bench: civetweb reads a whole message (up to 2 GiB) before it can be
 // refused, and on the web view's traffic both cost well under 0.1 ms of CPU a frame.
@@ -42,7 +42,7 @@ struct WebCounters {
   uint64_t bad_requests = 0;     // HTTP errors: unknown paths, garbage on the port
   uint64_t frames_sent = 0;
   uint64_t frames_replaced = 0;  // replaced by a newer one before a viewer could take it
-  uint64_t cut_short = 0;        // frames a viewer did not take within the write timeout (closed)
+  uint64_t cut_short = 0;        // viewers closed in the middle of a frame (stopped reading, or left)
   // For the latest (at most 1000) lossless and moving frames viewers acknowledged: ms from the
   // display presenting the frame to the acknowledgement (sent once the page has drawn it).
   std::vector<double> lossless_ms, moving_ms;

@@ -28,6 +28,7 @@ class WebSink final : public Sink {
       {
         std::lock_guard lock(m_);
         if (!next_ && last_) next_ = last_;
+        joined_ = true;  // present() may have counted no viewers just before this one came
       }
       cv_.notify_one();
     });
@@ -35,6 +36,7 @@ class WebSink final : public Sink {
   }
 
   ~WebSink() override {
+    server_.onViewer({});  // under the server's lock: no viewer callback reaches this sink after it
     {
       std::lock_guard lock(m_);
       quit_ = true;
@@ -45,7 +47,7 @@ class WebSink final : public Sink {
     spdlog::info("web view: {} connections, {} frames sent, {} replaced before sending, {} refused, "
                  "{} bad messages, {} bad requests",
                  c.connections, c.frames_sent, c.frames_replaced, c.refused, c.bad_messages, c.bad_requests);
-    if (c.cut_short) spdlog::info("web view: {} viewers stopped reading in the middle of a frame (closed)", c.cut_short);
+    if (c.cut_short) spdlog::info("web view: {} viewers closed in the middle of a frame (stopped reading, or left)", c.cut_short);
     for (auto [kind, ms] : {std::pair{"lossless", &c.lossless_ms}, std::pair{"moving", &c.moving_ms}}) {
       if (ms->empty()) continue;
       std::sort(ms->begin(), ms->end());
@@ -60,7 +62,8 @@ class WebSink final : public Sink {
     {
       std::lock_guard lock(m_);
       last_ = Next{frame, shown, std::chrono::steady_clock::now()};
-      if (watched) next_ = last_;
+      if (watched || joined_) next_ = last_;
+      joined_ = false;
     }
     cv_.notify_one();
   }
@@ -143,6 +146,7 @@ class WebSink final : public Sink {
   std::condition_variable cv_;
   std::optional<Next> next_, last_;  // to encode; the newest presented
   bool quit_ = false;
+  bool joined_ = false;  // a viewer connected since the last present()
   std::thread encoder_;
 };
 
