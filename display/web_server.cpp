@@ -10,7 +10,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <random>
 #include <stdexcept>
 
 #include <spdlog/spdlog.h>
@@ -96,29 +95,11 @@ struct WebCallbacks {
   static void logOnce(WebServer& s, const std::string& what);
 };
 
-std::string webToken() {
-  if (const char* t = std::getenv("TESSERA_WEB_TOKEN"); t && *t) return t;
-  std::random_device rd;
-  std::string token;
-  for (int i = 0; i < 4; ++i) {
-    char part[9];
-    std::snprintf(part, sizeof part, "%08x", (unsigned)rd());
-    token += part;
-  }
-  return token;
-}
-
 WebServer::WebServer(const std::string& given, std::string token) : token_(std::move(token)) {
   if (token_.size() > 200) throw std::runtime_error("the web view's token is longer than 200 characters");
-  // PORT or :PORT listens on loopback: nothing is served beyond this host unless asked.
-  const size_t colon = given.rfind(':');
-  host_ = colon == std::string::npos || colon == 0 ? "127.0.0.1" : given.substr(0, colon);
-  const std::string port = colon == std::string::npos ? given : given.substr(colon + 1);
-  const std::string address = host_ + ":" + port;
-  char* end = nullptr;
-  const long number = std::strtol(port.c_str(), &end, 10);
-  if (port.empty() || *end || number < 0 || number > 65535)
-    throw std::runtime_error("--web " + given + ": the port must be a number from 0 to 65535");
+  const WebAddress where = parseWebAddress(given);
+  host_ = where.host;
+  const std::string address = host_ + ":" + std::to_string(where.port);
   lws_set_log_level(LLL_ERR, &logLibwebsockets);
   static const lws_protocols protocols[] = {
       {"tessera", &WebCallbacks::callback, sizeof(Session), kMaxMessage, 0, nullptr, 0}, {nullptr, nullptr, 0, 0, 0, nullptr, 0}};
@@ -126,7 +107,7 @@ WebServer::WebServer(const std::string& given, std::string token) : token_(std::
   // entry) is closed after 10 s instead of holding its slot until TCP gives up.
   static const lws_retry_bo_t idle = {nullptr, 0, 0, 3, 10, 0};
   lws_context_creation_info info{};
-  info.port = (int)number;
+  info.port = where.port;
   info.iface = host_.c_str();
   info.protocols = protocols;
   info.user = this;

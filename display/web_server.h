@@ -34,6 +34,14 @@ namespace tessera::display {
 // TESSERA_WEB_TOKEN, or 128 random bits in hex (a new token per start).
 std::string webToken();
 
+struct WebAddress {
+  std::string host;  // an address of this host
+  int port = 0;      // 0: any free port
+};
+// HOST:PORT, :PORT or PORT (loopback); throws std::runtime_error naming `given` and the reason
+// if the port is not a number or cannot be listened on.
+WebAddress parseWebAddress(const std::string& given);
+
 struct WebCounters {
   uint64_t viewers = 0;          // connected now
   uint64_t connections = 0;      // accepted since the start
