@@ -55,10 +55,8 @@ std::string webHost() {
 // `watch`, a page that only watches until dir/stop-watching appears.
 nlohmann::json dragInPage(int port, double drag_s, const fs::path& dir, bool watch = false) {
   const char* ns = std::getenv("TESSERA_VIEWER_NETNS");
-  const char* nice = std::getenv("TESSERA_VIEWER_NICE");
-  const std::string cmd = fmt::format("{}{}node {}/tests/web/bench.mjs 'http://{}:{}/#bench-token' {} {} {} 2>&1",
-                                      ns && *ns ? fmt::format("ip netns exec {} ", ns) : "",
-                                      nice && *nice ? fmt::format("nice -n {} ", nice) : "", TESSERA_SOURCE_DIR,
+  const std::string cmd = fmt::format("{}node {}/tests/web/bench.mjs 'http://{}:{}/#bench-token' {} {} {} 2>&1",
+                                      ns && *ns ? fmt::format("ip netns exec {} ", ns) : "", TESSERA_SOURCE_DIR,
                                       webHost(), port, drag_s, dir.string(), watch ? "watch" : "drag");
   std::string out;
   if (FILE* p = popen(cmd.c_str(), "r")) {
