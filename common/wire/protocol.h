@@ -41,10 +41,11 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 6;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
+inline constexpr uint16_t kVersion = 7;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
                                          // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms);
                                          // 5: time steps (FrameParams step, Stats step cache, Input time keys);
-                                         // 6: Stats carry the epoch of the FrameParams they answer
+                                         // 6: Stats carry the epoch of the FrameParams they answer;
+                                         // 7: Piece pixels travel Up-filtered
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -218,7 +219,8 @@ std::set<uint32_t> renderersWithWork(const FrameParams& p);  // ranks named by i
 //   active                  rect    16  sane; inside region unless empty (w or h <= 0)
 //   format                  u8      1   1..PixelFormat::Last
 //   render_ms, encode_ms    f64 x2  16  finite
-//   pixels                  codec   rest  decodes to exactly active.w * active.h * bytesPerPixel(format)
+//   pixels                  codec   rest  decodes to exactly active.w * active.h * bytesPerPixel(format),
+//                                         Up-filtered by rows within each plane (row_filter.h)
 struct Piece {                                 // renderer -> compositor
   uint64_t frame = 0;
   uint32_t epoch = 0;                          // FrameParams::epoch it was rendered for
