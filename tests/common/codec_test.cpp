@@ -6,15 +6,10 @@
 #include <cmath>
 #include <random>
 
+#include "tests/common/random_bytes.h"
+
 namespace tessera {
 namespace {
-
-std::vector<std::byte> randomBytes(size_t n, uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::vector<std::byte> v(n);
-  for (auto& b : v) b = std::byte(rng() & 0xFF);
-  return v;
-}
 
 // rgba8 with a smooth disc of colour in a transparent field, like a volume rendering.
 std::vector<std::byte> imageLike(int w, int h) {

@@ -8,16 +8,10 @@
 
 #include "common/wire/codec.h"
 #include "common/wire/protocol.h"
+#include "tests/common/random_bytes.h"
 
 namespace tessera {
 namespace {
-
-std::vector<std::byte> randomBytes(size_t n, uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::vector<std::byte> v(n);
-  for (auto& b : v) b = std::byte(rng() & 0xFF);
-  return v;
-}
 
 TEST(RowFilter, UndoesItselfForAnyPlanesAndRows) {
   for (size_t planes : {1, 2, 4})
