@@ -37,6 +37,11 @@ ImageF::ImageF(int w, int h) : width(w), height(h) {
   px.assign((size_t)w * h * 4, 0.0f);
 }
 
+ImageF::ImageF(int w, int h, std::vector<float>&& storage) : width(w), height(h), px(std::move(storage)) {
+  checkSize(w, h);
+  px.assign((size_t)w * h * 4, 0.0f);
+}
+
 Image8::Image8(int w, int h) : width(w), height(h) {
   checkSize(w, h);
   px.assign((size_t)w * h * 4, 0);

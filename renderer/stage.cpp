@@ -219,8 +219,12 @@ class Stage {
     Brick local = brick;  // in the held window's voxel indices
     for (int a = 0; a < 3; ++a) local.lo[a] -= held_.volume->origin[a], local.hi[a] -= held_.volume->origin[a];
     // No RenderStats: the farm needs no sample counts, and counting skipped samples costs.
-    c.image = held_.caster->render(p.camera, p.width, p.height, local, ro, nullptr, &c.active);
-    if (cache_.size() >= 2) cache_.pop_front();  // a renderer may own two bricks after a failure
+    ImageF spare;  // the oldest image's memory, so that a frame does not fault in fresh pages
+    if (cache_.size() >= 2) {  // a renderer may own two bricks after a failure
+      spare = std::move(cache_.front().image);
+      cache_.pop_front();
+    }
+    c.image = held_.caster->render(p.camera, p.width, p.height, local, ro, nullptr, &c.active, std::move(spare));
     cache_.push_back(std::move(c));
     return cache_.back();
   }

@@ -37,9 +37,10 @@ class VolumeBackend {
   // Renders `brick` as seen by `cam` into a width x height premultiplied image. Pixels
   // outside the brick's screen footprint stay transparent; `active` receives the bounding
   // rectangle of pixels with alpha > 0. Counting every skipped sample has a cost: without
-  // `stats` a backend may leave it out.
+  // `stats` a backend may leave it out. `recycled`: an image the caller no longer needs,
+  // whose memory the result takes (ImageF's storage constructor).
   virtual ImageF render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
-                        RenderStats* stats = nullptr, Rect* active = nullptr) const = 0;
+                        RenderStats* stats = nullptr, Rect* active = nullptr, ImageF recycled = {}) const = 0;
 };
 
 // The arguments every backend refuses the same way: a non-positive image size, a brick

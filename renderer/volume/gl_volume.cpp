@@ -271,7 +271,7 @@ void GlVolumeRenderer::Impl::castRays(const Quality& q, const Rect& fp, const st
 }
 
 ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
-                                RenderStats* stats, Rect* active) const {
+                                RenderStats* stats, Rect* active, ImageF recycled) const {
   const auto start = std::chrono::steady_clock::now();
   Impl& m = *impl_;
   const Volume& v = *m.volume;
@@ -281,12 +281,12 @@ ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const 
   if (q.reference) {
     // The reference is defined in double precision; GLSL floats cannot give it.
     if (!m.reference) m.reference = std::make_unique<Raycaster>(m.volume, m.tf);
-    return m.reference->render(cam, width, height, brick, opt, stats, active);
+    return m.reference->render(cam, width, height, brick, opt, stats, active, std::move(recycled));
   }
 
   const RayGenerator gen(cam, width, height);  // validates the camera
   const VolumeGeometry geom(v);
-  ImageF img(width, height);
+  ImageF img(width, height, std::move(recycled.px));
   const Rect fp = brickFootprint(gen, geom, brick, width, height);
   if (active) *active = Rect{};
   if (stats) *stats = RenderStats{};

@@ -23,7 +23,7 @@ class GlVolumeRenderer final : public VolumeBackend {
   // As Raycaster::render. opt.threads sizes the CPU ray setup only; llvmpipe's own thread
   // count comes from LP_NUM_THREADS (default: all cores).
   ImageF render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
-                RenderStats* stats = nullptr, Rect* active = nullptr) const override;
+                RenderStats* stats = nullptr, Rect* active = nullptr, ImageF recycled = {}) const override;
 
  private:
   struct Impl;

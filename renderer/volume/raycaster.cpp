@@ -256,7 +256,7 @@ class TileWorker {
 }  // namespace
 
 ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
-                         RenderStats* stats, Rect* active) const {
+                         RenderStats* stats, Rect* active, ImageF recycled) const {
   const auto start = std::chrono::steady_clock::now();
   const Volume& v = *impl_->volume;
   const Quality& q = opt.quality;
@@ -264,7 +264,7 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
 
   const RayGenerator gen(cam, width, height);  // validates the camera
   const VolumeGeometry geom(v);
-  ImageF img(width, height);
+  ImageF img(width, height, std::move(recycled.px));
   const Rect fp = brickFootprint(gen, geom, brick, width, height);
 
   std::optional<ShadeParams> shade;

@@ -34,7 +34,7 @@ class Raycaster final : public VolumeBackend {
   // brick's screen footprint are never touched (left transparent). `active` receives the
   // bounding rectangle of pixels with alpha > 0.
   ImageF render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
-                RenderStats* stats = nullptr, Rect* active = nullptr) const override;
+                RenderStats* stats = nullptr, Rect* active = nullptr, ImageF recycled = {}) const override;
 
  private:
   struct Impl;

@@ -103,5 +103,25 @@ TEST(BricksVsWhole, SkippingIsBitIdenticalPerBrick) {
     EXPECT_TRUE(rc.render(test::defaultCamera(), 48, 48, b, on) == rc.render(test::defaultCamera(), 48, 48, b, off));
 }
 
+// A renderer passes the image it no longer needs as the next one's memory: what was in it
+// (another brick, another size) must not show through.
+TEST(BricksVsWhole, ARecycledImageGivesTheSameImage) {
+  auto vol = test::generated("hollow-shell", 48);
+  const TransferFunction tf = defaultTf();
+  const Raycaster rc(vol, tf);
+  const RenderOptions opt = options("default");
+  const auto bricks = splitBricks(*vol, 2, &tf).bricks;
+  ImageF junk(64, 64);
+  std::fill(junk.px.begin(), junk.px.end(), 0.75f);
+  const float* memory = junk.px.data();
+  Rect fresh_active, recycled_active;
+  const ImageF fresh = rc.render(test::defaultCamera(), 48, 40, bricks[1], opt, nullptr, &fresh_active);
+  const ImageF recycled =
+      rc.render(test::defaultCamera(), 48, 40, bricks[1], opt, nullptr, &recycled_active, std::move(junk));
+  EXPECT_EQ(recycled.px.data(), memory) << "the recycled memory is used";
+  EXPECT_TRUE(recycled == fresh);
+  EXPECT_EQ(recycled_active, fresh_active);
+}
+
 }  // namespace
 }  // namespace tessera::renderer
