@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <regex>
 #include <string>
 #include <vector>
@@ -138,16 +139,73 @@ void plot(const fs::path& out, const std::vector<Result>& results) {
   if (std::system(("gnuplot -e \"" + gp + "\"").c_str()) != 0) std::cerr << "gnuplot failed; the CSV is there\n";
 }
 
+// Runs one farm on the emulated cluster; false (and a message) if it failed.
+bool runFarm(const Config& c, const fs::path& root, int frames, Result& r) {
+  const fs::path bin = fs::canonical("/proc/self/exe").parent_path();
+  const std::string script = fs::path(TESSERA_SOURCE_DIR) / "tests" / "cluster" / "emulated_cluster.sh";
+  const fs::path dir = root / c.name();
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const int n = c.size < 512 ? 2 * frames : frames;
+  const std::string cmd = fmt::format(
+      "env TESSERA_SCENE={} TESSERA_FRAMES={} TESSERA_RENDERERS={} TESSERA_COMPOSITORS={} TESSERA_IN_FLIGHT={} "
+      "TESSERA_CODEC={} TESSERA_LOG=warn timeout -s INT {} {} --rate {} --out {} --bin {} > {}/run.log 2>&1",
+      sceneAt(c.size, root), n, c.renderers, c.compositors, c.in_flight, c.codec, 60 + 5 * n, script, c.rate, dir.string(),
+      bin.string(), dir.string());
+  std::cerr << "run " << c.name() << " (" << n << " frames)\n";
+  if (std::system(cmd.c_str()) != 0) {
+    std::cerr << "farm failed; see " << (dir / "run.log") << "\n";
+    return false;
+  }
+  r = measure(c, dir, n);
+  return true;
+}
+
+// The two goals, each a ratio within one round (this machine's speed drifts by
+// 10-20% over minutes, more than the effects measured): per round the one-process time,
+// then for each shape the farm on 100 Mbit/s and on unlimited links, LZO, 1024^2.
+int goals(const fs::path& root, int frames, int rounds) {
+  std::ofstream csv(root / "goals.csv");
+  csv << "round,one_process_ms,shape,fps_100mbit,fps_unlimited,efficiency,slow_over_fast,busiest_bytes_100mbit,busiest_host\n";
+  std::map<std::string, std::vector<double>> eff, ratio;
+  for (int round = 1; round <= rounds; ++round) {
+    const double one = oneProcessMs(sceneAt(1024, root), root);
+    for (auto [nr, nc] : {std::pair{2, 1}, std::pair{4, 2}}) {
+      Result slow, fast;
+      if (!runFarm({"100mbit", "lzo", 3, 1024, nr, nc}, root, frames, slow)) return 1;
+      if (!runFarm({"unlimited", "lzo", 3, 1024, nr, nc}, root, frames, fast)) return 1;
+      const std::string shape = slow.c.shape();
+      eff[shape].push_back(fast.fps * one / 1000);
+      ratio[shape].push_back(fast.fps > 0 ? slow.fps / fast.fps : 0);
+      const std::string line = fmt::format("{},{:.1f},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.0f},{}", round, one, shape, slow.fps,
+                                           fast.fps, eff[shape].back(), ratio[shape].back(), slow.busiest_bytes, slow.busiest_host);
+      csv << line << "\n" << std::flush;
+      std::cout << line << std::endl;
+    }
+  }
+  for (const auto& [shape, v] : eff)
+    std::cout << fmt::format("{}: efficiency median {:.2f} (rounds {:.2f}..{:.2f}), 100 Mbit/s / unlimited median {:.2f} "
+                             "({:.2f}..{:.2f})\n",
+                             shape, median(v), *std::min_element(v.begin(), v.end()), *std::max_element(v.begin(), v.end()),
+                             median(ratio[shape]), *std::min_element(ratio[shape].begin(), ratio[shape].end()),
+                             *std::max_element(ratio[shape].begin(), ratio[shape].end()));
+  std::cout << "CSV: " << (root / "goals.csv").string() << "\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Tessera on an emulated cluster: fps, latency and link bytes per frame (needs root)"};
   std::string out = "bench-out/cluster";
-  int frames = 20;
+  int frames = 20, rounds = 0;
   bool quick = false;
   app.add_option("--out", out, "folder for runs, results.csv and the plot")->capture_default_str();
   app.add_option("--frames", frames, "frames per run (twice as many below 512^2)")->check(CLI::Range(6, 1000))->capture_default_str();
   app.add_flag("--quick", quick, "one small run (checks that the benchmark works)");
+  app.add_option("--goals", rounds, "instead of the sweep: this many rounds of the goals' runs (efficiency, 100 Mbit/s "
+                                    "against unlimited), each ratio within a round")
+      ->check(CLI::Range(1, 20));
   CLI11_PARSE(app, argc, argv);
   if (geteuid() != 0) {
     std::cerr << "tessera-cluster-bench: needs root (it makes network namespaces)\n";
@@ -155,26 +213,13 @@ int main(int argc, char** argv) {
   }
   const fs::path root = fs::absolute(out);
   fs::create_directories(root);
-  const fs::path bin = fs::canonical("/proc/self/exe").parent_path();
-  const std::string script = fs::path(TESSERA_SOURCE_DIR) / "tests" / "cluster" / "emulated_cluster.sh";
+  if (rounds > 0) return goals(root, frames, rounds);
 
   std::vector<Result> results;
   for (const Config& c : sweep(quick)) {
-    const fs::path dir = root / c.name();
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    const int n = c.size < 512 ? 2 * frames : frames;
-    const std::string cmd = fmt::format(
-        "env TESSERA_SCENE={} TESSERA_FRAMES={} TESSERA_RENDERERS={} TESSERA_COMPOSITORS={} TESSERA_IN_FLIGHT={} "
-        "TESSERA_CODEC={} TESSERA_LOG=warn timeout -s INT {} {} --rate {} --out {} --bin {} > {}/run.log 2>&1",
-        sceneAt(c.size, root), n, c.renderers, c.compositors, c.in_flight, c.codec, 60 + 5 * n, script, c.rate, dir.string(),
-        bin.string(), dir.string());
-    std::cerr << "run " << c.name() << " (" << n << " frames)\n";
-    if (std::system(cmd.c_str()) != 0) {
-      std::cerr << "farm failed; see " << (dir / "run.log") << "\n";
-      return 1;
-    }
-    results.push_back(measure(c, dir, n));
+    Result r;
+    if (!runFarm(c, root, frames, r)) return 1;
+    results.push_back(r);
   }
   std::ofstream csv(root / "results.csv");
   csv << "rate,codec,in_flight,size,renderers,compositors,fps,latency_ms,render_ms,composite_ms,display_ms,"

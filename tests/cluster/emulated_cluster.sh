@@ -82,12 +82,14 @@ set +e
 "$bin/tessera-up" "$root/compose.yaml" --launch-with "$root/tests/cluster/on_host.sh" "$@" 2>&1 | tee "$out/farm.log"
 status=${PIPESTATUS[0]}
 set -e
-: > "$out/links.tsv"
+: > "$out/links.tsv"; : > "$out/qdisc.txt"
 for h in "${hosts[@]}"; do
   link=$(cat "$state/hosts/$h.link")
   # The switch side sends what the host receives and receives what the host sends.
   tx=$(ip netns exec "$sw" cat "/sys/class/net/$link/statistics/rx_bytes")
   rx=$(ip netns exec "$sw" cat "/sys/class/net/$link/statistics/tx_bytes")
   printf '%s\t%s\t%s\n' "$h" "$tx" "$rx" >> "$out/links.tsv"
+  { echo "== $h"; ip netns exec "$tag-$h" tc -s qdisc show dev eth0; ip netns exec "$sw" tc -s qdisc show dev "$link"
+    ip netns exec "$tag-$h" nstat -az TcpRetransSegs TcpExtTCPTimeouts TcpExtTCPLossProbes 2>/dev/null | tail -n +2; } >> "$out/qdisc.txt"
 done
 exit "$status"
