@@ -33,6 +33,14 @@ class RayGenerator {
   RayGenerator(const Camera& cam, int width, int height);
   Ray ray(double px_centre_x, double px_centre_y) const;  // pass px+0.5, py+0.5
   Ray pixelRay(int px, int py) const { return ray(px + 0.5, py + 0.5); }
+  // What ray() computes from, for code that makes many rays at once with the same arithmetic.
+  struct Basis {
+    Vec3 eye, fwd, right, up;
+    double tan_half, aspect;
+    int width, height;
+    bool orthographic;
+  };
+  Basis basis() const { return {cam_.eye, fwd_, right_, upv_, tan_half_, aspect_, w_, h_, cam_.orthographic}; }
   // Screen-space projection of a world point to continuous pixel coords; false if behind eye.
   bool project(const Vec3& p, double& sx, double& sy) const;
 

@@ -10,6 +10,8 @@
   bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);       \
   void castFastBatch(const FastContext& c, const RaySpan* spans, float* const* out, int n,           \
                      SampleCounts& counts, bool* terminated);                                         \
+  unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo, const double* t_hi,     \
+                    RaySpan* spans);                                                                  \
   }
 TESSERA_DECLARE_KERNEL(scalar)
 #if TESSERA_X86_KERNELS
@@ -23,6 +25,7 @@ namespace {
 struct Kernel {
   decltype(&scalar::castFast) single;
   decltype(&scalar::castFastBatch) batch;
+  decltype(&scalar::raySpans) spans;
 };
 
 const Kernel& kernel() {
@@ -31,10 +34,10 @@ const Kernel& kernel() {
     spdlog::debug("ray casting kernel: {}", isaName(isa));
     switch (isa) {
 #if TESSERA_X86_KERNELS
-      case Isa::Avx512: return Kernel{avx512::castFast, avx512::castFastBatch};
-      case Isa::Avx2: return Kernel{avx2::castFast, avx2::castFastBatch};
+      case Isa::Avx512: return Kernel{avx512::castFast, avx512::castFastBatch, avx512::raySpans};
+      case Isa::Avx2: return Kernel{avx2::castFast, avx2::castFastBatch, avx2::raySpans};
 #endif
-      default: return Kernel{scalar::castFast, scalar::castFastBatch};
+      default: return Kernel{scalar::castFast, scalar::castFastBatch, scalar::raySpans};
     }
   }();
   return k;
@@ -49,6 +52,10 @@ bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCou
 void castFastBatch(const FastContext& c, const RaySpan* spans, float* const* out, int n, SampleCounts& counts,
                    bool* terminated) {
   kernel().batch(c, spans, out, n, counts, terminated);
+}
+
+unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo, const double* t_hi, RaySpan* spans) {
+  return kernel().spans(row, px0, py, n, t_lo, t_hi, spans);
 }
 
 }  // namespace tessera::renderer

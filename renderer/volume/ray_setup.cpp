@@ -127,6 +127,21 @@ bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick
   return hit;
 }
 
+SpanRow::SpanRow(const RayGenerator& gen, const VolumeGeometry& g, const BrickBox& brick, const BrickBox& clip,
+                 double grid_step)
+    : basis(gen.basis()), brick_is_whole(brick == g.wholeBox()), clip_is_brick(clip == brick), step(grid_step),
+      inv_step(1.0 / grid_step) {
+  const BrickBox whole = g.wholeBox();
+  for (int a = 0; a < 3; ++a) {
+    half[a] = g.half[a];
+    cell[a] = g.cell[a];
+    origin[a] = g.origin[a];
+    whole_lo[a] = g.plane(a, whole.lo[a]), whole_hi[a] = g.plane(a, whole.hi[a]);
+    brick_lo[a] = g.plane(a, brick.lo[a]), brick_hi[a] = g.plane(a, brick.hi[a]);
+    clip_lo[a] = g.plane(a, clip.lo[a]), clip_hi[a] = g.plane(a, clip.hi[a]);
+  }
+}
+
 int64_t spanSamples(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step) {
   RaySpan span;
   double b_in, b_out;

@@ -6,6 +6,7 @@
 #include "common/parallel.h"
 
 #include <algorithm>
+#include <bit>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -161,6 +162,7 @@ struct FrameRays {
   const ShadeParams* shade;  // null: unlit
   ImageF& img;
   bool count;  // count the samples skipped outside the rays cast (stats were asked for)
+  SpanRow rows;  // raySpans' constants: brick and clip, or brick twice without clipping
 };
 
 // One worker thread: casts the rays of the tiles it pulls, counts samples, and tracks the
@@ -171,6 +173,7 @@ class TileWorker {
   explicit TileWorker(const FrameRays& f) : f_(f), ax0_(f.img.width), ay0_(f.img.height) {}
 
   void castTile(int tx, int ty, int ex, int ey) {
+    if (!f_.q.reference && !f_.count) return castTileFast(tx, ty, ex, ey);
     for (int py = ty; py < ey; ++py)
       for (int px = tx; px < ex; ++px) {
         RaySpan span;
@@ -185,6 +188,36 @@ class TileWorker {
         } else {
           pending_[n_pending_] = Pending{px, py, after};
           spans_[n_pending_++] = span;
+          if (n_pending_ == kBatch) flush();
+        }
+      }
+    flush();
+  }
+
+  // The fast path without sample counts: rays set up kSpanLanes at a time (raySpans).
+  void castTileFast(int tx, int ty, int ex, int ey) {
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    const DepthBounds* depth = f_.clipping ? f_.depth : nullptr;
+    for (int py = ty; py < ey; ++py)
+      for (int px0 = tx; px0 < ex; px0 += kSpanLanes) {
+        const int n = std::min(kSpanLanes, ex - px0);
+        double lo[kSpanLanes], hi[kSpanLanes];
+        unsigned wanted = 0;
+        for (int i = 0; i < n; ++i) {
+          lo[i] = -kInf, hi[i] = kInf;
+          if (depth) {  // a cell with no non-empty node: no ray to set up
+            const size_t ci = (size_t)(py / DepthBounds::kCell) * depth->cols + (px0 + i) / DepthBounds::kCell;
+            if (!(depth->lo[ci] <= depth->hi[ci])) continue;
+            lo[i] = depth->lo[ci], hi[i] = depth->hi[ci];
+          }
+          wanted |= 1u << i;
+        }
+        if (!wanted) continue;
+        RaySpan spans[kSpanLanes];
+        for (unsigned hits = raySpans(f_.rows, px0, py, n, lo, hi, spans) & wanted; hits; hits &= hits - 1) {
+          const int i = std::countr_zero(hits);
+          pending_[n_pending_] = Pending{px0 + i, py, 0};
+          spans_[n_pending_++] = spans[i];
           if (n_pending_ == kBatch) flush();
         }
       }
@@ -303,7 +336,8 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   Rect act;
 
   const FrameRays rays{v, impl_->tf, q, gen, geom, brick, clip, clipping, depth ? &*depth : nullptr, fast,
-                        shade ? &*shade : nullptr, img, stats != nullptr};
+                        shade ? &*shade : nullptr, img, stats != nullptr,
+                        SpanRow(gen, geom, brick, clipping ? clip : brick, q.step)};
   auto worker = [&] {
     TileWorker w(rays);
     try {

@@ -1,0 +1,111 @@
+// raySpans (several rays at once, per instruction set) against raySpanClipped one ray at a
+// time: the same spans bit for bit, for every instruction set this CPU has.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <limits>
+#include <random>
+
+#include "common/cpu.h"
+#include "renderer/volume/ray_setup.h"
+
+namespace tessera::renderer {
+#define TESSERA_DECLARE_SPANS(isa)                                                                           \
+  namespace isa {                                                                                            \
+  unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo, const double* t_hi,     \
+                    RaySpan* spans);                                                                         \
+  }
+TESSERA_DECLARE_SPANS(scalar)
+#if defined(__x86_64__)
+TESSERA_DECLARE_SPANS(avx2)
+TESSERA_DECLARE_SPANS(avx512)
+#endif
+
+namespace {
+
+using SpansFn = unsigned (*)(const SpanRow&, int, int, int, const double*, const double*, RaySpan*);
+
+std::vector<std::pair<const char*, SpansFn>> available() {
+  std::vector<std::pair<const char*, SpansFn>> v{{"scalar", scalar::raySpans}};
+#if defined(__x86_64__)
+  if (cpuIsa() >= Isa::Avx2) v.push_back({"avx2", avx2::raySpans});
+  if (cpuIsa() >= Isa::Avx512) v.push_back({"avx512", avx512::raySpans});
+#endif
+  return v;
+}
+
+bool same(const RaySpan& a, const RaySpan& b) {
+  return std::memcmp(&a.t0, &b.t0, sizeof a.t0) == 0 && a.k_first == b.k_first && a.k_end == b.k_end &&
+         std::memcmp(a.u0.data(), b.u0.data(), sizeof a.u0) == 0 && std::memcmp(a.du.data(), b.du.data(), sizeof a.du) == 0;
+}
+
+// A volume window (held voxels from `origin` in a whole volume of `whole`), spacing anisotropic.
+Volume window(std::array<int, 3> whole, std::array<int, 3> origin, std::array<int, 3> dims) {
+  Volume v;
+  v.dims = dims;
+  v.origin = origin;
+  v.whole_dims = whole;
+  v.spacing = {1.0, 0.8, 1.3};
+  return v;
+}
+
+// Every pixel of a w x h image through raySpans and through raySpanClipped.
+int compareAll(SpansFn fn, const char* isa, const Camera& cam, int w, int h, const Volume& v, const BrickBox& brick,
+               const BrickBox& clip, double step, bool depth_cut) {
+  const RayGenerator gen(cam, w, h);
+  const VolumeGeometry g(v);
+  const SpanRow row(gen, g, brick, clip, step);
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  int hits = 0;
+  for (int py = 0; py < h; ++py)
+    for (int px0 = 0; px0 < w; px0 += kSpanLanes) {
+      const int n = std::min(kSpanLanes, w - px0);
+      double lo[kSpanLanes], hi[kSpanLanes];
+      for (int i = 0; i < kSpanLanes; ++i) {
+        // Depth cuts that fall inside, before and after the volume.
+        lo[i] = depth_cut ? 0.5 * ((px0 + i + py) % 7) : -kInf;
+        hi[i] = depth_cut ? lo[i] + 0.3 + 0.2 * ((px0 + i) % 5) : kInf;
+      }
+      RaySpan spans[kSpanLanes];
+      const unsigned got = fn(row, px0, py, n, lo, hi, spans);
+      EXPECT_EQ(got >> n, 0u) << isa << ": a hit beyond the n pixels asked";
+      for (int i = 0; i < n; ++i) {
+        RaySpan want;
+        const bool hit = raySpanClipped(g, gen.pixelRay(px0 + i, py), brick, clip, step, want, nullptr, nullptr, lo[i], hi[i]);
+        if (hit != (((got >> i) & 1) != 0) || (hit && !same(want, spans[i]))) {
+          ADD_FAILURE() << isa << ": pixel " << px0 + i << "," << py << (hit ? " differs" : " hit on one side only");
+          return hits;  // one report per image
+        }
+        hits += hit;
+      }
+    }
+  return hits;
+}
+
+TEST(RaySpans, BitIdenticalToOneRayAtATime) {
+  const Volume v = window({40, 30, 20}, {10, 0, 5}, {20, 30, 10});
+  const BrickBox whole{{-10, 0, -5}, {30, 30, 15}};
+  const BrickBox brick{{0, 0, 0}, {20, 30, 10}};
+  const BrickBox clip{{3, 4, 1}, {17, 25, 9}};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (auto [name, fn] : available()) {
+    int hits = 0;
+    for (int c = 0; c < 12; ++c) {
+      Camera cam;
+      cam.eye = {2.5 * u(rng), 2.5 * u(rng), 2.5 * u(rng)};
+      if (c == 0) cam.eye = {0, 0, 2.5};                  // axis-aligned: rays parallel to slabs
+      if (c == 1) cam.eye = {0.1, 0.05, 0.2};             // inside the volume
+      cam.orthographic = c % 3 == 2;
+      cam.height = 1.2;
+      const int w = 37 + c, h = 23 + c;                   // rows that do not fill the lanes
+      hits += compareAll(fn, name, cam, w, h, v, brick, brick, 1.0 / 64, false);
+      hits += compareAll(fn, name, cam, w, h, v, brick, clip, 1.0 / 100, c % 2 == 0);
+      hits += compareAll(fn, name, cam, w, h, v, whole, whole, 1.0 / 256, c % 2 == 1);
+    }
+    EXPECT_GT(hits, 5000) << name << ": the cases must hit";
+  }
+}
+
+}  // namespace
+}  // namespace tessera::renderer
