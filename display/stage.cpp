@@ -129,6 +129,7 @@ class Stage {
     if (input) {
       shown.page = input->page;
       shown.page_input = input->page_input;
+      shown.input_ms = msSince(input->at);
     }
     sink_->present(image_, shown);
     last_display_ms_ = msSince(t0);

@@ -73,7 +73,9 @@
         for (const n of sentAt.keys()) if (n <= header.input.n) sentAt.delete(n); else break;
         requestAnimationFrame(() => {
           const painted = performance.now();
-          state.latencies.push([painted, painted - t]);  // when, and how long after the input
+          // When, how long after the input, and how much of that the display saw (from
+          // receiving the input to presenting the frame): the rest is the page and the link.
+          state.latencies.push([painted, painted - t, header.input.ms || 0]);
           if (state.latencies.length > 10000) state.latencies.shift();
         });
       }

@@ -255,7 +255,8 @@ void webTable(const std::vector<Result>& results, const fs::path& path) {
   wcsv << "image,in_flight,round,viewer_link,window_fps,window_fps_page_watching,watching_page_fps,page_fps,"
           "farm_fps_page_drag,window_input_ms,page_input_ms,"
           "page_input_ms_p95,page_input_ms_first_quarter,page_input_ms_last_quarter,moving_bytes,lossless_bytes,"
-          "window_release_to_sharp_ms,page_release_to_lossless_ms,lossless_on_page_after_display_ms\n";
+          "window_release_to_sharp_ms,page_release_to_lossless_ms,lossless_on_page_after_display_ms,"
+          "page_input_display_share_ms,page_input_page_and_link_ms\n";
   std::printf("\n| image | in flight | round | fps window / window with a page watching / page steering (farm) | "
               "input-to-present median ms, "
               "window / page (p95; first / last quarter) | bytes per moving frame | bytes per lossless frame | release "
@@ -264,12 +265,13 @@ void webTable(const std::vector<Result>& results, const fs::path& path) {
     const auto& w = r.web;
     auto num = [&](const char* k) { return w.value(k, 0.0); };
     wcsv << fmt::format("{},{},{},{},{:.2f},{:.2f},{:.2f},{:.2f},{:.2f},{:.1f},{:.1f},{:.1f},{:.1f},{:.1f},{},{},{:.1f},"
-                        "{:.1f},\"{}\"\n",
+                        "{:.1f},\"{}\",{:.1f},{:.1f}\n",
                         r.image, r.in_flight, r.round, rate, r.fps, r.fps_watched, r.watch.value("fps", 0.0), num("fps"),
                         r.farm_fps_web, r.input_median,
                         num("input_ms_median"), num("input_ms_p95"), num("input_ms_first_quarter"),
                         num("input_ms_last_quarter"), num("moving_bytes_median"), num("lossless_bytes"), r.sharp_ms,
-                        num("release_to_lossless_ms"), r.lossless_on_page);
+                        num("release_to_lossless_ms"), r.lossless_on_page, num("display_share_ms_median"),
+                        num("page_and_link_ms_median"));
     std::printf("| %d² | %d | %d | %.1f / %.1f / %.1f (%.1f) | %.0f / %.0f (%.0f; %.0f / %.0f) | %.0f | %.0f | %.0f / %.0f |\n",
                 r.image, r.in_flight, r.round, r.fps, r.fps_watched, num("fps"), r.farm_fps_web, r.input_median,
                 num("input_ms_median"),
@@ -279,6 +281,12 @@ void webTable(const std::vector<Result>& results, const fs::path& path) {
   for (const Result& r : results)
     if (r.round == 0)
       std::printf("%d², %d in flight: %s\n", r.image, r.in_flight, r.lossless_on_page.c_str());
+  // Where a page's input-to-present goes: in the display (input received to frame presented)
+  // and the rest (the input's way to the display, the frame's to the page, the page's paint).
+  for (const Result& r : results)
+    std::printf("%d², round %d: page input-to-present %.0f ms median = display %.0f + page and link %.0f\n", r.image,
+                r.round, r.web.value("input_ms_median", 0.0), r.web.value("display_share_ms_median", 0.0),
+                r.web.value("page_and_link_ms_median", 0.0));
 }
 
 }  // namespace

@@ -63,6 +63,7 @@ async function drag(page, lossless) {
     fps: during.length > 1 ? (during.length - 1) * 1000 / (during[during.length - 1].t - during[0].t) : 0,
     input_ms_median: median(lat.map(([, ms]) => ms)), input_ms_p95: p95(lat.map(([, ms]) => ms)),
     input_ms_first_quarter: median(first), input_ms_last_quarter: median(last),
+    display_share_ms_median: median(lat.map(([, , d]) => d)), page_and_link_ms_median: median(lat.map(([, ms, d]) => ms - d)),
     moving_decode_ms_median: median(moving.map((f) => f.decode)),
     moving_bytes_median: median(moving.map((f) => f.bytes)), lossless_bytes: still.length ? still[still.length - 1].bytes : 0,
     release_to_lossless_ms: s.releaseToLossless,
