@@ -43,7 +43,7 @@ struct Shown {
   // The first input this frame answers, if it came from a web page (InputEvent::page, page_input).
   uint32_t page = 0;
   uint64_t page_input = 0;
-  double input_ms = 0;  // from the display receiving that input to this frame's presentation
+  double input_ms = 0;  // from the display receiving that input to this frame going to the sinks
 };
 
 // A drag and nothing else: consecutive ones collapse into one (the master needs the sum).

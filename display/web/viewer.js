@@ -74,7 +74,8 @@
         requestAnimationFrame(() => {
           const painted = performance.now();
           // When, how long after the input, and how much of that the display saw (from
-          // receiving the input to presenting the frame): the rest is the page and the link.
+          // receiving the input to handing the frame to its sinks): the rest is the web view's
+          // encoding, the link both ways and the page.
           state.latencies.push([painted, painted - t, header.input.ms || 0]);
           if (state.latencies.length > 10000) state.latencies.shift();
         });

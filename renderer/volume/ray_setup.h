@@ -74,8 +74,9 @@ struct SpanRow {
 inline constexpr int kSpanLanes = 8;
 // The spans of pixels (px0 + i, py), i < n <= kSpanLanes, several rays at a time (SIMD
 // where the CPU has it): bit for bit raySpanClipped(pixelRay(px0 + i, py), brick, clip,
-// step, span, nullptr, nullptr, t_lo[i], t_hi[i]). Bit i of the result: pixel i's ray has
-// samples (spans[i] is set only then).
+// step, span, nullptr, nullptr, t_lo[i], t_hi[i]). t_lo and t_hi hold kSpanLanes values
+// (the lanes past n are computed and dropped). Bit i of the result: pixel i's ray has
+// samples (spans[i] means something only then).
 unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo, const double* t_hi, RaySpan* spans);
 
 // How many samples of the global grid of `step` lie in `brick` (raySpan's k_end - k_first,

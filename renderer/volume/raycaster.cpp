@@ -203,8 +203,8 @@ class TileWorker {
         const int n = std::min(kSpanLanes, ex - px0);
         double lo[kSpanLanes], hi[kSpanLanes];
         unsigned wanted = 0;
+        for (int i = 0; i < kSpanLanes; ++i) lo[i] = -kInf, hi[i] = kInf;  // raySpans reads every lane
         for (int i = 0; i < n; ++i) {
-          lo[i] = -kInf, hi[i] = kInf;
           if (depth) {  // a cell with no non-empty node: no ray to set up
             const size_t ci = (size_t)(py / DepthBounds::kCell) * depth->cols + (px0 + i) / DepthBounds::kCell;
             if (!(depth->lo[ci] <= depth->hi[ci])) continue;

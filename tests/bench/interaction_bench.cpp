@@ -281,8 +281,9 @@ void webTable(const std::vector<Result>& results, const fs::path& path) {
   for (const Result& r : results)
     if (r.round == 0)
       std::printf("%d², %d in flight: %s\n", r.image, r.in_flight, r.lossless_on_page.c_str());
-  // Where a page's input-to-present goes: in the display (input received to frame presented)
-  // and the rest (the input's way to the display, the frame's to the page, the page's paint).
+  // Where a page's input-to-present goes: in the display (input received to the frame handed
+  // to its sinks) and the rest (the input's way to the display, the web view's encoding, the
+  // frame's way to the page, the page's paint).
   for (const Result& r : results)
     std::printf("%d², round %d: page input-to-present %.0f ms median = display %.0f + page and link %.0f\n", r.image,
                 r.round, r.web.value("input_ms_median", 0.0), r.web.value("display_share_ms_median", 0.0),
