@@ -32,10 +32,7 @@ static void checkSize(int w, int h) {
   if (w < 0 || h < 0) throw std::invalid_argument("image size must be non-negative");
 }
 
-ImageF::ImageF(int w, int h) : width(w), height(h) {
-  checkSize(w, h);
-  px.assign((size_t)w * h * 4, 0.0f);
-}
+ImageF::ImageF(int w, int h) : ImageF(w, h, {}) {}
 
 ImageF::ImageF(int w, int h, std::vector<float>&& storage) : width(w), height(h), px(std::move(storage)) {
   checkSize(w, h);

@@ -69,6 +69,9 @@ void makeRays(const RayGenerator::Basis& b, int px0, int py, Lanes& r) {
   for (int i = 0; i < L; ++i) ok[i] &= (int64_t)(t_in[i] < t_out[i]);
 }
 
+// ray_setup.cpp's sampleT and firstAtOrAfter's loops, repeated here on purpose: this file is
+// compiled once per instruction set, and every copy must keep its code to itself
+// (tests/renderer/kernel_symbols.cmake).
 double sampleT(double t0, int64_t k, double step) { return t0 + ((double)k + 0.5) * step; }
 
 // firstAtOrAfter's correction of its guess (rarely more than one step).

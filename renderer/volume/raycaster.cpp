@@ -88,6 +88,7 @@ struct DepthBounds {
   static constexpr int kCell = 8;
   int cols = 0;
   std::vector<double> lo, hi;
+  size_t cell(int px, int py) const { return (size_t)(py / kCell) * cols + px / kCell; }
 };
 
 DepthBounds depthBounds(const RayGenerator& gen, const VolumeGeometry& g, const Vec3& eye, const MinMaxHierarchy& mm,
@@ -197,7 +198,7 @@ class TileWorker {
   // The fast path without sample counts: rays set up kSpanLanes at a time (raySpans).
   void castTileFast(int tx, int ty, int ex, int ey) {
     constexpr double kInf = std::numeric_limits<double>::infinity();
-    const DepthBounds* depth = f_.clipping ? f_.depth : nullptr;
+    const DepthBounds* depth = f_.depth;  // only with clipping
     for (int py = ty; py < ey; ++py)
       for (int px0 = tx; px0 < ex; px0 += kSpanLanes) {
         const int n = std::min(kSpanLanes, ex - px0);
@@ -206,7 +207,7 @@ class TileWorker {
         for (int i = 0; i < kSpanLanes; ++i) lo[i] = -kInf, hi[i] = kInf;  // raySpans reads every lane
         for (int i = 0; i < n; ++i) {
           if (depth) {  // a cell with no non-empty node: no ray to set up
-            const size_t ci = (size_t)(py / DepthBounds::kCell) * depth->cols + (px0 + i) / DepthBounds::kCell;
+            const size_t ci = depth->cell(px0 + i, py);
             if (!(depth->lo[ci] <= depth->hi[ci])) continue;
             lo[i] = depth->lo[ci], hi[i] = depth->hi[ci];
           }
@@ -241,7 +242,7 @@ class TileWorker {
     const double step = f_.q.step;
     if (!f_.clipping) return raySpan(f_.geom, f_.gen.pixelRay(px, py), f_.brick, step, span);
     const DepthBounds* depth = f_.depth;
-    const size_t ci = depth ? (size_t)(py / DepthBounds::kCell) * depth->cols + px / DepthBounds::kCell : 0;
+    const size_t ci = depth ? depth->cell(px, py) : 0;
     if (depth && !(depth->lo[ci] <= depth->hi[ci])) {  // no non-empty node here
       if (f_.count) counts.skipped += (uint64_t)spanSamples(f_.geom, f_.gen.pixelRay(px, py), f_.brick, step);
       return false;
