@@ -239,9 +239,12 @@ class Stage {
     piece.region = region.region;
     piece.active = intersect(c.active, region.region);
     piece.format = p.format;
-    if (!piece.active.empty()) piece.pixels = packPixels(c.image, piece.active, p.format);
+    piece.pixels = std::move(packed_);
+    if (!piece.active.empty()) packPixels(c.image, piece.active, p.format, piece.pixels);
+    else piece.pixels.clear();
     piece.render_ms = st.work_ms;
     auto bytes = proto::encode(piece, link_.rank(), p.codec);
+    packed_ = std::move(piece.pixels);
     st.bytes_raw += piece.pixels.size();
     st.bytes_encoded += bytes.size();
     sendBytes(socketFor(region.endpoint), std::move(bytes));
@@ -267,6 +270,7 @@ class Stage {
   HeldStep held_;                     // the window and caster of the frame being rendered
   std::unique_ptr<TileRenderer> tiles_;   // geometry scenes (sort-first)
   std::deque<Cached> cache_;
+  std::vector<std::byte> packed_;  // a piece's pixels before encoding, kept (see packPixels)
   std::map<std::string, zmq::socket_t> pushes_;
   uint32_t epoch_ = 0;
   uint64_t first_wanted_ = 0;  // frames below it were cancelled

@@ -97,21 +97,23 @@ Codec parseCodec(const std::string& name) {
 }
 
 void compressAppend(Codec c, std::span<const std::byte> raw, std::vector<std::byte>& out) {
-  size_t start = out.size();
-  out.resize(start + bound(c, raw.size()));
-  unsigned char* dst = reinterpret_cast<unsigned char*>(out.data() + start);
-  size_t cap = out.size() - start;
+  if (c == Codec::None) return (void)out.insert(out.end(), raw.begin(), raw.end());
+  // Encoded into a buffer kept per thread, then appended: growing `out` to the codec's bound
+  // would zero-fill (and fault in) ~the raw size per message only to shrink it to ~1/4
+  // (a renderer's pieces: ~3% of a 4-renderer farm's CPU).
+  thread_local std::vector<unsigned char> scratch;
+  const size_t cap = bound(c, raw.size());
+  if (scratch.size() < cap) scratch.resize(cap);
   size_t n = 0;
   switch (c) {
-    case Codec::None:
-      if (!raw.empty()) std::memcpy(dst, raw.data(), raw.size());
-      n = raw.size();
-      break;
-    case Codec::Lzo: n = compressLzo(raw, dst); break;
-    case Codec::Lz4: n = compressLz4(raw, dst, cap); break;
-    case Codec::Zstd: n = compressZstd(raw, dst, cap); break;
+    case Codec::None: break;
+    case Codec::Lzo: n = compressLzo(raw, scratch.data()); break;
+    case Codec::Lz4: n = compressLz4(raw, scratch.data(), cap); break;
+    case Codec::Zstd: n = compressZstd(raw, scratch.data(), cap); break;
   }
-  out.resize(start + n);
+  out.reserve(out.size() + n);
+  const auto* p = reinterpret_cast<const std::byte*>(scratch.data());
+  out.insert(out.end(), p, p + n);
 }
 
 std::vector<std::byte> compress(Codec c, std::span<const std::byte> raw) {

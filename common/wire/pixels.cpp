@@ -115,8 +115,14 @@ static void compositeHalfRow(float* d, const uint8_t* lo, const uint8_t* hi, int
 }
 
 std::vector<std::byte> packPixels(const ImageF& img, const Rect& r, proto::PixelFormat f) {
+  std::vector<std::byte> out;
+  packPixels(img, r, f, out);
+  return out;
+}
+
+void packPixels(const ImageF& img, const Rect& r, proto::PixelFormat f, std::vector<std::byte>& out) {
   const size_t bpp = proto::bytesPerPixel(f), row_values = (size_t)r.w * 4, values = (size_t)r.area() * 4;
-  std::vector<std::byte> out((size_t)r.area() * bpp);
+  out.resize((size_t)r.area() * bpp);
   auto* o = reinterpret_cast<uint8_t*>(out.data());
   for (int y = r.y; y < r.y + r.h; ++y) {
     const float* row = img.at(r.x, y);
@@ -129,7 +135,6 @@ std::vector<std::byte> packPixels(const ImageF& img, const Rect& r, proto::Pixel
       std::memcpy(o + 4 * first, row, row_values * 4);
     }
   }
-  return out;
 }
 
 TESSERA_CLONES void compositeUnderRow(float* d, int dst_x, std::span<const std::byte> src, const Rect& src_rect, int row,

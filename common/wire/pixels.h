@@ -12,6 +12,8 @@
 namespace tessera {
 
 std::vector<std::byte> packPixels(const ImageF& img, const Rect& r, proto::PixelFormat f);
+// The same into `out`, resized (a kept buffer saves zero-filling and faulting in its pages).
+void packPixels(const ImageF& img, const Rect& r, proto::PixelFormat f, std::vector<std::byte>& out);
 // dst (covering screen rect dst_rect) += (1 - dst.a) * src, where src holds `src_rect`
 // (inside dst_rect) in format f. Sizes must already be validated (decodePiece does).
 void compositeUnder(ImageF& dst, const Rect& dst_rect, std::span<const std::byte> src, const Rect& src_rect,
