@@ -244,8 +244,8 @@ class Stage {
     else piece.pixels.clear();
     piece.render_ms = st.work_ms;
     auto bytes = proto::encode(piece, link_.rank(), p.codec);
-    packed_ = std::move(piece.pixels);
     st.bytes_raw += piece.pixels.size();
+    packed_ = std::move(piece.pixels);
     st.bytes_encoded += bytes.size();
     sendBytes(socketFor(region.endpoint), std::move(bytes));
   }
