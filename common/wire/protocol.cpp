@@ -2,7 +2,7 @@
 // Pixel messages (Piece, Strips) live in protocol_pixels.cpp.
 #include "common/wire/protocol.h"
 
-#include <lzo/lzoconf.h>
+#include <libdeflate.h>
 
 #include <cstdio>
 #include <stdexcept>
@@ -13,9 +13,9 @@ namespace tessera::proto {
 namespace detail {
 
 namespace {
-uint32_t adler32(std::span<const std::byte> p) {
-  return static_cast<uint32_t>(lzo_adler32(1, reinterpret_cast<const unsigned char*>(p.data()), p.size()));
-}
+// libdeflate's: vectorized, ~15x liblzo2's (every piece is summed twice, by its sender and
+// its receiver: ~1% of a 4-renderer farm's CPU with liblzo2's).
+uint32_t adler32(std::span<const std::byte> p) { return libdeflate_adler32(1, p.data(), p.size()); }
 }  // namespace
 
 std::vector<std::byte> beginMessage() {
