@@ -102,6 +102,7 @@ void compressAppend(Codec c, std::span<const std::byte> raw, std::vector<std::by
   // would zero-fill (and fault in) ~the raw size per message only to shrink it to ~1/4
   // (a renderer's pieces: ~3% of a 4-renderer farm's CPU).
   thread_local std::vector<unsigned char> scratch;
+  if (c == Codec::Lz4 && raw.size() > LZ4_MAX_INPUT_SIZE) throw std::length_error("lz4: input larger than 2 GB");
   const size_t cap = bound(c, raw.size());
   if (scratch.size() < cap) scratch.resize(cap);
   size_t n = 0;
@@ -111,7 +112,6 @@ void compressAppend(Codec c, std::span<const std::byte> raw, std::vector<std::by
     case Codec::Lz4: n = compressLz4(raw, scratch.data(), cap); break;
     case Codec::Zstd: n = compressZstd(raw, scratch.data(), cap); break;
   }
-  out.reserve(out.size() + n);
   const auto* p = reinterpret_cast<const std::byte*>(scratch.data());
   out.insert(out.end(), p, p + n);
 }

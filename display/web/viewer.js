@@ -108,10 +108,10 @@
     sock.onclose = () => {  // a restart of the display or a lost link: try again, soon
       if (!opened && ++failures >= 3) statusEl.textContent = 'refused or the display is down: check the URL the display logged';
       setKind('reconnecting', 'offline');
-      setTimeout(connect, retry);
       // Soon while a display may be restarting; a page refused a minute long (a wrong token,
       // a display gone) asks every 5 s instead of filling the display's refusal count.
-      retry = failures >= 120 ? 5000 : Math.min(500, retry * 2);
+      setTimeout(connect, failures >= 120 ? 5000 : retry);
+      retry = Math.min(500, retry * 2);
     };
   }
 

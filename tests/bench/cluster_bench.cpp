@@ -177,6 +177,10 @@ int goals(const fs::path& root, int frames, int rounds) {
       const double before = oneProcessMs(sceneAt(1024, root), root);
       if (!runFarm({"unlimited", "lzo", 3, 1024, nr, nc}, root, frames, fast)) return 1;
       const double after = oneProcessMs(sceneAt(1024, root), root);
+      if (before <= 0 || after <= 0) {
+        std::cerr << "tessera-render gave no frame time (see " << (root / "one.png").string() << ")\n";
+        return 1;
+      }
       const std::string shape = slow.c.shape();
       eff[shape].push_back(fast.fps * (before + after) / 2 / 1000);
       ratio[shape].push_back(fast.fps > 0 ? slow.fps / fast.fps : 0);

@@ -131,7 +131,7 @@ TEST(BricksVsWhole, ARecycledImageGivesTheSameImage) {
   int clear = 0;
   for (int y = fresh_active.y; y < fresh_active.y + fresh_active.h; ++y)
     for (int x = fresh_active.x; x < fresh_active.x + fresh_active.w; ++x) clear += fresh.at(x, y)[3] == 0;
-  EXPECT_GT(clear, fresh_active.area() / 4) << "the case has transparent pixels between the cubes";
+  EXPECT_GT(clear, fresh_active.area() / 4) << "the case has transparent pixels in the active rectangle";
 }
 
 }  // namespace
