@@ -2,7 +2,6 @@
 #include "common/io/image_io.h"
 
 #include <png.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -13,6 +12,8 @@
 #include <memory>
 #include <sstream>
 #include <stdexcept>
+
+#include "common/io/png_encode.h"
 
 namespace tessera {
 
@@ -57,45 +58,8 @@ std::vector<uint8_t> toStraight(int w, int h, Get get, const std::optional<std::
   return out;
 }
 
-// PNG bytes of 8-bit RGBA rows, in memory: the file writer and the web view send the same.
-std::vector<uint8_t> encodeRows(const std::string& what, int w, int h, const std::vector<uint8_t>& rgba) {
-  if (w <= 0 || h <= 0) fail(what, "cannot write an empty image as PNG");
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
-  png_infop info = png ? png_create_info_struct(png) : nullptr;
-  if (!info) {
-    png_destroy_write_struct(&png, nullptr);
-    fail(what, "libpng init failed");
-  }
-  std::vector<uint8_t> out;
-  if (setjmp(png_jmpbuf(png))) {
-    png_destroy_write_struct(&png, &info);
-    fail(what, "libpng write error");
-  }
-  png_set_write_fn(
-      png, &out,
-      [](png_structp p, png_bytep data, png_size_t n) {
-        auto* bytes = static_cast<std::vector<uint8_t>*>(png_get_io_ptr(p));
-        bytes->insert(bytes->end(), data, data + n);
-      },
-      nullptr);
-  png_set_IHDR(png, info, w, h, 8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-               PNG_FILTER_TYPE_DEFAULT);
-  // The headless display writes every frame: speed over size. One filter (Up) instead of
-  // libpng's adaptive choice among five, and zlib level 1 (codec_bench write_png/render,
-  // 1024x1024: see the README's figures); the run-length strategy keeps the time and makes
-  // the file 18% smaller.
-  png_set_compression_level(png, 1);
-  png_set_filter(png, 0, PNG_FILTER_UP);
-  png_set_compression_strategy(png, Z_RLE);
-  png_write_info(png, info);
-  for (int y = 0; y < h; ++y) png_write_row(png, rgba.data() + (size_t)y * w * 4);
-  png_write_end(png, nullptr);
-  png_destroy_write_struct(&png, &info);
-  return out;
-}
-
 void writeRows(const std::string& path, int w, int h, const std::vector<uint8_t>& rgba) {
-  const std::vector<uint8_t> bytes = encodeRows(path, w, h, rgba);
+  const std::vector<uint8_t> bytes = encodePngRgba(path, w, h, rgba.data());
   FilePtr f(std::fopen(path.c_str(), "wb"));
   if (!f) fail(path, std::string("cannot open for writing: ") + std::strerror(errno));
   if (std::fwrite(bytes.data(), 1, bytes.size(), f.get()) != bytes.size() || std::fflush(f.get()) != 0)
@@ -136,7 +100,7 @@ void writePng(const std::string& path, const Image8& img, std::optional<std::arr
 }
 
 std::vector<uint8_t> encodePng(const Image8& img, std::optional<std::array<double, 3>> background) {
-  return encodeRows("PNG in memory", img.width, img.height, pngPixels(img, background));
+  return encodePngRgba("PNG in memory", img.width, img.height, pngPixels(img, background).data());
 }
 
 void writePng(const std::string& path, const ImageF& img, std::optional<std::array<double, 3>> background) {

@@ -29,6 +29,34 @@ TEST(ImageIo, OpaquePngRoundTripIsExact) {
   EXPECT_EQ(readPng(t.file("a.png")), img);
 }
 
+// The PNG writer hands the compressor filtered rows 256 KiB at a time: images of one
+// block, of several (a row per block boundary or many rows per block), and a 1x1 one must
+// come back exactly through libpng, which checks every chunk's CRC and the stream's Adler-32.
+TEST(ImageIo, OpaquePngRoundTripIsExactAcrossCompressionBlocks) {
+  TempDir t("image_io");
+  for (const auto& [w, h] : {std::pair{1, 1}, {700, 300}, {16, 16000}, {16384, 8}, {1024, 1024}}) {
+    SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
+    Image8 img(w, h);
+    uint32_t seed = 12345;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        uint8_t* p = img.at(x, y);
+        seed = seed * 1664525u + 1013904223u;
+        // Noise in a disc, runs of one colour and zeros around it, as frames have.
+        const bool inside = (x - w / 2) * (double)(x - w / 2) + (y - h / 2) * (double)(y - h / 2) < w * (double)h / 9;
+        p[0] = inside ? (uint8_t)(seed >> 24) : 0;
+        p[1] = inside ? (uint8_t)(x + y) : 0;
+        p[2] = inside ? 200 : 0;
+        p[3] = 255;
+      }
+    writePng(t.file("blocks.png"), img);
+    EXPECT_EQ(readPng(t.file("blocks.png")), img);
+    const std::vector<uint8_t> bytes = encodePng(img);
+    std::ifstream in(t.file("blocks.png"), std::ios::binary);
+    EXPECT_EQ(std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), {}), bytes);  // file == memory
+  }
+}
+
 TEST(ImageIo, TranslucentPngRoundTripWithinOneLevel) {
   // Tolerance 1/255: un-premultiplying then premultiplying again rounds twice.
   TempDir t("image_io");
