@@ -33,6 +33,9 @@ uint8_t clampByte(double v) {
   return (uint8_t)(v < 0 ? 0 : (v > 255 ? 255 : v));
 }
 
+// A premultiplied channel c with alpha a over background channel b (all in [0, 1]), 8-bit.
+uint8_t overBackground(double c, double a, double b) { return clampByte(255.0 * (c + (1 - a) * b)); }
+
 // Premultiplied float RGBA -> 8-bit straight (or opaque over a background) RGBA.
 template <class Get>
 std::vector<uint8_t> toStraight(int w, int h, Get get, const std::optional<std::array<double, 3>>& bg) {
@@ -46,7 +49,7 @@ std::vector<uint8_t> toStraight(int w, int h, Get get, const std::optional<std::
     }
     uint8_t* o = &out[4 * i];
     if (bg) {
-      for (int k = 0; k < 3; ++k) o[k] = clampByte(255.0 * (c[k] + (1 - c[3]) * (*bg)[k]));
+      for (int k = 0; k < 3; ++k) o[k] = overBackground(c[k], c[3], (*bg)[k]);
       o[3] = 255;
     } else if (c[3] > 0) {
       for (int k = 0; k < 3; ++k) o[k] = clampByte(255.0 * std::min(1.0, c[k] / c[3]));
@@ -90,9 +93,30 @@ static std::vector<uint8_t> unpremultiply8(const Image8& img) {
   return out;
 }
 
+// Opaque over a background by table: every (channel, alpha, value) result computed once per
+// background with toStraight's own arithmetic (so the bytes are the same), then one lookup a
+// channel (the web view's lossless frame: 1024^2 in ~6 ms less).
+static std::vector<uint8_t> overBackground8(const Image8& img, const std::array<double, 3>& bg) {
+  thread_local std::array<double, 3> table_bg{-1, -1, -1};
+  thread_local std::vector<uint8_t> table;  // [channel][alpha][value]
+  if (table.empty() || table_bg != bg) {
+    table.resize(3 * 256 * 256);
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 256; ++a)
+        for (int v = 0; v < 256; ++v) table[(k * 256 + a) * 256 + v] = overBackground(v / 255.0, a / 255.0, bg[k]);
+    table_bg = bg;
+  }
+  std::vector<uint8_t> out(img.px.size());
+  for (size_t i = 0; i < img.px.size(); i += 4) {
+    const size_t a = img.px[i + 3];
+    for (int k = 0; k < 3; ++k) out[i + k] = table[(k * 256 + a) * 256 + img.px[i + k]];
+    out[i + 3] = 255;
+  }
+  return out;
+}
+
 std::vector<uint8_t> pngPixels(const Image8& img, std::optional<std::array<double, 3>> background) {
-  return background ? toStraight(img.width, img.height, [&](size_t i) { return img.px[i] / 255.0; }, background)
-                    : unpremultiply8(img);
+  return background ? overBackground8(img, *background) : unpremultiply8(img);
 }
 
 void writePng(const std::string& path, const Image8& img, std::optional<std::array<double, 3>> background) {

@@ -28,6 +28,9 @@ const std::array<double, 3> kBg{32 / 255.0, 32 / 255.0, 36 / 255.0};  // the web
 
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
+// Encodings timed per frame and codec, the best kept (the first pays for the encoders' buffers).
+constexpr int kRepeats = 5;
+
 struct Jpeg {
   size_t bytes = 0;
   double encode_ms = 0, psnr = 0;
@@ -40,10 +43,15 @@ Jpeg jpeg(const std::vector<uint8_t>& rgba, int w, int h, int quality, int subsa
   unsigned char* out = nullptr;
   unsigned long size = 0;
   Jpeg j;
-  const auto t0 = Clock::now();
-  if (tjCompress2(enc.get(), rgba.data(), w, 0, h, TJPF_RGBA, &out, &size, subsampling, quality, TJFLAG_FASTDCT) != 0)
-    throw std::runtime_error(tjGetErrorStr2(enc.get()));
-  j.encode_ms = msSince(t0);
+  j.encode_ms = 1e300;
+  for (int i = 0; i < kRepeats; ++i) {  // the best of a few: the web view encodes frame after frame
+    tjFree(out);
+    out = nullptr;
+    const auto t0 = Clock::now();
+    if (tjCompress2(enc.get(), rgba.data(), w, 0, h, TJPF_RGBA, &out, &size, subsampling, quality, TJFLAG_FASTDCT) != 0)
+      throw std::runtime_error(tjGetErrorStr2(enc.get()));
+    j.encode_ms = std::min(j.encode_ms, msSince(t0));
+  }
   j.bytes = size;
   std::vector<uint8_t> back(rgba.size());
   if (tjDecompress2(dec.get(), out, size, back.data(), w, 0, h, TJPF_RGBA, 0) != 0)
@@ -83,9 +91,13 @@ int main(int argc, char** argv) {
     const auto rgba = tessera::pngPixels(region, kBg);
     const std::string size = std::to_string(frame.width) + "x" + std::to_string(frame.height);
     const std::string reg = std::to_string(r.w) + "x" + std::to_string(r.h);
-    auto t0 = Clock::now();
-    const auto png = tessera::display::encodeWebFrame(frame, {}, kBg, 80);
-    const double png_ms = msSince(t0);
+    double png_ms = 1e300;
+    tessera::display::WebFrame png;
+    for (int i = 0; i < kRepeats; ++i) {
+      const auto t0 = Clock::now();
+      png = tessera::display::encodeWebFrame(frame, {}, kBg, 80);
+      png_ms = std::min(png_ms, msSince(t0));
+    }
     csv << size << "," << frame.width << "," << frame.height << "," << r.w << "," << r.h << ",png,100,"
         << png.image_bytes << "," << png_ms << ",inf,0\n";
     std::printf("| %s | %s | PNG (lossless) | %zu | %.1f | exact | 0 |\n", size.c_str(), reg.c_str(), png.image_bytes, png_ms);

@@ -8,6 +8,8 @@
 #include <png.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -102,6 +104,31 @@ TEST(ImageIo, PngStoresStraightAlphaForEveryPair) {
       wrong += p[0] != expect || p[3] != a;
     }
   EXPECT_EQ(wrong, 0);
+}
+
+// Over a background the rows come from a table built per background: for every (alpha,
+// value) pair and two backgrounds in turn (the table must follow the background), each byte
+// is the direct computation, round(255 * (v + (1 - a) * bg)) in double, ties up.
+TEST(ImageIo, OverABackgroundEveryPairIsTheDirectComputation) {
+  Image8 img(256, 256);
+  for (int a = 0; a < 256; ++a)
+    for (int v = 0; v < 256; ++v) {
+      uint8_t* p = img.at(v, a);
+      p[0] = (uint8_t)v, p[1] = (uint8_t)(255 - v), p[2] = (uint8_t)(v / 2);
+      p[3] = (uint8_t)a;
+    }
+  for (const std::array<double, 3> bg : {std::array<double, 3>{0.2, 0.5, 1.0}, {1.0, 0.0, 0.125}}) {
+    const std::vector<uint8_t> rows = pngPixels(img, bg);
+    int wrong = 0;
+    for (size_t i = 0; i < img.px.size(); i += 4) {
+      for (int k = 0; k < 3; ++k) {
+        const double v = std::floor(255.0 * (img.px[i + k] / 255.0 + (1 - img.px[i + 3] / 255.0) * bg[k]) + 0.5);
+        wrong += rows[i + k] != (uint8_t)std::clamp(v, 0.0, 255.0);
+      }
+      wrong += rows[i + 3] != 255;
+    }
+    EXPECT_EQ(wrong, 0) << bg[0];
+  }
 }
 
 TEST(ImageIo, BackgroundMakesOpaque) {
