@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <map>
 
+#include "common/io/image_io.h"
 #include "common/net/log.h"
 #include "common/net/stage_main.h"
 #include "display/stage.h"
@@ -34,7 +35,7 @@ int main(int argc, char** argv) {
       ->expected(3)
       ->option_text("R,G,B [none: straight alpha]");
   return stageMain(app, argc, argv, args, [&](const Endpoints& endpoints, zmq::context_t& ctx, auto stop) {
-    if (!bg.empty()) opt.background = std::array<double, 3>{bg[0], bg[1], bg[2]};
+    opt.background = backgroundColour(bg);
     // Parses the scene only (its volume is never loaded): the image size bounds what
     // peers may send to this stage.
     const Scene parsed = args.scene();

@@ -1,4 +1,4 @@
-// Cropping and encoding frames for the web view (libpng through image_io, libturbojpeg).
+// Cropping and encoding frames for the web view (PNG through image_io, libturbojpeg).
 #include "display/web_frame.h"
 
 #include <turbojpeg.h>

@@ -1,4 +1,5 @@
-// PNG (libpng, straight alpha), PAM (premultiplied rgba8) and raw float image files.
+// PNG (written by png_encode.cpp, read by libpng; straight alpha), PAM (premultiplied rgba8)
+// and raw float image files.
 #include "common/io/image_io.h"
 
 #include <png.h>
@@ -93,6 +94,14 @@ static std::vector<uint8_t> unpremultiply8(const Image8& img) {
   return out;
 }
 
+std::optional<std::array<double, 3>> backgroundColour(const std::vector<double>& rgb) {
+  if (rgb.empty()) return std::nullopt;
+  if (rgb.size() != 3) throw std::invalid_argument("background: expected r,g,b, got " + std::to_string(rgb.size()) + " values");
+  for (double v : rgb)
+    if (!(v >= 0 && v <= 1)) throw std::invalid_argument("background: " + std::to_string(v) + " is not in [0, 1]");
+  return std::array<double, 3>{rgb[0], rgb[1], rgb[2]};
+}
+
 // Opaque over a background by table: every (channel, alpha, value) result computed once per
 // background with toStraight's own arithmetic (so the bytes are the same), then one lookup a
 // channel (the web view's lossless frame: 1024^2 in ~6 ms less).
@@ -100,6 +109,7 @@ static std::vector<uint8_t> overBackground8(const Image8& img, const std::array<
   thread_local std::array<double, 3> table_bg{-1, -1, -1};
   thread_local std::vector<uint8_t> table;  // [channel][alpha][value]
   if (table.empty() || table_bg != bg) {
+    backgroundColour({bg[0], bg[1], bg[2]});  // throws unless every channel is in [0, 1]
     table.resize(3 * 256 * 256);
     for (int k = 0; k < 3; ++k)
       for (int a = 0; a < 256; ++a)

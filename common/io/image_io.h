@@ -11,6 +11,10 @@
 
 namespace tessera {
 
+// The background colour of an r,g,b option (none if empty). Throws std::invalid_argument
+// naming the value unless there are three numbers in [0, 1] (NaN has no colour).
+std::optional<std::array<double, 3>> backgroundColour(const std::vector<double>& rgb);
+
 // Un-premultiplies with rounding; with a background, composites over it instead (opaque).
 void writePng(const std::string& path, const Image8& img,
               std::optional<std::array<double, 3>> background = std::nullopt);

@@ -1,7 +1,7 @@
 // PNG writing with ISA-L's deflate (igzip): the headless display writes every frame as PNG,
-// and libpng can only compress through zlib. On the default 1024x1024 frame (AMD EPYC,
-// AVX-512) zlib at its fastest setting took 9-20 ms and 192 KB, igzip level 1 2.8 ms and
-// 206 KB (codec_bench write_png). The container is what PNG specifies and every reader
+// and libpng can only compress through zlib. On codec_bench's 1024x1024 frame (AMD EPYC,
+// AVX-512) libpng with zlib at its fastest setting took 13.3 ms and 364 KB, igzip level 1
+// 3.6 ms and 420 KB (write_png/render). The container is what PNG specifies and every reader
 // checks: signature, IHDR, IDAT (a zlib stream of filtered rows), IEND, each chunk with its
 // CRC-32. Rows are filtered with Up (the row above subtracted), which suits rendered frames
 // (runs of equal rows, smooth gradients) and is one subtraction a byte.
@@ -46,7 +46,8 @@ std::vector<uint8_t> encodePngRgba(const std::string& what, int w, int h, const 
   const size_t stride = (size_t)w * 4;
   if (stride + 1 > std::numeric_limits<uint32_t>::max())
     throw std::runtime_error(what + ": " + std::to_string(w) + " pixels are too wide a row for PNG");
-  // Kept per thread: the compressor's tables (~1 MB) and the buffers, reused frame after frame.
+  // Kept per thread: the compressor's tables (~280 KB) and the buffers, reused frame after
+  // frame; a huge image's buffers are let go afterwards (also when this throws).
   thread_local std::vector<uint8_t> level_buf(ISAL_DEF_LVL1_DEFAULT), block, z;
   isal_zstream s;
   isal_deflate_init(&s);
@@ -55,14 +56,20 @@ std::vector<uint8_t> encodePngRgba(const std::string& what, int w, int h, const 
   s.level_buf_size = (uint32_t)level_buf.size();
   s.gzip_flag = IGZIP_ZLIB;
   s.flush = NO_FLUSH;
-  const int rows_per_block = (int)std::max<size_t>(1, kBlockBytes / (stride + 1));
+  struct Trim {
+    ~Trim() {
+      if (block.size() > kBlockBytes + (1 << 20)) block = {};
+      if (z.size() > (size_t{64} << 20)) z = {};
+    }
+  } trim;
+  const int64_t rows_per_block = (int64_t)std::max<size_t>(1, kBlockBytes / (stride + 1));
   block.resize((stride + 1) * (size_t)rows_per_block);
   if (z.size() < stride * h / 4 + 65536) z.resize(stride * h / 4 + 65536);
   size_t used = 0;
-  for (int y0 = 0; y0 < h; y0 += rows_per_block) {
-    const int n = std::min(rows_per_block, h - y0);
-    for (int i = 0; i < n; ++i) {
-      const int y = y0 + i;
+  for (int64_t y0 = 0; y0 < h; y0 += rows_per_block) {
+    const int64_t n = std::min<int64_t>(rows_per_block, h - y0);
+    for (int64_t i = 0; i < n; ++i) {
+      const int64_t y = y0 + i;
       uint8_t* f = &block[(stride + 1) * i];
       const uint8_t* row = rgba + stride * y;
       f[0] = kFilterUp;
@@ -93,7 +100,6 @@ std::vector<uint8_t> encodePngRgba(const std::string& what, int w, int h, const 
   chunk(out, "IHDR", ihdr, sizeof ihdr);
   for (size_t at = 0; at < used; at += kMaxChunk) chunk(out, "IDAT", z.data() + at, std::min(kMaxChunk, used - at));
   chunk(out, "IEND", nullptr, 0);
-  if (z.size() > (size_t{64} << 20)) z = {};  // a huge image's buffer is not kept
   return out;
 }
 

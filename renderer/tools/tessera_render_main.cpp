@@ -177,8 +177,7 @@ int run(int argc, char** argv) {
   }
 
   const Scene scene = a.scene_path.empty() ? defaultScene() : loadScene(a.scene_path);
-  std::optional<std::array<double, 3>> bg;
-  if (!a.background.empty()) bg = std::array<double, 3>{a.background[0], a.background[1], a.background[2]};
+  const std::optional<std::array<double, 3>> bg = backgroundColour(a.background);
   int w = scene.width, h = scene.height;
   if (!a.size.empty()) parseSize(a.size, w, h);
   if (!scene.mesh) return renderVolume(scene, a, w, h, bg);
