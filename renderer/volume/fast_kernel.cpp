@@ -53,6 +53,18 @@ struct Consts {
   float inv_cell[3], light[3], half[3];
 };
 
+// A ray's colour and alpha so far (premultiplied) and its transmittance, the product of
+// (1 - alpha) over its samples. Kept apart from the alpha, each sample adds one fused
+// multiply-add to the colour's chain and one to the transmittance's, independent of each other
+// (compositing as c += (1 - c.a) * s chained a shuffle, a subtract and the FMA per sample).
+struct Accum {
+#ifdef TESSERA_AVX2
+  __m128 c = _mm_setzero_ps(), t = _mm_set1_ps(1.0f);
+#else
+  float c[4] = {0, 0, 0, 0}, t = 1.0f;
+#endif
+};
+
 // Table position of a scalar in quantized units [0, 65535].
 constexpr float kToTable = (float)(TfTable::kEntries - 1) / VolumeAccel::kQuantScale;
 
@@ -97,11 +109,7 @@ struct RayState {
   Leaper leaper;
   int64_t k = 0, k_end = 0;
   bool terminated = false;
-#ifdef TESSERA_AVX2
-  __m128 acc = _mm_setzero_ps();
-#else
-  float acc[4] = {0, 0, 0, 0};
-#endif
+  Accum acc;
   // Samples planned ahead of sampling, at most: an opaque ray ends a few samples into its
   // first non-empty block, and planning the rest of it (the leaper walked on through the
   // non-empty blocks, merging them into one run) was wasted.
@@ -170,8 +178,9 @@ struct RayState {
       bool done = false;
 #ifdef TESSERA_AVX2
       int64_t j;
-      done = skip ? runPackets<false>(c, runs[r].begin, runs[r].end, et, acc, j)
-                  : runPackets<true>(c, runs[r].begin, runs[r].end, et, acc, j);
+      const int64_t b = runs[r].begin, e = runs[r].end;
+      done = c.grad ? (skip ? runPackets<false, true>(c, b, e, et, acc, j) : runPackets<true, true>(c, b, e, et, acc, j))
+                    : (skip ? runPackets<false, false>(c, b, e, et, acc, j) : runPackets<true, false>(c, b, e, et, acc, j));
       counts.taken += (uint64_t)(j - runs[r].begin);
 #else
       int64_t j = runs[r].begin;
@@ -197,9 +206,9 @@ struct RayState {
 
   void store(float out[4]) const {
 #ifdef TESSERA_AVX2
-    _mm_storeu_ps(out, acc);
+    _mm_storeu_ps(out, acc.c);
 #else
-    for (int i = 0; i < 4; ++i) out[i] = acc[i];
+    for (int i = 0; i < 4; ++i) out[i] = acc.c[i];
 #endif
   }
 };

@@ -99,10 +99,14 @@ inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off,
 // chunk are classified first, then the listed samples composited in order (the same
 // operations, in the same order, as one sample at a time). Returns true if the alpha
 // reached et; `stop` is the sample after the last one used.
-template <bool kEarlyOutEmpty>
-inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, __m128& acc, int64_t& stop) {
+// kShade: c.grad is set (a loop of its own: the unlit loop stays short).
+template <bool kEarlyOutEmpty, bool kShade>
+inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, Accum& out, int64_t& stop) {
+  // Locals: `out` may alias the table's floats as far as the compiler knows, so compositing
+  // into it stored and reloaded it for every sample (a longer dependency chain).
+  __m128 acc = out.c, trans = out.t;
   Classified cl;
-  const __m128 one = _mm_set1_ps(1.0f), etv = _mm_set1_ps(et);
+  const __m128 etv = _mm_set1_ps(et);
   for (int64_t j = begin; j < end; j += Classified::kChunk) {
     const int64_t chunk_end = std::min(end, j + Classified::kChunk);
     int n = 0;
@@ -112,21 +116,23 @@ inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, __
       const float* e = c.rgba + 4 * cl.ti[i];
       const __m128 e0 = _mm_load_ps(e), e1 = _mm_load_ps(e + 4);
       __m128 pc = _mm_fmadd_ps(_mm_set1_ps(cl.w[i]), _mm_sub_ps(e1, e0), e0);
-      if (c.grad) pc = shadeSample(c, j + cl.off[i], pc);
-      const __m128 t = _mm_sub_ps(one, _mm_shuffle_ps(acc, acc, 0xFF));
-      acc = _mm_fmadd_ps(t, pc, acc);
+      if (kShade) pc = shadeSample(c, j + cl.off[i], pc);
+      acc = _mm_fmadd_ps(trans, pc, acc);
+      trans = _mm_fnmadd_ps(trans, _mm_shuffle_ps(pc, pc, 0xFF), trans);  // trans * (1 - alpha)
       if (_mm_movemask_ps(_mm_cmpge_ps(acc, etv)) & 8) {
+        out = Accum{acc, trans};
         stop = j + cl.off[i] + 1;
         return true;
       }
     }
   }
+  out = Accum{acc, trans};
   stop = end;
   return false;
 }
 #else
 // Portable version of the same arithmetic (one sample at a time).
-inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4], bool& done) {
+inline int packet(const Consts& c, int64_t k0, int lanes, float et, Accum& acc, bool& done) {
   auto lerp = [](float a, float b, float t) { return std::fma(t, b - a, a); };
   for (int l = 0; l < lanes; ++l) {
     float f[3];
@@ -146,9 +152,9 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, float acc[4]
     float pc[4];
     for (int ch = 0; ch < 4; ++ch) pc[ch] = lerp(c.rgba[4 * ti + ch], c.rgba[4 * ti + 4 + ch], w);
     if (c.grad) shadeSample(c, k0 + l, pc);
-    const float t = 1.0f - acc[3];
-    for (int ch = 0; ch < 4; ++ch) acc[ch] = std::fma(t, pc[ch], acc[ch]);
-    if (acc[3] >= et) {
+    for (int ch = 0; ch < 4; ++ch) acc.c[ch] = std::fma(acc.t, pc[ch], acc.c[ch]);
+    acc.t = std::fma(-acc.t, pc[3], acc.t);
+    if (acc.c[3] >= et) {
       done = true;
       return l + 1;
     }
