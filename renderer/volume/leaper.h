@@ -2,6 +2,7 @@
 // the min-max hierarchy's level-0 block grid and says how many samples it may leap over.
 #pragma once
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -23,13 +24,20 @@ inline constexpr double kSkipMargin = 1.0 / 64;
 inline constexpr int64_t kMinRun = 16;
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// Three axes at once (lane 3 idle): GCC's vector types, so each instruction set's build gets
+// its own code (SSE2 pairs for the scalar kernel). Every lane does the scalar arithmetic
+// (a multiply, then an add: no contraction in these files), so the decisions are exact.
+using V4d = double __attribute__((vector_size(32)));
+using V4i = int32_t __attribute__((vector_size(16)));
+
 // Empty-space leaps over the level-0 block grid, using the chessboard distance map.
 // Double precision; samples are only leapt over when they lie kSkipMargin inside a cube of
 // empty blocks, so their float positions (the kernel's) are inside it too.
 struct Leaper {
-  double u0[3]{}, du[3]{}, inv[3]{}, umax[3]{};
-  int imax[3]{}, nb[3]{};
-  bool fwd[3]{}, moving[3]{};
+  // Per axis (lane 3: a ray standing still at 0 in a grid of no blocks, so it never limits).
+  V4d u0{}, du{}, inv{}, umax{}, nb{};
+  V4i imax{};
+  decltype(V4d{} < V4d{}) neg{}, fwd{}, moving{};  // lane masks
   int nbx = 0, nbxy = 0;
   int64_t block_run = 1;  // samples after which the ray has surely left any block
   const uint8_t* dist = nullptr;
@@ -41,13 +49,14 @@ struct Leaper {
     for (int a = 0; a < 3; ++a) {
       u0[a] = s.u0[a];
       du[a] = s.du[a];
-      moving[a] = s.du[a] != 0;
-      fwd[a] = s.du[a] > 0;
-      inv[a] = moving[a] ? 1.0 / s.du[a] : 0.0;
+      inv[a] = s.du[a] != 0 ? 1.0 / s.du[a] : 0.0;
       umax[a] = v.dims[a] - 1;
       imax[a] = std::max(0, v.dims[a] - 2);
       nb[a] = d0[a];
     }
+    neg = du < 0.0;
+    fwd = du > 0.0;
+    moving = du != 0.0;
     nbx = d0[0];
     nbxy = d0[0] * d0[1];
     // A ray crosses a block's extent B along its fastest axis within B / max|du| samples.
@@ -57,36 +66,33 @@ struct Leaper {
     dist = e.octant_distance[octant].data();
   }
 
-  // Where the ray (from sample k) leaves the cube of r^3 blocks that starts at block b and
-  // extends forward (the ray's octant), shrunk by `margin`; `inside` tells whether sample
-  // k itself is in the shrunk cube.
-  double exit(const double u[3], const int b[3], int r, double margin, bool& inside) const {
+  // Where the ray (from sample k, at u in block b) leaves the cube of r^3 blocks that starts
+  // at b and extends forward (the ray's octant), shrunk by `margin`; `inside` tells whether
+  // sample k itself is in the shrunk cube.
+  double exit(const V4d& u, const V4d& b, double r, double margin, bool& inside) const {
     constexpr double B = MinMaxHierarchy::kBlock;
-    double e = kInf;
-    inside = true;
-    for (int a = 0; a < 3; ++a) {
-      const bool neg = du[a] < 0;
-      const int first = neg ? b[a] - r + 1 : b[a], last = neg ? b[a] + 1 : b[a] + r;
-      const double lo = first <= 0 ? -kInf : first * B + margin;
-      const double hi = last >= nb[a] ? kInf : last * B - margin;
-      inside = inside & (u[a] >= lo) & (u[a] <= hi);
-      const double ea = moving[a] ? ((fwd[a] ? hi : lo) - u0[a]) * inv[a] : kInf;
-      e = std::min(e, ea);
-    }
-    return e;
+    const V4d inf = V4d{} + kInf;
+    const V4d first = neg ? b - (r - 1) : b, last = neg ? b + 1.0 : b + r;
+    const V4d lo = first <= 0.0 ? -inf : first * B + margin;
+    const V4d hi = last >= nb ? inf : last * B - margin;
+    const auto in = (u >= lo) & (u <= hi);
+    inside = (in[0] & in[1] & in[2]) != 0;
+    const V4d ea = moving ? ((fwd ? hi : lo) - u0) * inv : inf;
+    return std::min({ea[0], ea[1], ea[2]});
   }
 
   // Returns the first sample not leapt over (== k if sample k must be taken) and sets
   // run_end to a sample index where the ray has left k's block (the next decision point).
   int64_t step(int64_t k, int64_t k_end, int64_t& run_end) const {
-    double u[3];
-    int b[3];
-    for (int a = 0; a < 3; ++a) {
-      u[a] = u0[a] + (double)k * du[a];
-      const double uc = std::min(std::max(u[a], 0.0), umax[a]);
-      b[a] = std::min((int)uc, imax[a]) / MinMaxHierarchy::kBlock;
-    }
-    const int d = dist[b[0] + nbx * b[1] + nbxy * b[2]];
+    const V4d u = u0 + (double)k * du;
+    V4d uc = u < 0.0 ? V4d{} : u;
+    uc = umax < uc ? umax : uc;
+    V4i i = __builtin_convertvector(uc, V4i);  // truncation, as (int)
+    i = imax < i ? imax : i;
+    constexpr int sh = std::countr_zero((unsigned)MinMaxHierarchy::kBlock);  // i >= 0: i / kBlock
+    const V4i bi = i >> sh;
+    const V4d b = __builtin_convertvector(bi, V4d);
+    const int d = dist[bi[0] + nbx * bi[1] + nbxy * bi[2]];
     bool inside;
     if (d > 0) {
       const double e = std::min(exit(u, b, d, kSkipMargin, inside), (double)k_end);
