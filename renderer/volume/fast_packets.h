@@ -112,11 +112,53 @@ inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, Ac
     int n = 0;
     for (int64_t p = j; p < chunk_end; p += kLanes)
       n += classifyPacket<kEarlyOutEmpty>(c, p, (int)std::min<int64_t>(kLanes, chunk_end - p), (int)(p - j), cl, n);
+    if constexpr (kShade) {
+      // Lit kLanes samples at a time (shadePacket), then composited one by one. A ray that ends
+      // early wastes the lighting of at most kLanes - 1 samples.
+      for (int i0 = 0; i0 < n; i0 += kLanes) {
+        const int m = std::min(kLanes, n - i0);
+        __m128 pc[kLanes];
+        for (int l = 0; l < kLanes; ++l) {
+          const int i = i0 + (l < m ? l : 0);  // idle lanes repeat the first sample
+          const float* e = c.rgba + 4 * cl.ti[i];
+          const __m128 e0 = _mm_load_ps(e), e1 = _mm_load_ps(e + 4);
+          pc[l] = _mm_fmadd_ps(_mm_set1_ps(cl.w[i]), _mm_sub_ps(e1, e0), e0);
+        }
+        const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+        const __m256i offs = _mm256_blendv_epi8(
+            _mm256_set1_epi32(cl.off[i0]), _mm256_loadu_si256(reinterpret_cast<const __m256i*>(cl.off + i0)),
+            _mm256_cmpgt_epi32(_mm256_set1_epi32(m), lane));
+        const __m256 kf = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32((int)j), offs));
+        // Eight (r, g, b, a) to four eight-lane channels and back.
+        __m128 a0 = pc[0], a1 = pc[1], a2 = pc[2], a3 = pc[3], b0 = pc[4], b1 = pc[5], b2 = pc[6], b3 = pc[7];
+        _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
+        _MM_TRANSPOSE4_PS(b0, b1, b2, b3);
+        __m256 soa[4] = {_mm256_set_m128(b0, a0), _mm256_set_m128(b1, a1), _mm256_set_m128(b2, a2),
+                         _mm256_set_m128(b3, a3)};
+        shadePacket(c, kf, soa);
+        a0 = _mm256_castps256_ps128(soa[0]), a1 = _mm256_castps256_ps128(soa[1]);
+        a2 = _mm256_castps256_ps128(soa[2]), a3 = _mm256_castps256_ps128(soa[3]);
+        b0 = _mm256_extractf128_ps(soa[0], 1), b1 = _mm256_extractf128_ps(soa[1], 1);
+        b2 = _mm256_extractf128_ps(soa[2], 1), b3 = _mm256_extractf128_ps(soa[3], 1);
+        _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
+        _MM_TRANSPOSE4_PS(b0, b1, b2, b3);
+        const __m128 lit[kLanes] = {a0, a1, a2, a3, b0, b1, b2, b3};
+        for (int l = 0; l < m; ++l) {
+          acc = _mm_fmadd_ps(trans, lit[l], acc);
+          trans = _mm_fnmadd_ps(trans, _mm_shuffle_ps(lit[l], lit[l], 0xFF), trans);
+          if (_mm_movemask_ps(_mm_cmpge_ps(acc, etv)) & 8) {
+            out = Accum{acc, trans};
+            stop = j + cl.off[i0 + l] + 1;
+            return true;
+          }
+        }
+      }
+      continue;
+    }
     for (int i = 0; i < n; ++i) {
       const float* e = c.rgba + 4 * cl.ti[i];
       const __m128 e0 = _mm_load_ps(e), e1 = _mm_load_ps(e + 4);
-      __m128 pc = _mm_fmadd_ps(_mm_set1_ps(cl.w[i]), _mm_sub_ps(e1, e0), e0);
-      if (kShade) pc = shadeSample(c, j + cl.off[i], pc);
+      const __m128 pc = _mm_fmadd_ps(_mm_set1_ps(cl.w[i]), _mm_sub_ps(e1, e0), e0);
       acc = _mm_fmadd_ps(trans, pc, acc);
       trans = _mm_fnmadd_ps(trans, _mm_shuffle_ps(pc, pc, 0xFF), trans);  // trans * (1 - alpha)
       if (_mm_movemask_ps(_mm_cmpge_ps(acc, etv)) & 8) {

@@ -45,36 +45,104 @@ inline void gradientAt(const Consts& c, int64_t k, float g[3]) {
   samplePosition(c, k, i, f);
   const int16_t* p = c.grad + 4 * ((size_t)i[0] + (size_t)c.gdims[0] * ((size_t)i[1] + (size_t)c.gdims[1] * i[2]));
   const size_t sx = c.gstride[0], sy = c.gstride[1], sz = c.gstride[2];
-#ifdef TESSERA_AVX2
-  auto load = [](const int16_t* q) {
-    return _mm_cvtepi32_ps(_mm_cvtepi16_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(q))));
-  };
-  auto lerp = [](__m128 a, __m128 b, float t) { return _mm_fmadd_ps(_mm_set1_ps(t), _mm_sub_ps(b, a), a); };
-  auto lx = [&](const int16_t* q) { return lerp(load(q), load(q + sx), f[0]); };
-  const __m128 v = lerp(lerp(lx(p), lx(p + sy), f[1]), lerp(lx(p + sz), lx(p + sy + sz), f[1]), f[2]);
-  alignas(16) float out[4];
-  _mm_store_ps(out, _mm_mul_ps(v, _mm_set1_ps(1.0f / GradientVolume::kScale)));
-  for (int a = 0; a < 3; ++a) g[a] = out[a];
-#else
   auto lerp = [](float a, float b, float t) { return std::fma(t, b - a, a); };
   for (int a = 0; a < 3; ++a) {
     auto lx = [&](const int16_t* q) { return lerp((float)q[a], (float)q[a + sx], f[0]); };
     const float v = lerp(lerp(lx(p), lx(p + sy), f[1]), lerp(lx(p + sz), lx(p + sy + sz), f[1]), f[2]);
     g[a] = v * (1.0f / GradientVolume::kScale);
   }
-#endif
 }
 
 #ifdef TESSERA_AVX2
-inline __m128 shadeSample(const Consts& c, int64_t k, __m128 pc) {
-  if (_mm_cvtss_f32(_mm_shuffle_ps(pc, pc, 0xFF)) <= 0) return pc;  // nothing to light
-  float g[3], scale, add;
-  gradientAt(c, k, g);
-  shadeFactors(c, g, scale, add);
-  const __m128 a = _mm_shuffle_ps(pc, pc, 0xFF);
-  const __m128 lit = _mm_min_ps(a, _mm_fmadd_ps(pc, _mm_set1_ps(scale), _mm_mul_ps(_mm_set1_ps(add), a)));
-  return _mm_blend_ps(lit, pc, 8);  // alpha unchanged
+// Eight samples at once, lanes holding samples (indices kf) with premultiplied colours
+// r, g, b and alpha a: shadeSample's operations lane by lane, so every lane's result is
+// shadeSample's to the bit (tests/integration/simd_paths_test.cpp compares the kernels).
+// Per sample, one at a time, the gradient's loads and the lighting's square root, division and
+// branches were ~60% of a shaded opaque frame.
+// Not inlined: its size pushed the leaper's planning out of the callers' inlining (unlit frames 5% slower).
+[[gnu::noinline]] void shadePacket(const Consts& c, __m256 kf, __m256 rgba[4]) {
+  const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+  const __m256 a = rgba[3];
+  const __m256 lit_lanes = _mm256_cmp_ps(a, zero, _CMP_GT_OQ);  // alpha <= 0: nothing to light
+  if (_mm256_movemask_ps(lit_lanes) == 0) return;
+  // samplePosition
+  __m256 f[3];
+  alignas(32) int32_t ii[3][8];
+  for (int ax = 0; ax < 3; ++ax) {
+    __m256 u = _mm256_fmadd_ps(kf, _mm256_set1_ps(c.du[ax]), _mm256_set1_ps(c.u0[ax]));
+    u = _mm256_min_ps(_mm256_max_ps(u, zero), _mm256_set1_ps(c.umax[ax]));
+    const __m256i i = _mm256_min_epi32(_mm256_cvttps_epi32(u), _mm256_set1_epi32(c.imax[ax]));
+    f[ax] = _mm256_sub_ps(u, _mm256_cvtepi32_ps(i));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(ii[ax]), i);
+  }
+  // gradientAt: a voxel's 4 int16 are one 64-bit element; indices in those elements.
+  alignas(32) int64_t vox[8];
+  for (int l = 0; l < 8; ++l)
+    vox[l] = (int64_t)ii[0][l] + (int64_t)c.gdims[0] * ((int64_t)ii[1][l] + (int64_t)c.gdims[1] * ii[2][l]);
+  const __m256i v_lo = _mm256_load_si256(reinterpret_cast<const __m256i*>(vox));
+  const __m256i v_hi = _mm256_load_si256(reinterpret_cast<const __m256i*>(vox + 4));
+  const auto* base = reinterpret_cast<const long long*>(c.grad);
+  // The corner `off` elements away: x, y, z components of the eight lanes.
+  auto corner = [&](int64_t off, __m256 g[3]) {
+    const __m256i o = _mm256_set1_epi64x(off);
+    const __m256 lo4 = _mm256_castsi256_ps(_mm256_i64gather_epi64(base, _mm256_add_epi64(v_lo, o), 8));
+    const __m256 hi4 = _mm256_castsi256_ps(_mm256_i64gather_epi64(base, _mm256_add_epi64(v_hi, o), 8));
+    // Dwords (x | y << 16) and (z | 0 << 16) of the eight lanes, in lane order.
+    const __m256i xy = _mm256_castpd_si256(_mm256_permute4x64_pd(
+        _mm256_castps_pd(_mm256_shuffle_ps(lo4, hi4, 0x88)), 0xD8));
+    const __m256i z0 = _mm256_castpd_si256(_mm256_permute4x64_pd(
+        _mm256_castps_pd(_mm256_shuffle_ps(lo4, hi4, 0xDD)), 0xD8));
+    g[0] = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(xy, 16), 16));
+    g[1] = _mm256_cvtepi32_ps(_mm256_srai_epi32(xy, 16));
+    g[2] = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(z0, 16), 16));
+  };
+  auto lerp = [](__m256 x, __m256 y, __m256 t) { return _mm256_fmadd_ps(t, _mm256_sub_ps(y, x), x); };
+  const int64_t sx = c.gstride[0] / 4, sy = c.gstride[1] / 4, sz = c.gstride[2] / 4;
+  // lx(q) = lerp(q, q + sx, f0) per component, as gradientAt.
+  auto lx = [&](int64_t q, __m256 out[3]) {
+    __m256 p0[3], p1[3];
+    corner(q, p0);
+    corner(q + sx, p1);
+    for (int k = 0; k < 3; ++k) out[k] = lerp(p0[k], p1[k], f[0]);
+  };
+  __m256 c00[3], c10[3], c01[3], c11[3], g[3];
+  lx(0, c00);
+  lx(sy, c10);
+  lx(sz, c01);
+  lx(sy + sz, c11);
+  const __m256 inv_scale = _mm256_set1_ps(1.0f / GradientVolume::kScale);
+  for (int k = 0; k < 3; ++k)
+    g[k] = _mm256_mul_ps(lerp(lerp(c00[k], c10[k], f[1]), lerp(c01[k], c11[k], f[1]), f[2]), inv_scale);
+  // shadeFactors; lanes with no direction get diffuse 1 and no highlight, as its branch does.
+  const __m256 sign = _mm256_set1_ps(-0.0f), flat = _mm256_set1_ps((float)kFlatGradient);
+  __m256 steep = zero;
+  for (int k = 0; k < 3; ++k) steep = _mm256_or_ps(steep, _mm256_cmp_ps(_mm256_andnot_ps(sign, g[k]), flat, _CMP_GE_OQ));
+  __m256 len2 = zero, nl = zero, nh = zero;
+  for (int k = 0; k < 3; ++k) {
+    const __m256 gw = _mm256_mul_ps(g[k], _mm256_set1_ps(c.inv_cell[k]));
+    len2 = _mm256_fmadd_ps(gw, gw, len2);
+    nl = _mm256_fmadd_ps(gw, _mm256_set1_ps(c.light[k]), nl);
+    nh = _mm256_fmadd_ps(gw, _mm256_set1_ps(c.half[k]), nh);
+  }
+  const __m256 inv_len = _mm256_div_ps(one, _mm256_sqrt_ps(_mm256_blendv_ps(one, len2, steep)));
+  const __m256 diffuse = _mm256_blendv_ps(one, _mm256_mul_ps(_mm256_andnot_ps(sign, nl), inv_len), steep);
+  __m256 highlight = zero;
+  if (c.ks > 0) {
+    constexpr int last = HighlightTable::kEntries - 1;
+    const __m256 t = _mm256_mul_ps(_mm256_min_ps(_mm256_mul_ps(_mm256_andnot_ps(sign, nh), inv_len), one),
+                                   _mm256_set1_ps((float)last));
+    const __m256i jv = _mm256_min_epi32(_mm256_cvttps_epi32(t), _mm256_set1_epi32(last - 1));
+    const __m256 h0 = _mm256_i32gather_ps(c.highlight, jv, 4);
+    const __m256 h1 = _mm256_i32gather_ps(c.highlight + 1, jv, 4);
+    const __m256 h = _mm256_fmadd_ps(_mm256_sub_ps(t, _mm256_cvtepi32_ps(jv)), _mm256_sub_ps(h1, h0), h0);
+    highlight = _mm256_blendv_ps(zero, h, steep);
+  }
+  const __m256 scale = _mm256_fmadd_ps(_mm256_set1_ps(c.kd), diffuse, _mm256_set1_ps(c.ka));
+  const __m256 add_a = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(c.ks), highlight), a);
+  for (int k = 0; k < 3; ++k)
+    rgba[k] = _mm256_blendv_ps(rgba[k], _mm256_min_ps(a, _mm256_fmadd_ps(rgba[k], scale, add_a)), lit_lanes);
 }
+
 #else
 inline void shadeSample(const Consts& c, int64_t k, float pc[4]) {
   if (pc[3] <= 0) return;
