@@ -100,40 +100,6 @@ Consts frameConsts(const FastContext& ctx) {
   return c;
 }
 
-// rayLight (gradient.cpp) for up to kLightBlock rays at once, in lane loops the compiler
-// vectorizes: the same operations, so the same values; one ray at a time, its square roots and
-// divisions were ~2.5% of a shaded frame.
-constexpr int kLightBlock = 32;
-struct LightBlock {
-  float l[kLightBlock][3], h[kLightBlock][3];
-};
-
-void normalizeLanes(double (&v)[3][kLightBlock], int n) {
-  for (int i = 0; i < n; ++i) {
-    const double len = std::sqrt(v[0][i] * v[0][i] + v[1][i] * v[1][i] + v[2][i] * v[2][i]);
-    v[0][i] = len > 0 ? v[0][i] / len : 0;
-    v[1][i] = len > 0 ? v[1][i] / len : 0;
-    v[2][i] = len > 0 ? v[2][i] / len : 0;
-  }
-}
-
-void rayLights(const ShadeParams& p, const RaySpan* spans, int n, LightBlock& out) {
-  alignas(64) double e[3][kLightBlock], h[3][kLightBlock];  // towards the eye; halfway
-  for (int a = 0; a < 3; ++a)
-    for (int i = 0; i < n; ++i) e[a][i] = -spans[i].du[a] * p.cell[a];
-  normalizeLanes(e, n);
-  const bool headlight = p.light[0] == 0 && p.light[1] == 0 && p.light[2] == 0;
-  for (int a = 0; a < 3; ++a)
-    for (int i = 0; i < n; ++i) {
-      const double l = headlight ? e[a][i] : p.light[a];
-      out.l[i][a] = (float)l;
-      h[a][i] = l + e[a][i];
-    }
-  normalizeLanes(h, n);
-  for (int a = 0; a < 3; ++a)
-    for (int i = 0; i < n; ++i) out.h[i][a] = (float)h[a][i];
-}
-
 // One ray in flight: its constants, leaper, position and the runs of the current batch.
 // Two phases per batch: the leaper (branchy, scalar) lists the runs to sample, then the
 // packets run over that list; keeping them apart lets each loop stay tight and predictable.
