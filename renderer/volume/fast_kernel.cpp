@@ -55,8 +55,9 @@ struct Consts {
 
 // A ray's colour and alpha so far (premultiplied) and its transmittance, the product of
 // (1 - alpha) over its samples. Kept apart from the alpha, each sample adds one fused
-// multiply-add to the colour's chain and one to the transmittance's, independent of each other
-// (compositing as c += (1 - c.a) * s chained a shuffle, a subtract and the FMA per sample).
+// multiply-add to the colour's chain and one to the transmittance's; the transmittance's chain
+// does not wait for the colour's (compositing as c += (1 - c.a) * s chained a shuffle, a
+// subtract and the FMA per sample).
 struct Accum {
 #ifdef TESSERA_AVX2
   __m128 c = _mm_setzero_ps(), t = _mm_set1_ps(1.0f);

@@ -124,10 +124,10 @@ inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, Ac
           const __m128 e0 = _mm_load_ps(e), e1 = _mm_load_ps(e + 4);
           pc[l] = _mm_fmadd_ps(_mm_set1_ps(cl.w[i]), _mm_sub_ps(e1, e0), e0);
         }
-        const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-        const __m256i offs = _mm256_blendv_epi8(
-            _mm256_set1_epi32(cl.off[i0]), _mm256_loadu_si256(reinterpret_cast<const __m256i*>(cl.off + i0)),
-            _mm256_cmpgt_epi32(_mm256_set1_epi32(m), lane));
+        // Offsets of the m listed samples (the rest of the array is unwritten: not read).
+        const __m256i used = _mm256_cmpgt_epi32(_mm256_set1_epi32(m), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+        const __m256i offs = _mm256_blendv_epi8(_mm256_set1_epi32(cl.off[i0]),
+                                                _mm256_maskload_epi32(cl.off + i0, used), used);
         const __m256 kf = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32((int)j), offs));
         // Eight (r, g, b, a) to four eight-lane channels and back.
         __m128 a0 = pc[0], a1 = pc[1], a2 = pc[2], a3 = pc[3], b0 = pc[4], b1 = pc[5], b2 = pc[6], b3 = pc[7];
@@ -160,7 +160,7 @@ inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, Ac
       const __m128 e0 = _mm_load_ps(e), e1 = _mm_load_ps(e + 4);
       const __m128 pc = _mm_fmadd_ps(_mm_set1_ps(cl.w[i]), _mm_sub_ps(e1, e0), e0);
       acc = _mm_fmadd_ps(trans, pc, acc);
-      trans = _mm_fnmadd_ps(trans, _mm_shuffle_ps(pc, pc, 0xFF), trans);  // trans * (1 - alpha)
+      trans = _mm_fnmadd_ps(trans, _mm_shuffle_ps(pc, pc, 0xFF), trans);  // trans - trans * alpha, one rounding
       if (_mm_movemask_ps(_mm_cmpge_ps(acc, etv)) & 8) {
         out = Accum{acc, trans};
         stop = j + cl.off[i] + 1;

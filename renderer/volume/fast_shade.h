@@ -97,7 +97,7 @@ inline void gradientAt(const Consts& c, int64_t k, float g[3]) {
 [[gnu::noinline]] void shadePacket(const Consts& c, __m256 kf, __m256 rgba[4]) {
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
   const __m256 a = rgba[3];
-  const __m256 lit_lanes = _mm256_cmp_ps(a, zero, _CMP_GT_OQ);  // alpha <= 0: nothing to light
+  const __m256 lit_lanes = _mm256_cmp_ps(a, zero, _CMP_NLE_UQ);  // !(alpha <= 0), as shadeSample
   if (_mm256_movemask_ps(lit_lanes) == 0) return;
   // samplePosition
   __m256 f[3];
@@ -174,7 +174,7 @@ inline void gradientAt(const Consts& c, int64_t k, float g[3]) {
   const __m256 scale = _mm256_fmadd_ps(_mm256_set1_ps(c.kd), diffuse, _mm256_set1_ps(c.ka));
   const __m256 add_a = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(c.ks), highlight), a);
   for (int k = 0; k < 3; ++k)
-    rgba[k] = _mm256_blendv_ps(rgba[k], _mm256_min_ps(a, _mm256_fmadd_ps(rgba[k], scale, add_a)), lit_lanes);
+    rgba[k] = _mm256_blendv_ps(rgba[k], _mm256_min_ps(_mm256_fmadd_ps(rgba[k], scale, add_a), a), lit_lanes);
 }
 
 #else

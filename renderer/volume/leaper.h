@@ -78,7 +78,7 @@ struct Leaper {
     const auto in = (u >= lo) & (u <= hi);
     inside = (in[0] & in[1] & in[2]) != 0;
     const V4d ea = moving ? ((fwd ? hi : lo) - u0) * inv : inf;
-    return std::min({ea[0], ea[1], ea[2]});
+    return std::min(std::min(std::min(kInf, ea[0]), ea[1]), ea[2]);  // as the scalar loop: a NaN never wins
   }
 
   // Returns the first sample not leapt over (== k if sample k must be taken) and sets

@@ -44,8 +44,15 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, 
   for (int a = 0; a < 3; ++a)
     if (v.dims[a] <= 0) throw std::invalid_argument("Raycaster: volume dims must be positive");
   if (v.values.size() != v.voxelCount()) throw std::invalid_argument("Raycaster: volume value count != dims product");
-  // 32-bit gather indices (AVX2) address at most 2^31 voxels.
-  if (v.voxelCount() >= (size_t{1} << 31)) throw std::invalid_argument("Raycaster: volume larger than 2^31 voxels");
+  // 32-bit gather indices (AVX2) address at most 2^31 values of the bricked copy, which holds
+  // 9^3 voxels per 8^3-cell brick: ~1.5 G voxels in one renderer (a larger volume needs more bricks).
+  const auto nb = MinMaxHierarchy::blockDims(v.dims);
+  const double bricked = (double)nb[0] * nb[1] * nb[2] * VolumeAccel::kBrickSize;
+  if (bricked >= 2147483648.0)
+    throw std::invalid_argument("Raycaster: " + std::to_string(v.dims[0]) + "x" + std::to_string(v.dims[1]) + "x" +
+                                std::to_string(v.dims[2]) +
+                                " voxels are more than one renderer can address (2^31 values bricked, about 1.5 G "
+                                "voxels): split the volume over more renderers");
   if (tf.points().empty()) throw std::invalid_argument("Raycaster: transfer function has no points");
   impl_->accel = VolumeAccel::forVolume(volume);  // one pass over the values, which also finds non-finite ones
   if (!impl_->accel->all_finite)

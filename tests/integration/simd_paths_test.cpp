@@ -24,37 +24,58 @@ class SimdPaths : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(SimdPaths, EveryLevelTheCpuHasRendersTheSameImage) {
   FarmDir dir("simd");
-  const auto scene = dir.writeScene(1, 48, 160, 120).string();
-  std::ofstream(scene, std::ios::app) << GetParam();
+  // The default scene's transfer function (transparent below 0.05: empty space to skip, a
+  // translucent shell, an opaque core) on a small shell.
+  const std::string scene = (dir.path() / "scene.yaml").string();
+  std::ofstream(scene) << "volume:\n  generator: {name: hollow-shell, size: 48, seed: 1}\n"
+                       << "transfer_function:\n  - [0.00, 0.0, 0.0, 0.0, 0.0]\n  - [0.05, 1.0, 0.45, 0.1, 0.0]\n"
+                       << "  - [0.50, 1.0, 0.55, 0.15, 0.06]\n  - [0.70, 1.0, 0.8, 0.5, 0.2]\n"
+                       << "  - [1.00, 1.0, 1.0, 0.9, 0.9]\n"
+                       << "camera: {eye: [0.3, 0.5, 2.2], target: [0, 0, 0], up: [0, 1, 0], fov: 30}\n"
+                       << "image: [160, 120]\nquality: default\n"
+                       << GetParam();
   // The float image (--raw), compared bit for bit: a rounding that differs rarely moves a byte.
+  // The sample counts (taken, skipped, terminated) show the empty-space and termination
+  // decisions, which an image cannot; with and without skipping (two loops of the kernel).
   struct Render {
-    std::string simd, floats;
+    std::string simd, counts, floats;
     Image8 image;
   };
-  auto render = [&](const std::string& level) {
+  auto render = [&](const std::string& level, const std::string& flags) {
     const std::string pam = (dir.path() / ("simd-" + level + ".pam")).string();
     const std::string raw = (dir.path() / ("simd-" + level + ".f32")).string();
     const auto r = runCommand((level.empty() ? "" : "env TESSERA_SIMD=" + level + " ") + bin("tessera-render") + " " +
-                                  scene + " --stats -o " + dir.path().string() + "/x.png --premultiplied " + pam +
-                                  " --raw " + raw,
+                                  scene + " --stats " + flags + " -o " + dir.path().string() + "/x.png --premultiplied " +
+                                  pam + " --raw " + raw,
                               120);
     EXPECT_EQ(r.exit_code, 0) << r.output;
+    std::smatch m;
+    const std::string counts =
+        std::regex_search(r.output, m, std::regex("samples=\\d+ skipped=(\\d+) terminated=\\d+")) ? m[0].str() : "";
+    if (flags.empty()) {
+      EXPECT_NE(m[1].str(), "0") << "nothing skipped: the scene does not test the leaper";
+    }
     std::ifstream in(raw, std::ios::binary);
-    return Render{simdOf(r.output), std::string(std::istreambuf_iterator<char>(in), {}), readPam(pam)};
+    return Render{simdOf(r.output), counts, std::string(std::istreambuf_iterator<char>(in), {}), readPam(pam)};
   };
-  const Render best = render("");
-  ASSERT_FALSE(best.simd.empty()) << "tessera-render --stats does not name its kernel";
-  ASSERT_GT(best.floats.size(), 160u * 120 * 16 - 1) << "no float image";
-  int levels = 0;
-  for (const std::string level : {"scalar", "avx2", "avx512"}) {
-    const Render other = render(level);
-    EXPECT_EQ(other.simd, level);
-    EXPECT_TRUE(other.floats == best.floats) << level << " and " << best.simd << " differ in their float images";
-    EXPECT_TRUE(dir.matches(other.image, best.image, 0, level + "_vs_" + best.simd));
-    ++levels;
-    if (level == best.simd) break;
+  for (const std::string flags : {"", "--no-skip"}) {
+    SCOPED_TRACE("flags '" + flags + "'");
+    const Render best = render("", flags);
+    ASSERT_FALSE(best.simd.empty()) << "tessera-render --stats does not name its kernel";
+    ASSERT_FALSE(best.counts.empty()) << "tessera-render --stats prints no sample counts";
+    ASSERT_GT(best.floats.size(), 160u * 120 * 16 - 1) << "no float image";
+    int levels = 0;
+    for (const std::string level : {"scalar", "avx2", "avx512"}) {
+      const Render other = render(level, flags);
+      EXPECT_EQ(other.simd, level);
+      EXPECT_EQ(other.counts, best.counts) << level << " against " << best.simd;
+      EXPECT_TRUE(other.floats == best.floats) << level << " and " << best.simd << " differ in their float images";
+      EXPECT_TRUE(dir.matches(other.image, best.image, 0, level + "_vs_" + best.simd));
+      ++levels;
+      if (level == best.simd) break;
+    }
+    EXPECT_GE(levels, 1);
   }
-  EXPECT_GE(levels, 1);
 }
 
 INSTANTIATE_TEST_SUITE_P(Lighting, SimdPaths,
