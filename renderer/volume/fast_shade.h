@@ -38,55 +38,6 @@ void rayLights(const ShadeParams& p, const RaySpan* spans, int n, LightBlock& ou
     for (int i = 0; i < n; ++i) out.h[i][a] = (float)h[a][i];
 }
 
-// Lights the premultiplied colour pc of a sample whose voxel-unit gradient is g.
-inline void shadeFactors(const Consts& c, const float g[3], float& scale, float& add) {
-  float diffuse = 1, highlight = 0;
-  const float flat = (float)kFlatGradient;
-  if (std::fabs(g[0]) >= flat || std::fabs(g[1]) >= flat || std::fabs(g[2]) >= flat) {
-    float len2 = 0, nl = 0, nh = 0;
-    for (int a = 0; a < 3; ++a) {
-      const float gw = g[a] * c.inv_cell[a];
-      len2 = std::fma(gw, gw, len2), nl = std::fma(gw, c.light[a], nl), nh = std::fma(gw, c.half[a], nh);
-    }
-    const float inv_len = 1.0f / std::sqrt(len2);
-    diffuse = std::fabs(nl) * inv_len;
-    if (c.ks > 0) {
-      constexpr int last = HighlightTable::kEntries - 1;
-      const float t = std::min(1.0f, std::fabs(nh) * inv_len) * (float)last;
-      const int j = std::min((int)t, last - 1);
-      highlight = std::fma(t - (float)j, c.highlight[j + 1] - c.highlight[j], c.highlight[j]);
-    }
-  }
-  scale = std::fma(c.kd, diffuse, c.ka);  // colour * scale + highlight, premultiplied by alpha
-  add = c.ks * highlight;
-}
-
-// Lower corner i and trilinear weights f of sample k: the same float operations as the
-// packets' (u = u0 + k * du, one FMA, clamped), so a sample is where the classification saw it.
-inline void samplePosition(const Consts& c, int64_t k, int i[3], float f[3]) {
-  const float kf = (float)k;
-  for (int a = 0; a < 3; ++a) {
-    const float u = std::min(std::max(std::fma(kf, c.du[a], c.u0[a]), 0.0f), c.umax[a]);
-    i[a] = std::min((int)u, c.imax[a]);
-    f[a] = u - (float)i[a];
-  }
-}
-
-// The trilinear gradient of sample k, in voxel units.
-inline void gradientAt(const Consts& c, int64_t k, float g[3]) {
-  float f[3];
-  int i[3];
-  samplePosition(c, k, i, f);
-  const int16_t* p = c.grad + 4 * ((size_t)i[0] + (size_t)c.gdims[0] * ((size_t)i[1] + (size_t)c.gdims[1] * i[2]));
-  const size_t sx = c.gstride[0], sy = c.gstride[1], sz = c.gstride[2];
-  auto lerp = [](float a, float b, float t) { return std::fma(t, b - a, a); };
-  for (int a = 0; a < 3; ++a) {
-    auto lx = [&](const int16_t* q) { return lerp((float)q[a], (float)q[a + sx], f[0]); };
-    const float v = lerp(lerp(lx(p), lx(p + sy), f[1]), lerp(lx(p + sz), lx(p + sy + sz), f[1]), f[2]);
-    g[a] = v * (1.0f / GradientVolume::kScale);
-  }
-}
-
 #ifdef TESSERA_AVX2
 // Eight samples at once, lanes holding samples (indices kf) with premultiplied colours
 // r, g, b and alpha a: shadeSample's operations lane by lane, so every lane's result is
@@ -178,6 +129,57 @@ inline void gradientAt(const Consts& c, int64_t k, float g[3]) {
 }
 
 #else
+// The portable kernel: one sample at a time (shadePacket is these operations in eight lanes).
+
+// Lights the premultiplied colour pc of a sample whose voxel-unit gradient is g.
+inline void shadeFactors(const Consts& c, const float g[3], float& scale, float& add) {
+  float diffuse = 1, highlight = 0;
+  const float flat = (float)kFlatGradient;
+  if (std::fabs(g[0]) >= flat || std::fabs(g[1]) >= flat || std::fabs(g[2]) >= flat) {
+    float len2 = 0, nl = 0, nh = 0;
+    for (int a = 0; a < 3; ++a) {
+      const float gw = g[a] * c.inv_cell[a];
+      len2 = std::fma(gw, gw, len2), nl = std::fma(gw, c.light[a], nl), nh = std::fma(gw, c.half[a], nh);
+    }
+    const float inv_len = 1.0f / std::sqrt(len2);
+    diffuse = std::fabs(nl) * inv_len;
+    if (c.ks > 0) {
+      constexpr int last = HighlightTable::kEntries - 1;
+      const float t = std::min(1.0f, std::fabs(nh) * inv_len) * (float)last;
+      const int j = std::min((int)t, last - 1);
+      highlight = std::fma(t - (float)j, c.highlight[j + 1] - c.highlight[j], c.highlight[j]);
+    }
+  }
+  scale = std::fma(c.kd, diffuse, c.ka);  // colour * scale + highlight, premultiplied by alpha
+  add = c.ks * highlight;
+}
+
+// Lower corner i and trilinear weights f of sample k: the same float operations as the
+// packets' (u = u0 + k * du, one FMA, clamped), so a sample is where the classification saw it.
+inline void samplePosition(const Consts& c, int64_t k, int i[3], float f[3]) {
+  const float kf = (float)k;
+  for (int a = 0; a < 3; ++a) {
+    const float u = std::min(std::max(std::fma(kf, c.du[a], c.u0[a]), 0.0f), c.umax[a]);
+    i[a] = std::min((int)u, c.imax[a]);
+    f[a] = u - (float)i[a];
+  }
+}
+
+// The trilinear gradient of sample k, in voxel units.
+inline void gradientAt(const Consts& c, int64_t k, float g[3]) {
+  float f[3];
+  int i[3];
+  samplePosition(c, k, i, f);
+  const int16_t* p = c.grad + 4 * ((size_t)i[0] + (size_t)c.gdims[0] * ((size_t)i[1] + (size_t)c.gdims[1] * i[2]));
+  const size_t sx = c.gstride[0], sy = c.gstride[1], sz = c.gstride[2];
+  auto lerp = [](float a, float b, float t) { return std::fma(t, b - a, a); };
+  for (int a = 0; a < 3; ++a) {
+    auto lx = [&](const int16_t* q) { return lerp((float)q[a], (float)q[a + sx], f[0]); };
+    const float v = lerp(lerp(lx(p), lx(p + sy), f[1]), lerp(lx(p + sz), lx(p + sy + sz), f[1]), f[2]);
+    g[a] = v * (1.0f / GradientVolume::kScale);
+  }
+}
+
 inline void shadeSample(const Consts& c, int64_t k, float pc[4]) {
   if (pc[3] <= 0) return;
   float g[3], scale, add;

@@ -5,7 +5,8 @@
 //  - binary swap among the renderers (Cao et al., IceT): log2(R) rounds in which partners swap
 //    halves of the band they hold, then each sends its finished band to the display.
 // And two encodings of a piece: Up-filtered half floats + LZO (the farm's) against IceT's
-// sparse form (runs of empty pixels per row, then the active pixels), LZO-coded.
+// sparse form (runs of empty pixels per row, then the active pixels), LZO-coded. Messages are
+// the farm's own (proto::encode of a Piece or Strips).
 // Not a timed test: it prints KB per frame (and codec ms, one thread) for --views orbit views.
 #include <CLI/CLI.hpp>
 
@@ -24,7 +25,8 @@
 #include "common/volume.h"
 #include "common/wire/codec.h"
 #include "common/wire/pixels.h"
-#include "common/wire/row_filter.h"
+#include "common/wire/protocol.h"
+#include "common/wire/strips.h"
 #include "renderer/volume/backend.h"
 
 using namespace tessera;
@@ -37,21 +39,24 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 
 Rect rows(int y0, int y1, int width) { return y1 > y0 ? Rect{0, y0, width, y1 - y0} : Rect{}; }
 
-// A piece as a renderer or compositor sends it: rgba16f Up-filtered, LZO (+64 bytes of header).
-size_t pieceBytes(const ImageF& img, const Rect& band) {
-  const Rect a = intersect(activeRegion(img), band);
-  if (a.empty()) return 0;
-  const auto packed = packPixels(img, a, proto::PixelFormat::RGBA16F);
-  std::vector<std::byte> f(packed.size());
-  upFilter(packed, f, (size_t)a.w * 4, 2);
-  return compress(Codec::Lzo, f).size() + 64;
+// The Piece message a renderer sends for `band` of its image (the farm's format and codec:
+// rgba16f, Up filter, LZO); no message when nothing in the band is active.
+std::vector<std::byte> pieceMessage(const ImageF& img, const Rect& band) {
+  proto::Piece p;
+  p.region = band;
+  p.active = intersect(activeRegion(img), band);
+  if (p.active.empty()) return {};
+  p.format = proto::PixelFormat::RGBA16F;
+  p.pixels = packPixels(img, p.active, p.format);
+  return proto::encode(p, 0, Codec::Lzo);
 }
+size_t pieceBytes(const ImageF& img, const Rect& band) { return pieceMessage(img, band).size(); }
 
-// A finished band to the display: rgba8, LZO.
-size_t bandBytes(const ImageF& img, const Rect& band) {
-  const Rect a = intersect(activeRegion(img), band);
-  if (a.empty()) return 0;
-  return compress(Codec::Lzo, packPixels(img, a, proto::PixelFormat::RGBA8)).size() + 64;
+// The Strips message of a finished band to the display (rgba8 strips, LZO).
+size_t bandBytes(const Image8& frame, const Rect& band) {
+  proto::Strips s;
+  s.stream = encodeStrips(frame, band, 0);
+  return proto::encode(s, 0, Codec::Lzo).size();
 }
 
 ImageF over(const ImageF& front, const ImageF& back) {
@@ -78,7 +83,7 @@ struct Links {
 };
 
 // pieces[i]: the i-th nearest brick's image; `act` the frame's active rows; C compositors.
-Links directSend(const std::vector<ImageF>& pieces, const ImageF& frame, const Rect& act, int compositors) {
+Links directSend(const std::vector<ImageF>& pieces, const Image8& frame, const Rect& act, int compositors) {
   Links l;
   for (int c = 0; c < compositors; ++c) {
     const Rect band = rows(act.y + act.h * c / compositors, act.y + act.h * (c + 1) / compositors, frame.width);
@@ -92,7 +97,7 @@ Links directSend(const std::vector<ImageF>& pieces, const ImageF& frame, const R
 // Renderer r holds rows [lo[r], hi[r]) of the image of its group; partners differ in bit j of
 // their rank (visibility order), so a group is a run of nearest-first ranks and the lower
 // rank's group is in front.
-Links binarySwap(std::vector<ImageF> held, const ImageF& frame, const Rect& act) {
+Links binarySwap(std::vector<ImageF> held, const Image8& frame, const Rect& act) {
   Links l;
   const int n = (int)held.size();
   std::vector<int> lo(n, act.y), hi(n, act.y + act.h);
@@ -157,24 +162,20 @@ size_t sparseBytes(const ImageF& img, double& encode_ms, double& decode_ms) {
   }
   decode_ms += msSince(t1);
   if (full != packed) throw std::runtime_error("sparse piece does not decode to the piece");
-  return enc_planes.size() + enc_runs.size() + 64;
+  return enc_planes.size() + enc_runs.size() + proto::encode(proto::Piece{}, 0, Codec::Lzo).size();  // + a Piece's header
 }
 
+// The farm's piece of the whole image: bytes, encode and decode (proto::decodePiece) times.
 size_t upFilteredBytes(const ImageF& img, double& encode_ms, double& decode_ms) {
-  const Rect a = activeRegion(img);
-  if (a.empty()) return 0;
+  const Rect all{0, 0, img.width, img.height};
   const auto t0 = std::chrono::steady_clock::now();
-  const auto packed = packPixels(img, a, proto::PixelFormat::RGBA16F);
-  std::vector<std::byte> f(packed.size());
-  upFilter(packed, f, (size_t)a.w * 4, 2);
-  const auto enc = compress(Codec::Lzo, f);
+  const auto msg = pieceMessage(img, all);
   encode_ms += msSince(t0);
+  if (msg.empty()) return 0;
   const auto t1 = std::chrono::steady_clock::now();
-  std::vector<std::byte> dec(f.size());
-  (void)decompressInto(Codec::Lzo, enc, dec);
-  upUnfilter(dec, (size_t)a.w * 4, 2);
+  if (!proto::decodePiece(msg)) throw std::runtime_error("a piece does not decode");
   decode_ms += msSince(t1);
-  return enc.size() + 64;
+  return msg.size();
 }
 
 }  // namespace
@@ -210,7 +211,8 @@ int main(int argc, char** argv) {
     ImageF image = pieces[0];
     for (size_t r = 1; r < pieces.size(); ++r) image = over(image, pieces[r]);
     const Rect act = activeRegion(image);
-    const Links links[2] = {directSend(pieces, image, act, compositors), binarySwap(pieces, image, act)};
+    const Image8 frame8 = toRGBA8(image);
+    const Links links[2] = {directSend(pieces, frame8, act, compositors), binarySwap(pieces, frame8, act)};
     for (int s = 0; s < 2; ++s) {
       const auto [who, bytes] = links[s].busiest();
       std::printf("%d,%s,%s,%.0f,%.0f\n", frame, s ? "binary-swap" : "direct-send", who.c_str(), bytes / 1e3, links[s].total() / 1e3);
