@@ -29,7 +29,9 @@ std::string Gather::check(const proto::FrameParams& p, const proto::Piece& piece
   if (piece.brick >= work->bricks.size())
     return "piece for brick " + std::to_string(piece.brick) + " of " + std::to_string(work->bricks.size());
   if (work->bricks[piece.brick].renderer != piece.renderer) return "piece from a renderer not assigned that brick";
-  if (piece.format != p.format) return "piece pixel format differs from FrameParams";
+  // A binary swap's pieces are finished bands: rgba8, whatever the frame's format.
+  if (piece.format != (work->swap.empty() ? p.format : proto::PixelFormat::RGBA8))
+    return "piece pixel format differs from FrameParams";
   for (const auto& reg : p.regions)
     if (reg.compositor == rank_ && reg.region != piece.region) return "piece cut for another region";
   return "";

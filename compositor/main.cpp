@@ -1,6 +1,4 @@
 // tessera-compositor: one compositor stage of the farm (ranks come from the master).
-#include <unistd.h>
-
 #include "common/net/log.h"
 #include "common/net/stage_main.h"
 #include "compositor/stage.h"
@@ -16,12 +14,7 @@ int main(int argc, char** argv) {
                  "tcp: host renderers use to reach this compositor ('hostname' = this machine's name, 'ip' = its address on the route to the master)")
       ->envname("TESSERA_ADVERTISE_HOST");
   return stageMain(app, argc, argv, args, [&](const Endpoints& endpoints, zmq::context_t& ctx, auto stop) {
-    if (opt.advertise_host == "hostname") {
-      char name[256] = {};
-      gethostname(name, sizeof name - 1);
-      opt.advertise_host = name;
-    }
-    if (opt.advertise_host == "ip") opt.advertise_host = endpoints.localAddressTowardMaster();
+    opt.advertise_host = resolveAdvertiseHost(opt.advertise_host, endpoints);
     // Parses the scene only (its volume is never loaded): the image size bounds what
     // peers may send to this stage.
     const Scene parsed = args.scene();

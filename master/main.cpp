@@ -26,6 +26,12 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"rgba8", "rgba16f", "rgba32f"}));
   app.add_option("--metrics", opt.metrics_path, "JSON-lines metrics file")->envname("TESSERA_METRICS");
   app.add_option("--heartbeat-timeout", opt.heartbeat_timeout_s, "seconds of silence before a stage counts as lost");
+  std::string compositing = "direct-send";
+  app.add_option("--compositing", compositing,
+                 "sort-last: direct-send (every renderer sends each compositor its part) | binary-swap (renderers "
+                 "composite among themselves first; needs 2, 4, 8... renderers, else direct send)")
+      ->envname("TESSERA_COMPOSITING")
+      ->check(CLI::IsMember({"direct-send", "binary-swap"}));
   std::string tiling = "balanced";
   app.add_option("--tiling", tiling,
                  "balanced: re-split work every frame from the last frame's measurements (sort-last: compositor "
@@ -46,6 +52,7 @@ int main(int argc, char** argv) {
     opt.codec = parseCodec(codec);
     opt.format = formats.at(format);
     opt.balance = tiling == "balanced";
+    opt.binary_swap = compositing == "binary-swap";
     return master::run(opt, ctx, stop);
   });
 }

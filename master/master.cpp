@@ -43,16 +43,18 @@ class Master {
     bindTo(ctl_, opt_.endpoints.bind(opt_.endpoints.masterControl()));
     note_ = std::make_unique<FarmNote>(opt_.endpoints.base, fmt::format("run '{}', tessera-master pid {}", opt_.run, getpid()));
     total_frames_ = opt_.frames < 0 ? opt_.scene.orbit.frames : opt_.frames;
-    spdlog::info("master listening pub={} control={} renderers={} compositors={} frames={} in_flight={}",
+    spdlog::info("master listening pub={} control={} renderers={} compositors={} frames={} in_flight={}{}",
                  opt_.endpoints.masterPub(), opt_.endpoints.masterControl(), opt_.renderers, opt_.compositors,
-                 total_frames_ == 0 ? std::string("interactive") : std::to_string(total_frames_), opt_.in_flight);
+                 total_frames_ == 0 ? std::string("interactive") : std::to_string(total_frames_), opt_.in_flight,
+                 opt_.binary_swap && !sortFirst() ? " compositing=binary-swap" : "");
     if (total_frames_ == 0)
       spdlog::info("interactive run: a frame is rendered when the display window sends input (drag: orbit, wheel: zoom, "
                    "Space: play a series, h: help); without a window only the first frame is rendered (a series plays on). "
                    "Ctrl-C or closing the window stops it");
     // Sort-first (geometry) scenes need no volume here: renderers own the mesh.
     plan_ = sortFirst() ? std::unique_ptr<Plan>(std::make_unique<SortFirstPlan>(opt_.balance, opt_.tiles_per_renderer))
-                        : std::make_unique<SortLastPlan>(summarizeVolume(opt_.scene), opt_.scene.tf, opt_.balance);
+                        : std::make_unique<SortLastPlan>(summarizeVolume(opt_.scene), opt_.scene.tf, opt_.balance,
+                                                         opt_.binary_swap);
   }
 
   int run(const std::atomic<bool>* stop) {
@@ -122,6 +124,7 @@ class Master {
     bool joined = false;
     Member& m = members_.join(identity, h, Clock::now(), &joined);
     if (joined && h.role == Role::Compositor) m.endpoint = opt_.endpoints.compositorOn(m.rank, h.endpoint);
+    if (joined && h.role == Role::Renderer) m.endpoint = opt_.endpoints.rendererOn(m.rank, h.endpoint);
     sendTo(identity, proto::encode(proto::Welcome{m.role, m.rank}, kMasterRank));
     if (!joined) return;
     spdlog::info("{} {} joined pid={}{}", roleName(h.role), m.rank, h.pid,
@@ -202,10 +205,11 @@ class Master {
     metrics_.reissued(again.size());
   }
 
-  // Who may send pieces and strips, to the stages that receive them, privately (never on PUB).
+  // Who may send pieces and strips, to the stages that receive them (renderers: swap
+  // pieces), privately (never on PUB).
   void sendRoster() {
     const auto roster = members_.roster();
-    for (Role role : {Role::Compositor, Role::Display})
+    for (Role role : {Role::Renderer, Role::Compositor, Role::Display})
       for (const Member* m : members_.alive(role)) sendTo(m->identity, proto::encode(roster, kMasterRank));
   }
 

@@ -127,7 +127,10 @@ std::string describeWaiting(const Membership& members, const std::vector<uint32_
 
 Workers aliveWorkers(const Membership& members) {
   Workers w;
-  for (const Member* m : members.alive(proto::Role::Renderer)) w.renderers.push_back(m->rank);
+  for (const Member* m : members.alive(proto::Role::Renderer)) {
+    w.renderers.push_back(m->rank);
+    w.renderer_endpoints.push_back(m->endpoint);
+  }
   for (const Member* m : members.alive(proto::Role::Compositor)) w.compositors.push_back({m->rank, m->endpoint});
   return w;
 }

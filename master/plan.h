@@ -18,6 +18,7 @@ struct CompositorSlot {
 struct Workers {
   std::vector<uint32_t> renderers;           // ranks, ascending
   std::vector<CompositorSlot> compositors;   // by rank
+  std::vector<std::string> renderer_endpoints = {};  // per renderer: where it takes binary-swap pieces
 };
 
 class Plan {

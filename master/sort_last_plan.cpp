@@ -9,8 +9,8 @@
 
 namespace tessera::master {
 
-SortLastPlan::SortLastPlan(VolumeSummary volume, const TransferFunction& tf, bool balance)
-    : volume_(std::move(volume)), tf_(tf), balance_(balance) {
+SortLastPlan::SortLastPlan(VolumeSummary volume, const TransferFunction& tf, bool balance, bool binary_swap)
+    : volume_(std::move(volume)), tf_(tf), balance_(balance), binary_swap_(binary_swap) {
   // Said once, by the master: a range that misses the data makes every frame empty or uniform.
   if (std::string why = rangeProblem(volume_.shape); !why.empty()) spdlog::warn("volume: {}", why);
 }
@@ -64,6 +64,7 @@ void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
   auto& work = p.work.emplace<proto::SortLastWork>();
   for (size_t i = 0; i < tree_.bricks.size() && i < owner_.size(); ++i) work.bricks.push_back({owner_[i], tree_.bricks[i]});
   work.order = tree_.visibilityOrder(volume_.shape, p.camera);
+  if (binary_swap_) planSwap(work, w);
   std::vector<Rect> active;
   for (const auto& f : balance_ ? last_active_ : decltype(last_active_){}) {
     const int x0 = (int)std::floor(f[0] * p.width), y0 = (int)std::floor(f[1] * p.height);
@@ -74,6 +75,23 @@ void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
   auto bands = balancedBands(p.width, p.height, (int)w.compositors.size(), active);
   for (size_t i = 0; i < bands.size(); ++i)
     p.regions.push_back({w.compositors[i].rank, bands[i], w.compositors[i].endpoint});
+}
+
+// One brick per renderer, 2^k of them (after a loss a renderer holds two bricks and the
+// frames go by direct send until the renderers are a power of two again).
+void SortLastPlan::planSwap(proto::SortLastWork& work, const Workers& w) const {
+  const size_t n = work.bricks.size();
+  if (n < 2 || (n & (n - 1)) != 0) return;
+  for (const auto& b : work.bricks) {
+    auto it = std::find(w.renderers.begin(), w.renderers.end(), b.renderer);
+    const size_t i = it - w.renderers.begin();
+    if (i >= w.renderer_endpoints.size()) return work.swap.clear();
+    const std::string& endpoint = w.renderer_endpoints[i];
+    for (const auto& s : work.swap)
+      if (s.renderer == b.renderer) return work.swap.clear();
+    if (endpoint.empty()) return work.swap.clear();
+    work.swap.push_back({b.renderer, endpoint});
+  }
 }
 
 void SortLastPlan::stats(const proto::StageStats& s, const Workers&) {

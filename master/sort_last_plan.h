@@ -19,17 +19,20 @@ namespace tessera::master {
 class SortLastPlan : public Plan {
  public:
   // Compositor bands are cut for each frame's own size (interactive frames are smaller).
-  SortLastPlan(VolumeSummary volume, const TransferFunction& tf, bool balance);
+  // binary_swap: frames carry a swap plan whenever the renderers allow one (SortLastWork::swap).
+  SortLastPlan(VolumeSummary volume, const TransferFunction& tf, bool balance, bool binary_swap = false);
   void reassign(const Workers& w) override;
   void fill(proto::FrameParams& p, const Workers& w) override;
   void stats(const proto::StageStats& s, const Workers& w) override;
 
  private:
+  void planSwap(proto::SortLastWork& work, const Workers& w) const;
   std::optional<uint32_t> nearestAliveOwner(int brick, const std::function<bool(uint32_t)>& alive) const;
 
   VolumeSummary volume_;  // the master never holds the voxels
   const TransferFunction& tf_;
   bool balance_;
+  bool binary_swap_;
   BrickTree tree_;
   std::vector<uint32_t> owner_;  // renderer rank of each brick
   // Renderers' active rects of the latest reported frame, as fractions of its image (x0, y0,

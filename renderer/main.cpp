@@ -21,6 +21,9 @@ int main(int argc, char** argv) {
       ->envname("TESSERA_CACHE_MB")
       ->check(CLI::Range(0, 1 << 20))
       ->capture_default_str();
+  app.add_option("--advertise-host", opt.advertise_host,
+                 "tcp: host the other renderers use to reach this one for binary swap ('hostname', 'ip' = its address on the route to the master)")
+      ->envname("TESSERA_ADVERTISE_HOST");
   std::string backend = "cpu";
   app.add_option("--backend", backend, "volume backend: cpu (SIMD ray caster) | osmesa (GLSL on llvmpipe)")
       ->envname("TESSERA_BACKEND")
@@ -29,6 +32,7 @@ int main(int argc, char** argv) {
     opt.backend = renderer::parseBackend(backend);
     opt.scene = args.scene();
     opt.endpoints = endpoints;
+    opt.advertise_host = resolveAdvertiseHost(opt.advertise_host, endpoints);
     return renderer::runStage(opt, ctx, stop);
   });
 }

@@ -14,6 +14,7 @@
 #include "common/net/stage_link.h"
 #include "common/net/transport.h"
 #include "renderer/step_cache.h"
+#include "renderer/swap_exchange.h"
 #include "renderer/tile_render.h"
 
 namespace tessera::renderer {
@@ -35,7 +36,7 @@ struct RenderKey {
 class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
-      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Renderer), scene_(opt.scene) {
+      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Renderer, opt.advertise_host), scene_(opt.scene) {
     if (opt.scene.mesh) {
       tiles_ = std::make_unique<TileRenderer>(opt.scene);
     } else {
@@ -43,6 +44,8 @@ class Stage {
       // normalised with the whole file's range (a series: step 0's) without scanning it again.
       fixVolumeRange(scene_);
       steps_ = std::make_unique<StepCache>(scene_, opt.backend, (uint64_t)opt.cache_mb << 20);
+      swap_ = std::make_unique<SwapExchange>(ctx, maxPixelMessageBytes(scene_.width, scene_.height),
+                                             2 * 16 * size_t(scene_.width) * size_t(scene_.height));
     }
   }
 
@@ -55,37 +58,55 @@ class Stage {
   }
 
   int run(const std::atomic<bool>* stop) {
+    stop_ = stop;
     if (!link_.join(stop)) {
       if (stop && *stop) return 0;  // stopped (Ctrl-C) while it waited: not a failure to join
       spdlog::error("renderer could not join the master at {}", opt_.endpoints.masterControl());
       return 1;
     }
-    spdlog::info("renderer rank={} joined backend={} simd={}", link_.rank(),
-                 scene_.mesh ? "osmesa-mesh" : backendName(opt_.backend), isaName(cpuIsa()));
-    zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0}};
-    std::deque<proto::FrameParams> queued;
-    while (!(stop && *stop)) {
-      pollFor(items, 1, std::chrono::milliseconds(queued.empty() ? 100 : 0));
-      // Drain before every frame, so frames superseded by a newer epoch or cancelled by an
-      // interaction are skipped, not rendered.
-      auto published = link_.receive(drops_);
-      if (published.shutdown) return 0;
-      for (auto& p : published.params) {
-        epoch_ = std::max(epoch_, p.epoch);
-        first_wanted_ = std::max(first_wanted_, p.first_wanted);
-        queued.push_back(std::move(p));
-      }
+    if (swap_) swap_->bind(opt_.endpoints.rendererBind(link_.rank()));
+    spdlog::info("renderer rank={} joined backend={} simd={}{}", link_.rank(),
+                 scene_.mesh ? "osmesa-mesh" : backendName(opt_.backend), isaName(cpuIsa()),
+                 swap_ ? " swap pieces at " + opt_.endpoints.rendererBind(link_.rank()) : "");
+    while (!stopped()) {
+      pump(queued_.empty() ? 100 : 0);
+      if (shutdown_) return 0;
       if (link_.masterLost()) return 1;
-      std::erase_if(queued, [&](const auto& p) { return p.epoch != epoch_ || p.frame < first_wanted_; });
-      if (queued.empty()) continue;
-      if (steps_) steps_->prefetch(stepsAfter(queued));
-      renderFrameOrLog(queued.front());
-      queued.pop_front();
+      std::erase_if(queued_, [&](const auto& p) { return !wanted(p); });
+      if (queued_.empty()) continue;
+      if (steps_) steps_->prefetch(stepsAfter(queued_));
+      const proto::FrameParams p = std::move(queued_.front());
+      queued_.pop_front();
+      renderFrameOrLog(p);
     }
     return 0;
   }
 
  private:
+  bool stopped() const { return shutdown_ || (stop_ && *stop_); }
+  // Frames superseded by a newer epoch or cancelled by an interaction are skipped, not rendered.
+  bool wanted(const proto::FrameParams& p) const { return p.epoch == epoch_ && p.frame >= first_wanted_; }
+
+  // Waits up to `ms` for the master's messages and swap pieces, and takes what came: new
+  // FrameParams are queued (drained before every frame, and while a swap waits), a Roster
+  // admits peers, Shutdown ends the run.
+  void pump(int ms) {
+    zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0},
+                               {link_.control().handle(), 0, ZMQ_POLLIN, 0},
+                               {swap_ ? swap_->socket().handle() : nullptr, 0, ZMQ_POLLIN, 0}};
+    pollFor(items, swap_ ? 3 : 2, std::chrono::milliseconds(ms));
+    auto published = link_.receive(drops_);
+    shutdown_ = shutdown_ || published.shutdown;
+    for (auto& p : published.params) {
+      epoch_ = std::max(epoch_, p.epoch);
+      first_wanted_ = std::max(first_wanted_, p.first_wanted);
+      queued_.push_back(std::move(p));
+    }
+    if (items[1].revents & ZMQ_POLLIN)
+      if (auto roster = link_.receiveRoster(drops_); roster && swap_) swap_->setRoster(*roster, drops_);
+    if (swap_ && (items[2].revents & ZMQ_POLLIN)) swap_->receive(drops_);
+  }
+
   // A frame whose parameters make rendering throw (the master's checks should prevent it)
   // costs that frame, never the renderer: the farm keeps its other frames.
   void renderFrameOrLog(const proto::FrameParams& p) {
@@ -120,6 +141,7 @@ class Stage {
   void renderBricks(const proto::FrameParams& p, const proto::SortLastWork& work, proto::StageStats& st) {
     if (tiles_) return drops_.drop(~0u, "sort-last FrameParams for a geometry scene");
     if (!holdBricks(p, work, st)) return;
+    if (auto plan = planSwap(p, link_.rank())) return swapBrick(p, *plan, st);
     for (uint32_t b = 0; b < work.bricks.size(); ++b) {
       if (work.bricks[b].renderer != link_.rank()) continue;
       auto t0 = Clock::now();
@@ -131,6 +153,53 @@ class Stage {
       for (const auto& region : p.regions) sendPiece(p, b, region, c, st);
       st.encode_ms += msSince(t1);
     }
+    st.dropped = drops_.total();
+    link_.report(proto::encode(st, link_.rank()));
+  }
+
+  // Binary swap: this renderer's one brick, composited with the others' by swapping halves;
+  // the finished band goes to the compositors as rgba8 pieces (their blend of disjoint
+  // bands only places them). A frame given up (a new epoch, a lost partner) reports nothing:
+  // the master issues it again.
+  void swapBrick(const proto::FrameParams& p, const SwapPlan& plan, proto::StageStats& st) {
+    auto t0 = Clock::now();
+    const Cached& c = render(p, p.sortLast()->bricks[plan.brick].brick, st);
+    st.work_ms += msSince(t0);
+    st.active = c.active;
+    st.active_pixels = c.active.area();
+    auto send = [&](const std::string& endpoint, std::vector<std::byte>&& bytes) { sendBytes(socketFor(endpoint), std::move(bytes)); };
+    auto idle = [&](int ms) {
+      pump(ms);
+      return !stopped() && !link_.masterLost() && wanted(p);
+    };
+    if (plan.rounds.size() != swap_rounds_logged_) {  // said when the farm's shape changes
+      swap_rounds_logged_ = plan.rounds.size();
+      spdlog::info("frame={} binary swap among {} renderers: {} rounds, band rows [{}, {})", p.frame,
+                   p.sortLast()->swap.size(), plan.rounds.size(), plan.band.y, plan.band.y + plan.band.h);
+    }
+    auto band = swap_->run(p, link_.rank(), plan, c.image, c.active, send, idle, st, drops_);
+    if (!band) return spdlog::info("frame={} epoch={}: binary swap given up", p.frame, p.epoch);
+    auto t1 = Clock::now();
+    for (const auto& region : p.regions) {
+      proto::Piece piece;
+      piece.frame = p.frame;
+      piece.epoch = p.epoch;
+      piece.renderer = link_.rank();
+      piece.brick = plan.brick;
+      piece.region = region.region;
+      piece.active = intersect(band->rect, region.region);
+      piece.format = proto::PixelFormat::RGBA8;
+      piece.pixels = std::move(packed_);
+      packLayer(*band, piece.active, piece.format, piece.pixels);
+      if (piece.active.empty()) piece.pixels.clear();
+      piece.render_ms = st.work_ms;
+      auto bytes = proto::encode(piece, link_.rank(), p.codec);
+      st.bytes_raw += piece.pixels.size();
+      packed_ = std::move(piece.pixels);
+      st.bytes_encoded += bytes.size();
+      sendBytes(socketFor(region.endpoint), std::move(bytes));
+    }
+    st.encode_ms += msSince(t1);
     st.dropped = drops_.total();
     link_.report(proto::encode(st, link_.rank()));
   }
@@ -271,7 +340,12 @@ class Stage {
   std::unique_ptr<TileRenderer> tiles_;   // geometry scenes (sort-first)
   std::deque<Cached> cache_;
   std::vector<std::byte> packed_;  // a piece's pixels before encoding, kept (see packPixels)
-  std::map<std::string, zmq::socket_t> pushes_;
+  std::map<std::string, zmq::socket_t> pushes_;  // to compositors and swap partners
+  std::unique_ptr<SwapExchange> swap_;  // volume scenes
+  size_t swap_rounds_logged_ = 0;
+  std::deque<proto::FrameParams> queued_;
+  const std::atomic<bool>* stop_ = nullptr;
+  bool shutdown_ = false;
   uint32_t epoch_ = 0;
   uint64_t first_wanted_ = 0;  // frames below it were cancelled
   uint64_t frames_failed_ = 0;

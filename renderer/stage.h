@@ -1,6 +1,8 @@
 // The renderer stage of the farm: renders its bricks for every FrameParams, crops each
 // image to its active region, splits it by the compositors' regions (direct send),
 // compresses and sends one Piece per (brick, compositor) — empty parts as empty pieces.
+// With a binary-swap plan it first composites with the other renderers (swap_exchange.h)
+// and sends the compositors its finished band instead.
 #pragma once
 #include <atomic>
 
@@ -18,6 +20,7 @@ struct StageOptions {
   int threads = 0;  // ray-casting threads; 0 = all cores
   BackendKind backend = BackendKind::Cpu;  // volume scenes
   int cache_mb = 1024;  // time series: voxels held for steps besides the one rendered (step_cache.h)
+  std::string advertise_host = "";  // tcp: host the other renderers use to reach this one ("" = the base host)
 };
 
 // Returns the exit code: 0 on Shutdown or stop, 1 if it could not join the farm.

@@ -29,7 +29,7 @@ TcpBase parseTcp(const std::string& base) {
   } catch (const std::exception&) {
     port = -1;
   }
-  if (port <= 0 || port > 65535 - 100) throw std::invalid_argument("endpoint base '" + base + "': bad port");
+  if (port <= 0 || port > 65535 - 1400) throw std::invalid_argument("endpoint base '" + base + "': bad port");
   return {rest.substr(0, colon), port};
 }
 
@@ -82,6 +82,25 @@ std::string Endpoints::compositorOn(uint32_t rank, const std::string& host) cons
 }
 
 std::string Endpoints::compositorBind(uint32_t rank) const { return bind(compositor(rank)); }
+
+std::string Endpoints::renderer(uint32_t rank) const {
+  return named(base, "renderer-" + std::to_string(rank), 300 + (int)rank, "");
+}
+std::string Endpoints::rendererOn(uint32_t rank, const std::string& host) const {
+  if (host.empty() || !startsWith(base, "tcp://")) return renderer(rank);
+  return "tcp://" + host + ":" + std::to_string(parseTcp(base).port + 300 + (int)rank);
+}
+std::string Endpoints::rendererBind(uint32_t rank) const { return bind(renderer(rank)); }
+
+std::string resolveAdvertiseHost(const std::string& advertise, const Endpoints& endpoints) {
+  if (advertise == "hostname") {
+    char name[256] = {};
+    gethostname(name, sizeof name - 1);
+    return name;
+  }
+  if (advertise == "ip") return endpoints.localAddressTowardMaster();
+  return advertise;
+}
 
 std::string Endpoints::bind(const std::string& connect_form) const {
   if (!startsWith(connect_form, "tcp://")) return connect_form;

@@ -1,6 +1,7 @@
 // Where the farm's sockets live, derived from one base address so that replicas need no
 // per-process configuration. ipc://DIR puts sockets in DIR; tcp://HOST:PORT uses PORT..PORT+2
-// for the master and display and PORT+10+rank for compositors; inproc://NAME runs a farm
+// for the master and display, PORT+10+rank for compositors (rank < 256) and PORT+300+rank for
+// renderers' binary-swap pieces (rank < 1024); inproc://NAME runs a farm
 // inside one process (tests). Loopback by default: nothing listens publicly unless asked.
 #pragma once
 #include <cstdint>
@@ -17,6 +18,10 @@ struct Endpoints {
   // The same on a named host (tcp only; containers advertise their own hostname).
   std::string compositorOn(uint32_t rank, const std::string& host) const;
   std::string compositorBind(uint32_t rank) const;   // address a compositor binds
+  // Where a renderer takes its binary-swap partners' pieces (the same forms).
+  std::string renderer(uint32_t rank) const;
+  std::string rendererOn(uint32_t rank, const std::string& host) const;
+  std::string rendererBind(uint32_t rank) const;
   // Bind forms: tcp binds on TESSERA_BIND_HOST (default: the base host) so containers can
   // bind 0.0.0.0 while peers connect by service name.
   std::string bind(const std::string& connect_form) const;
@@ -29,6 +34,9 @@ struct Endpoints {
 Endpoints makeEndpoints(const std::string& base);
 // TESSERA_ENDPOINTS, or ipc://<tmp>/tessera-<uid> when unset.
 std::string defaultEndpointBase();
+// What a stage advertises to its peers: "hostname" = this machine's name, "ip" = its address
+// on the route to the master (tcp only), anything else as given ("" = the base host).
+std::string resolveAdvertiseHost(const std::string& advertise, const Endpoints& endpoints);
 // The farm this process belongs to: TESSERA_RUN (tessera-up makes one per run), "" if unset.
 // Stages say it in their Hello; a master refuses a stage of another run.
 std::string farmRun();

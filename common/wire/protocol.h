@@ -41,11 +41,12 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 7;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
+inline constexpr uint16_t kVersion = 8;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
                                          // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms);
                                          // 5: time steps (FrameParams step, Stats step cache, Input time keys);
                                          // 6: Stats carry the epoch of the FrameParams they answer;
-                                         // 7: Piece pixels travel Up-filtered
+                                         // 7: Piece pixels travel Up-filtered;
+                                         // 8: sort-last FrameParams may carry a binary-swap plan
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -168,16 +169,28 @@ struct CompositorRegion {
 //   bricks.lo, bricks.hi       3x i32   24    per axis 0 <= lo < hi <= 65536
 //   order                      u32      4     count == bricks count, then:
 //   order[i]                   i32      4     together a permutation of 0..count-1
+//   swap                       u32      4     count 0 (direct send) or == bricks count, a power
+//                                             of two >= 2, then per renderer (>= 8 bytes):
+//   swap.renderer              u32      4     each renderer of `bricks` exactly once
+//   swap.endpoint              str      4+n   n >= 1: where that renderer takes swap pieces
 // sort-first (mode 2):
 //   tiles                      u32      4     count <= 2^20, then per tile (24 bytes):
 //   tiles.renderer, compositor u32 x2   8
 //   tiles.tile                 rect     16    w, h > 0; 0 <= x, y; inside width x height
 enum class FrameMode : uint8_t { SortLast = 1, SortFirst = 2, Last = SortFirst };
+// Binary swap (swap_plan.h): where one renderer takes the pieces its partners send it.
+struct SwapPeer {
+  uint32_t renderer = 0; std::string endpoint;
+  bool operator==(const SwapPeer&) const = default;
+};
 // Sort-last: renderers draw bricks of the volume over the whole image; compositors blend
-// every brick's piece of their region in `order`.
+// every brick's piece of their region in `order`. With a swap plan the renderers first
+// composite among themselves by binary swap, each ending with its band of the whole
+// image, and send compositors that band (rgba8, already final) as their brick's piece.
 struct SortLastWork {
   std::vector<BrickAssignment> bricks;       // one per renderer that has work
   std::vector<int> order;                    // brick indices (into `bricks`) front to back
+  std::vector<SwapPeer> swap;                // empty: direct send
   bool operator==(const SortLastWork&) const = default;
 };
 // Sort-first: renderers draw whole scenes into screen tiles; compositors only route them.
@@ -213,7 +226,9 @@ struct FrameParams {                                                       // ma
 };
 std::set<uint32_t> renderersWithWork(const FrameParams& p);  // ranks named by its bricks or tiles
 
-// Piece (pixel message, header frame = frame; 61 bytes of metadata):
+// Piece (pixel message, header frame = frame; 61 bytes of metadata). Also what renderers
+// exchange in a binary swap: then `region` is the part of the image the receiver keeps
+// this round (swap_plan.h), `brick` the sender's brick, and the format at least rgba16f.
 //   epoch, renderer, brick  u32 x3  12
 //   region                  rect    16  sane
 //   active                  rect    16  sane; inside region unless empty (w or h <= 0)

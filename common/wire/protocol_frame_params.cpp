@@ -92,6 +92,29 @@ void readBricks(ByteReader& r, SortLastWork& m) {
   }
 }
 
+// A swap plan names every renderer of the bricks once, one brick each, 2^k of them.
+void readSwap(ByteReader& r, SortLastWork& m) {
+  const uint32_t n = r.count("swap", kMaxBricks, 8);
+  if (!r.ok() || n == 0) return;
+  if (n != m.bricks.size() || n < 2 || (n & (n - 1)) != 0) {
+    r.fail("swap has " + std::to_string(n) + " renderers for " + std::to_string(m.bricks.size()) +
+           " bricks (needs one per brick, a power of two >= 2)");
+    return;
+  }
+  std::set<uint32_t> owners, named;
+  for (const auto& b : m.bricks) owners.insert(b.renderer);
+  if (owners.size() != n) return r.fail("swap with a renderer that owns more than one brick");
+  m.swap.resize(n);
+  for (uint32_t i = 0; i < n && r.ok(); ++i) {
+    m.swap[i].renderer = r.u32("swap.renderer");
+    m.swap[i].endpoint = r.str("swap.endpoint");
+    if (!r.ok()) break;
+    if (!owners.count(m.swap[i].renderer) || !named.insert(m.swap[i].renderer).second)
+      return r.fail("swap names renderer " + std::to_string(m.swap[i].renderer) + " twice or without a brick");
+    if (m.swap[i].endpoint.empty()) return r.fail("swap endpoint of renderer " + std::to_string(m.swap[i].renderer) + " is empty");
+  }
+}
+
 void readOrder(ByteReader& r, SortLastWork& m) {
   const uint32_t n = r.count("order", kMaxBricks, 4);
   if (r.ok() && n != m.bricks.size()) {
@@ -177,6 +200,11 @@ std::vector<std::byte> encode(const FrameParams& m, uint32_t sender) {
       }
       w.u32(static_cast<uint32_t>(sl->order.size()));
       for (int v : sl->order) w.i32(v);
+      w.u32(static_cast<uint32_t>(sl->swap.size()));
+      for (const SwapPeer& s : sl->swap) {
+        w.u32(s.renderer);
+        w.str(s.endpoint);
+      }
     } else {
       const auto& sf = std::get<SortFirstWork>(m.work);
       w.u32(static_cast<uint32_t>(sf.tiles.size()));
@@ -237,6 +265,7 @@ Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
           SortLastWork& sl = m.work.emplace<SortLastWork>();
           readBricks(r, sl);
           readOrder(r, sl);
+          readSwap(r, sl);
         } else if (mode == static_cast<uint8_t>(FrameMode::SortFirst)) {
           readTiles(r, Rect{0, 0, m.width, m.height}, m.work.emplace<SortFirstWork>());
         } else {

@@ -58,6 +58,46 @@ TEST(Protocol, FrameParamsInvariantsAreChecked) {
 }
 
 
+// A swap plan: two renderers with one brick each, so both must be named once.
+FrameParams swapParams() {
+  FrameParams p = sampleParams();
+  p.work = SortLastWork{{{0, {{0, 0, 0}, {128, 256, 256}}}, {1, {{128, 0, 0}, {256, 256, 256}}}},
+                        {1, 0},
+                        {{0, "ipc:///tmp/r0"}, {1, "tcp://10.0.0.2:5851"}}};
+  return p;
+}
+
+TEST(Protocol, SwapPlanRoundTripsAndIsValidated) {
+  const FrameParams good = swapParams();
+  auto ok = decodeFrameParams(encode(good, 1));
+  ASSERT_TRUE(ok) << ok.error();
+  EXPECT_EQ(*ok, good);
+  auto refused = [](FrameParams p, const std::string& words) {
+    auto r = decodeFrameParams(encode(p, 1));
+    if (r) return ::testing::AssertionFailure() << "accepted";
+    if (r.error().find(words) == std::string::npos) return ::testing::AssertionFailure() << r.error();
+    return ::testing::AssertionSuccess();
+  };
+  FrameParams p = good;
+  std::get<SortLastWork>(p.work).swap[1].renderer = 0;  // renderer 0 twice, renderer 1 never
+  EXPECT_TRUE(refused(p, "swap names renderer 0"));
+  p = good;
+  std::get<SortLastWork>(p.work).swap[1].renderer = 7;  // owns no brick
+  EXPECT_TRUE(refused(p, "swap names renderer 7"));
+  p = good;
+  std::get<SortLastWork>(p.work).swap[0].endpoint.clear();
+  EXPECT_TRUE(refused(p, "endpoint of renderer 0 is empty"));
+  p = good;
+  std::get<SortLastWork>(p.work).swap.pop_back();  // one peer for two bricks
+  EXPECT_TRUE(refused(p, "swap has 1 renderers for 2 bricks"));
+  p = good;
+  std::get<SortLastWork>(p.work).bricks[1].renderer = 0;  // one renderer, two bricks
+  EXPECT_TRUE(refused(p, "more than one brick"));
+  p = sampleParams();  // three bricks: not a power of two
+  std::get<SortLastWork>(p.work).swap = {{0, "a"}, {1, "b"}, {2, "c"}};
+  EXPECT_TRUE(refused(p, "power of two"));
+}
+
 TEST(Protocol, UnknownFrameModeIsRefused) {
   FrameParams p = sampleParams();
   Bytes m = encode(p, 1);

@@ -30,7 +30,7 @@ inline FrameParams sampleParams() {
   p.step = 12345;
   p.next_step = 12344;
   p.work = SortLastWork{{{0, {{0, 0, 0}, {128, 256, 256}}}, {1, {{128, 0, 0}, {256, 256, 256}}}, {1, {{0, 0, 0}, {1, 1, 1}}}},
-                        {2, 0, 1}};
+                        {2, 0, 1}, {}};
   return p;
 }
 

@@ -75,7 +75,7 @@ void writeSeeds(const std::string& dir) {
   FrameParams fp;
   fp.width = 64;
   fp.height = 32;
-  fp.work = SortLastWork{{{0, {{0, 0, 0}, {8, 8, 8}}}, {1, {{8, 0, 0}, {16, 8, 8}}}}, {1, 0}};
+  fp.work = SortLastWork{{{0, {{0, 0, 0}, {8, 8, 8}}}, {1, {{8, 0, 0}, {16, 8, 8}}}}, {1, 0}, {}};
   fp.regions = {{0, {0, 0, 64, 16}, "a"}, {1, {0, 16, 64, 16}, "b"}};
   fp.step = 3, fp.next_step = 4;
   writeSeed(dir, n, encode(fp, 1));

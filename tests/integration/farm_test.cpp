@@ -24,19 +24,25 @@ namespace {
 
 struct Shape {
   int renderers, compositors;
+  bool swap = false;  // binary swap between the renderers before the compositors
 };
 
 class FarmMatchesOneProcess : public ::testing::TestWithParam<Shape> {};
 
 TEST_P(FarmMatchesOneProcess, EveryFrameWithinOneLevel) {
-  const auto [renderers, compositors] = GetParam();
-  FarmDir dir("match-" + std::to_string(renderers) + "x" + std::to_string(compositors));
+  const auto [renderers, compositors, swap] = GetParam();
+  FarmDir dir("match-" + std::to_string(renderers) + "x" + std::to_string(compositors) + (swap ? "-swap" : ""));
   const int frames = 3;
   auto scene = dir.writeScene(6);
-  auto run = dir.runFarm(scene, renderers, compositors, frames);
+  auto run = dir.runFarm(scene, renderers, compositors, frames, 120,
+                         swap ? "--env TESSERA_COMPOSITING=binary-swap" : "");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("frame 3 of 3 (100%)"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("run summary: 3 frames in "), std::string::npos) << run.output;
+  if (swap) {
+    const std::string said = "binary swap among " + std::to_string(renderers) + " renderers";
+    EXPECT_NE(run.output.find(said), std::string::npos) << run.output;
+  }
   for (int k = 0; k < frames; ++k) {
     ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " missing\n" << run.output;
     Image8 farm = dir.farmFrame(k);
@@ -80,9 +86,11 @@ TEST(FarmShaded, FourRenderersMatchOneProcess) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Shapes, FarmMatchesOneProcess,
-                         ::testing::Values(Shape{1, 1}, Shape{2, 1}, Shape{2, 2}, Shape{4, 2}),
+                         ::testing::Values(Shape{1, 1}, Shape{2, 1}, Shape{2, 2}, Shape{4, 2}, Shape{2, 1, true},
+                                           Shape{4, 2, true}, Shape{8, 3, true}),
                          [](const auto& param_info) {
-                           return std::to_string(param_info.param.renderers) + "r" + std::to_string(param_info.param.compositors) + "c";
+                           return std::to_string(param_info.param.renderers) + "r" + std::to_string(param_info.param.compositors) + "c" +
+                                  (param_info.param.swap ? "Swap" : "");
                          });
 
 }  // namespace

@@ -1,0 +1,57 @@
+// A renderer's side of binary swap (swap_plan.h): its peer socket, where partners' pieces
+// arrive (admitted by the master's Roster like the compositors' pieces), and the rounds of
+// one frame. A partner may run ahead into its next frame, so pieces wait here until their
+// round comes; pieces of frames left behind (cancelled, or issued again under a new epoch)
+// are discarded quietly, malformed ones are dropped and counted. Single-threaded.
+#pragma once
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <zmq.hpp>
+
+#include "common/net/data_inbox.h"
+#include "common/net/log.h"
+#include "renderer/swap_plan.h"
+
+namespace tessera::renderer {
+
+class SwapExchange {
+ public:
+  // No piece for this long means the frame is lost: the master has bumped the epoch long
+  // before (a dead partner misses heartbeats, a silent one its frame deadline).
+  static constexpr double kWaitS = 30.0;
+  static constexpr size_t kMaxHeld = 64;  // pieces held for later rounds or frames
+
+  SwapExchange(zmq::context_t& ctx, int64_t max_message, size_t max_waiting_bytes);
+  void bind(const std::string& endpoint) { inbox_.bind(endpoint); }
+  zmq::socket_t& socket() { return inbox_.socket(); }
+  void setRoster(const proto::Roster& roster, DropCounter& drops);
+  void receive(DropCounter& drops);  // drains the socket (non-blocking)
+
+  // Sends `bytes` to a partner's endpoint.
+  using Send = std::function<void(const std::string& endpoint, std::vector<std::byte>&& bytes)>;
+  // Waits up to `ms` for any socket of the stage (this one included, then receive()) and
+  // says whether frame p is still wanted.
+  using Idle = std::function<bool(int ms)>;
+  // The rounds of frame p for brick image `img` (active within `active`): the finished band,
+  // or nullopt when the frame was given up (no longer wanted, or no piece within kWaitS).
+  std::optional<Layer> run(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan, const ImageF& img,
+                           const Rect& active, const Send& send, const Idle& idle, proto::StageStats& st,
+                           DropCounter& drops);
+
+ private:
+  void accept(std::vector<DataInbox::Message> messages, DropCounter& drops);
+  std::optional<proto::Piece> take(const proto::FrameParams& p, uint32_t from, const Rect& region);
+
+  DataInbox inbox_;
+  std::vector<proto::Piece> held_;
+  std::vector<std::byte> packed_;
+};
+
+// Pieces between renderers carry at least rgba16f: each round's blend is rounded once more,
+// and rgba8 rounding per round would break the 1/255 contract.
+proto::PixelFormat swapFormat(proto::PixelFormat f);
+
+}  // namespace tessera::renderer
