@@ -18,12 +18,17 @@ SortLastPlan::SortLastPlan(VolumeSummary volume, const TransferFunction& tf, boo
 // Bricks are sticky: a renderer keeps its bricks (and the voxels it loaded for them) for
 // the whole run. A renderer that joins gets a new split for everyone (balance needs it);
 // a lost renderer's bricks go to the owner of their nearest bricks in the k-d tree, so its
-// new window is the parent box, and nobody else loads anything.
+// new window is the parent box, and nobody else loads anything (binary swap: see below).
 void SortLastPlan::reassign(const Workers& w) {
   const auto alive = [&](uint32_t r) { return std::find(w.renderers.begin(), w.renderers.end(), r) != w.renderers.end(); };
   bool joined = tree_.bricks.empty();
   for (uint32_t r : w.renderers) joined = joined || std::find(owner_.begin(), owner_.end(), r) == owner_.end();
-  if (joined) {
+  // Binary swap needs one brick per renderer: once the renderers are a power of two again
+  // (a lost one's bricks went to a neighbour meanwhile), everyone gets a new split.
+  const size_t n = w.renderers.size();
+  const bool resplit = binary_swap_ && !joined && n >= 2 && (n & (n - 1)) == 0 && tree_.bricks.size() != n;
+  if (resplit) spdlog::info("binary swap: a new split of {} bricks for {} renderers", n, n);
+  if (joined || resplit) {
     tree_ = splitBricks(volume_, std::max<int>(1, (int)w.renderers.size()), tf_);
     owner_.clear();
     for (size_t i = 0; i < tree_.bricks.size() && i < w.renderers.size(); ++i) owner_.push_back(w.renderers[i]);

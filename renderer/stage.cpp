@@ -142,6 +142,7 @@ class Stage {
     if (tiles_) return drops_.drop(~0u, "sort-last FrameParams for a geometry scene");
     if (!holdBricks(p, work, st)) return;
     if (auto plan = planSwap(p, link_.rank())) return swapBrick(p, *plan, st);
+    swap_rounds_logged_ = 0;  // direct send: say it when swapping starts again
     for (uint32_t b = 0; b < work.bricks.size(); ++b) {
       if (work.bricks[b].renderer != link_.rank()) continue;
       auto t0 = Clock::now();

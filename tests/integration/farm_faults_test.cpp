@@ -64,12 +64,15 @@ void push(zmq::context_t& ctx, const std::string& endpoint, zmq::socket_type typ
   for (const auto& m : messages) s.send(zmq::buffer(m.data(), m.size()), zmq::send_flags::none);
 }
 
-TEST(FarmFaults, BadMessagesAreDroppedCountedAndFramesStayCorrect) {
-  FarmDir dir("garbage");
+// swap: the renderers composite by binary swap, and their swap sockets get the junk too.
+void expectBadMessagesDroppedAndCounted(bool swap) {
+  FarmDir dir(swap ? "garbage-swap" : "garbage");
   const int frames = 24;
   auto scene = dir.writeScene(frames, 40, 160, 120);
   const fs::path sockets = dir.path() / "sockets";
-  auto farm = std::async(std::launch::async, [&] { return dir.runFarm(scene, 2, 1, frames, 180, "--env TESSERA_WINDOW=off"); });
+  auto farm = std::async(std::launch::async, [&] {
+    return dir.runFarm(scene, 2, 1, frames, 180, swap ? "--env TESSERA_COMPOSITING=binary-swap" : "");
+  });
   ASSERT_TRUE(waitFor([&] { return fs::exists(dir.frame(1)); }, 60s)) << "the farm produced no frame";
 
   // Garbage, a truncated header, an out-of-date protocol version and a piece whose
@@ -92,6 +95,7 @@ TEST(FarmFaults, BadMessagesAreDroppedCountedAndFramesStayCorrect) {
   push(ctx, "ipc://" + (sockets / "compositor-0").string(), zmq::socket_type::dealer, junk);
   push(ctx, "ipc://" + (sockets / "display").string(), zmq::socket_type::dealer, junk);
   push(ctx, "ipc://" + (sockets / "master-ctl").string(), zmq::socket_type::dealer, junk);
+  if (swap) push(ctx, "ipc://" + (sockets / "renderer-0").string(), zmq::socket_type::dealer, junk);
 
   auto run = farm.get();
   ASSERT_EQ(run.exit_code, 0) << run.output;
@@ -101,10 +105,11 @@ TEST(FarmFaults, BadMessagesAreDroppedCountedAndFramesStayCorrect) {
     EXPECT_TRUE(dir.matches(dir.farmFrame(k), dir.reference(scene, k), 1, "frame_" + std::to_string(k))) << "frame " << k;
   }
   std::ifstream metrics(dir.path() / "out" / "metrics.jsonl");
-  double master = 0, composite = 0, display = 0;
+  double master = 0, composite = 0, display = 0, render = 0;
   int lines = 0;
   for (std::string line; std::getline(metrics, line); ++lines) {
     auto j = nlohmann::json::parse(line);
+    render = std::max(render, j["render_dropped"].get<double>());
     master = std::max(master, j["master_dropped"].get<double>());
     composite = std::max(composite, j["composite_dropped"].get<double>());
     display = std::max(display, j["display_dropped"].get<double>());
@@ -114,7 +119,14 @@ TEST(FarmFaults, BadMessagesAreDroppedCountedAndFramesStayCorrect) {
   EXPECT_GE(composite, (double)junk.size()) << "compositor did not count the bad messages";
   EXPECT_GE(display, (double)junk.size()) << "display did not count the bad messages";
   EXPECT_NE(run.output.find("dropped message"), std::string::npos) << "drops were not logged";
+  if (swap) {
+    EXPECT_NE(run.output.find("binary swap among 2 renderers"), std::string::npos) << run.output;
+    EXPECT_GE(render, (double)junk.size()) << "the renderer did not count the bad messages";
+  }
 }
+
+TEST(FarmFaults, BadMessagesAreDroppedCountedAndFramesStayCorrect) { expectBadMessagesDroppedAndCounted(false); }
+TEST(FarmFaults, BadSwapMessagesAreDroppedCountedAndFramesStayCorrect) { expectBadMessagesDroppedAndCounted(true); }
 
 // ---- losing a stage (issue 8): compose.yaml restarts renderers and compositors ------
 
@@ -160,8 +172,8 @@ void expectEveryFrameOnceAndCorrect(const FarmDir& dir, const fs::path& scene, c
 
 // Runs the default farm (2 renderers, 1 compositor) and calls `fault` once frame 1 is out.
 CommandResult runWithFault(FarmDir& dir, const fs::path& scene, const std::function<void()>& fault,
-                           int frames = kFaultFrames) {
-  auto farm = std::async(std::launch::async, [&] { return dir.runFarm(scene, 2, 1, frames, 240); });
+                           int frames = kFaultFrames, const std::string& extra = "") {
+  auto farm = std::async(std::launch::async, [&] { return dir.runFarm(scene, 2, 1, frames, 240, extra); });
   if (!waitFor([&] { return fs::exists(dir.frame(1)); }, 60s)) {
     ADD_FAILURE() << "the farm produced no frame";
   } else {
@@ -228,29 +240,43 @@ TEST(FarmFaults, ForgedPartsFromNonMembersAreRefusedAndFramesStayCorrect) {
   EXPECT_GE(display, (double)strips.size()) << "forged strips not counted";
 }
 
-TEST(FarmFaults, KilledRendererIsRestartedAndEveryFrameIsDoneOnce) {
-  FarmDir dir("kill-renderer");
+// swap: the renderers composite by binary swap; the survivor waits for its dead partner's
+// pieces until the master's new epoch, renders both bricks by direct send, and swaps again
+// once the restarted renderer has joined.
+void expectKilledRendererReplaced(bool swap) {
+  FarmDir dir(swap ? "kill-renderer-swap" : "kill-renderer");
   auto scene = dir.writeScene(kFaultFrames, 40, 160, 120);
   const fs::path sockets = dir.path() / "sockets";
   auto run = runWithFault(dir, scene, [&] {
     auto victims = farmPids(sockets, "tessera-renderer");
     ASSERT_EQ(victims.size(), 2u);
     ASSERT_EQ(kill(victims[0], SIGKILL), 0);
-  });
+  }, kFaultFrames, swap ? "--env TESSERA_COMPOSITING=binary-swap" : "");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("died (signal 9); restarting (restart: on-failure, attempt 1)"), std::string::npos)
       << run.output;
   // Today's master marks the killed one lost and gives the restarted one a new rank.
   EXPECT_NE(run.output.find("renderer 2 joined"), std::string::npos) << run.output;
-  // Its bricks went to a survivor, which loaded their voxels; no other brick moved then.
-  EXPECT_NE(run.output.find("of lost renderer"), std::string::npos) << run.output;
+  // Its bricks went to a survivor, which loaded their voxels; no other brick moved then. With
+  // binary swap, if the restarted one joined before the loss was noticed, the two left get
+  // a new split of two bricks instead (swapping needs one brick each).
+  const bool heir = run.output.find("of lost renderer") != std::string::npos;
+  EXPECT_TRUE(heir || (swap && run.output.find("binary swap: a new split of 2 bricks") != std::string::npos)) << run.output;
   const auto m = readMetrics(dir);
   ASSERT_FALSE(m.lines.empty());
   expectEveryFrameOnceAndCorrect(dir, scene, m);
   // The last frame was rendered by two renderers again: the survivor and the restarted one.
   expectTwoRenderersWorked(m.lines.back());
   EXPECT_GT(m.lines.back()["epoch"].get<int>(), 0);
+  if (!swap) return;
+  // Both renderers said it at the start; the restarted one (and the survivor) again after.
+  size_t said = 0;
+  for (size_t at = 0; (at = run.output.find("binary swap among 2 renderers", at)) != std::string::npos; ++at) ++said;
+  EXPECT_GE(said, 3u) << run.output;
 }
+
+TEST(FarmFaults, KilledRendererIsRestartedAndEveryFrameIsDoneOnce) { expectKilledRendererReplaced(false); }
+TEST(FarmFaults, KilledSwapRendererIsRestartedAndEveryFrameIsDoneOnce) { expectKilledRendererReplaced(true); }
 
 TEST(FarmFaults, KilledCompositorIsRestartedAndEveryFrameIsDoneOnce) {
   FarmDir dir("kill-compositor");
