@@ -188,11 +188,11 @@ class Stage {
       piece.renderer = link_.rank();
       piece.brick = plan.brick;
       piece.region = region.region;
-      piece.active = intersect(band->rect, region.region);
+      const LayerView part = viewOf(*band, region.region);
+      piece.active = part.rect;
       piece.format = proto::PixelFormat::RGBA8;
       piece.pixels = std::move(packed_);
-      packLayer(*band, piece.active, piece.format, piece.pixels);
-      if (piece.active.empty()) piece.pixels.clear();
+      packView(part, piece.format, piece.pixels);
       piece.render_ms = st.work_ms;
       auto bytes = proto::encode(piece, link_.rank(), p.codec);
       st.bytes_raw += piece.pixels.size();
@@ -200,6 +200,7 @@ class Stage {
       st.bytes_encoded += bytes.size();
       sendBytes(socketFor(region.endpoint), std::move(bytes));
     }
+    swap_->recycle(std::move(*band));
     st.encode_ms += msSince(t1);
     st.dropped = drops_.total();
     link_.report(proto::encode(st, link_.rank()));

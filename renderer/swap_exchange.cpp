@@ -51,6 +51,18 @@ std::optional<proto::Piece> SwapExchange::take(const proto::FrameParams& p, uint
   return std::nullopt;
 }
 
+// Layers' memory goes round: no fresh pages to fault in for every round of every frame.
+std::vector<float> SwapExchange::takeSpare() {
+  if (spares_.empty()) return {};
+  std::vector<float> v = std::move(spares_.back());
+  spares_.pop_back();
+  return v;
+}
+
+void SwapExchange::recycle(Layer&& l) {
+  if (spares_.size() < 2 && l.img.px.capacity() > 0) spares_.push_back(std::move(l.img.px));
+}
+
 std::optional<Layer> SwapExchange::run(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan,
                                        const ImageF& img, const Rect& active, const Send& send, const Idle& idle,
                                        proto::StageStats& st, DropCounter& drops) {
@@ -69,16 +81,10 @@ std::optional<Layer> SwapExchange::run(const proto::FrameParams& p, uint32_t me,
     out.region = r.send;
     out.format = format;
     out.render_ms = st.work_ms;
-    if (j == 0) {
-      out.active = intersect(active, r.send);
-      if (!out.active.empty()) packPixels(img, out.active, format, packed_);
-      mine = cutLayer(img, active, r.keep);
-    } else {
-      out.active = intersect(mine.rect, r.send);
-      packLayer(mine, out.active, format, packed_);
-      mine = cutLayer(mine, r.keep);
-    }
-    if (out.active.empty()) packed_.clear();
+    // Round 0 reads the brick image itself; later rounds, the layer blended last round.
+    const LayerView sent = j == 0 ? viewOf(img, active, r.send) : viewOf(mine, r.send);
+    out.active = sent.rect;
+    packView(sent, format, packed_);
     out.pixels = std::move(packed_);
     auto bytes = proto::encode(out, me, p.codec);
     st.bytes_raw += out.pixels.size();
@@ -101,7 +107,10 @@ std::optional<Layer> SwapExchange::run(const proto::FrameParams& p, uint32_t me,
       }
     }
     auto t1 = Clock::now();
-    mine = blendLayer(mine, in->pixels, in->active, format, r.partner_in_front);
+    const LayerView kept = j == 0 ? viewOf(img, active, r.keep) : viewOf(mine, r.keep);
+    Layer blended = blendLayer(kept, in->pixels, in->active, format, r.partner_in_front, takeSpare());
+    recycle(std::move(mine));
+    mine = std::move(blended);
     st.decode_ms += msSince(t1);
   }
   return mine;

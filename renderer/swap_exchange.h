@@ -40,14 +40,18 @@ class SwapExchange {
   std::optional<Layer> run(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan, const ImageF& img,
                            const Rect& active, const Send& send, const Idle& idle, proto::StageStats& st,
                            DropCounter& drops);
+  // A band run() returned, once sent: its memory serves the next frame's rounds.
+  void recycle(Layer&& l);
 
  private:
   void accept(std::vector<DataInbox::Message> messages, DropCounter& drops);
+  std::vector<float> takeSpare();
   std::optional<proto::Piece> take(const proto::FrameParams& p, uint32_t from, const Rect& region);
 
   DataInbox inbox_;
   std::vector<proto::Piece> held_;
   std::vector<std::byte> packed_;
+  std::vector<std::vector<float>> spares_;
 };
 
 // Pieces between renderers carry at least rgba16f: each round's blend is rounded once more,

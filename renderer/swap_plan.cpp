@@ -52,49 +52,28 @@ std::optional<SwapPlan> planSwap(const proto::FrameParams& p, uint32_t me) {
   return plan;
 }
 
-Layer cutLayer(const ImageF& full, const Rect& active, const Rect& keep) {
-  Layer l;
-  l.rect = intersect(active, keep);
-  if (l.rect.empty()) return Layer{};
-  l.img = ImageF(l.rect.w, l.rect.h);
-  for (int y = 0; y < l.rect.h; ++y)
-    std::memcpy(l.img.at(0, y), full.at(l.rect.x, l.rect.y + y), sizeof(float) * 4 * l.rect.w);
-  return l;
+void packView(const LayerView& v, proto::PixelFormat f, std::vector<std::byte>& out) {
+  if (v.rect.empty()) return out.clear();
+  packPixels(*v.img, local(v.rect, v.covers), f, out);
 }
 
-Layer cutLayer(const Layer& src, const Rect& keep) {
-  Layer l;
-  l.rect = intersect(src.rect, keep);
-  if (l.rect.empty()) return Layer{};
-  l.img = ImageF(l.rect.w, l.rect.h);
-  for (int y = 0; y < l.rect.h; ++y)
-    std::memcpy(l.img.at(0, y), src.img.at(l.rect.x - src.rect.x, l.rect.y - src.rect.y + y),
-                sizeof(float) * 4 * l.rect.w);
-  return l;
-}
-
-void packLayer(const Layer& l, const Rect& r, proto::PixelFormat f, std::vector<std::byte>& out) {
-  if (r.empty()) return out.clear();
-  packPixels(l.img, local(r, l.rect), f, out);
-}
-
-Layer blendLayer(const Layer& mine, std::span<const std::byte> pixels, const Rect& theirs, proto::PixelFormat f,
-                 bool partner_in_front) {
-  if (theirs.empty()) return mine;
+Layer blendLayer(const LayerView& mine, std::span<const std::byte> pixels, const Rect& theirs, proto::PixelFormat f,
+                 bool partner_in_front, std::vector<float>&& storage) {
   Layer out;
   out.rect = unite(mine.rect, theirs);
-  out.img = ImageF(out.rect.w, out.rect.h);
+  if (out.rect.empty()) return out;
+  out.img = ImageF(out.rect.w, out.rect.h, std::move(storage));
   const Rect at = local(mine.rect, out.rect);
+  auto row = [&](int y) { return mine.img->at(mine.rect.x - mine.covers.x, mine.rect.y - mine.covers.y + y); };
   if (!partner_in_front) {  // mine first, theirs under it
-    for (int y = 0; y < at.h; ++y)
-      std::memcpy(out.img.at(at.x, at.y + y), mine.img.at(0, y), sizeof(float) * 4 * at.w);
-    compositeUnder(out.img, out.rect, pixels, theirs, f);
+    for (int y = 0; y < at.h; ++y) std::memcpy(out.img.at(at.x, at.y + y), row(y), sizeof(float) * 4 * at.w);
+    if (!theirs.empty()) compositeUnder(out.img, out.rect, pixels, theirs, f);
     return out;
   }
-  compositeUnder(out.img, out.rect, pixels, theirs, f);  // onto transparent black: theirs exactly
+  if (!theirs.empty()) compositeUnder(out.img, out.rect, pixels, theirs, f);  // onto transparent black: theirs exactly
   for (int y = 0; y < at.h; ++y) {  // then mine under it, as the compositors blend
     float* d = out.img.at(at.x, at.y + y);
-    const float* s = mine.img.at(0, y);
+    const float* s = row(y);
     for (int x = 0; x < 4 * at.w; x += 4) {
       const float t = 1.0f - d[x + 3];
       for (int c = 0; c < 4; ++c) d[x + c] += t * s[x + c];

@@ -26,12 +26,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// Sort-last compositing of every run (--compositing): direct-send or binary-swap.
+std::string g_compositing = "direct-send";
+
 struct Config {
   std::string rate, codec;
   int in_flight, size, renderers, compositors;
   std::string shape() const { return fmt::format("{}R+{}C", renderers, compositors); }
   std::string name() const {
-    return fmt::format("{}-{}-f{}-{}-{}r{}c", rate, codec, in_flight, size, renderers, compositors);
+    return fmt::format("{}-{}-f{}-{}-{}r{}c{}", rate, codec, in_flight, size, renderers, compositors,
+                       g_compositing == "binary-swap" ? "-swap" : "");
   }
 };
 
@@ -149,8 +153,8 @@ bool runFarm(const Config& c, const fs::path& root, int frames, Result& r) {
   const int n = c.size < 512 ? 2 * frames : frames;
   const std::string cmd = fmt::format(
       "env TESSERA_SCENE={} TESSERA_FRAMES={} TESSERA_RENDERERS={} TESSERA_COMPOSITORS={} TESSERA_IN_FLIGHT={} "
-      "TESSERA_CODEC={} TESSERA_LOG=warn timeout -s INT {} {} --rate {} --out {} --bin {} > {}/run.log 2>&1",
-      sceneAt(c.size, root), n, c.renderers, c.compositors, c.in_flight, c.codec, 60 + 5 * n, script, c.rate, dir.string(),
+      "TESSERA_CODEC={} TESSERA_COMPOSITING={} TESSERA_LOG=warn timeout -s INT {} {} --rate {} --out {} --bin {} > {}/run.log 2>&1",
+      sceneAt(c.size, root), n, c.renderers, c.compositors, c.in_flight, c.codec, g_compositing, 60 + 5 * n, script, c.rate, dir.string(),
       bin.string(), dir.string());
   std::cerr << "run " << c.name() << " (" << n << " frames)\n";
   if (std::system(cmd.c_str()) != 0) {
@@ -211,6 +215,9 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "folder for runs, results.csv and the plot")->capture_default_str();
   app.add_option("--frames", frames, "frames per run (twice as many below 512^2)")->check(CLI::Range(6, 1000))->capture_default_str();
   app.add_flag("--quick", quick, "one small run (checks that the benchmark works)");
+  app.add_option("--compositing", g_compositing, "sort-last compositing of every run")
+      ->check(CLI::IsMember({"direct-send", "binary-swap"}))
+      ->capture_default_str();
   app.add_option("--goals", rounds, "instead of the sweep: this many rounds of the goals' runs (efficiency, 100 Mbit/s "
                                     "against unlimited), each ratio within a round")
       ->check(CLI::Range(1, 20));

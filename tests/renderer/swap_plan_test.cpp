@@ -1,0 +1,141 @@
+// Binary swap's plan and blend (renderer/swap_plan.h): for any visibility order the rounds
+// pair renderers that hold the same part of the image, the finished bands tile the image,
+// and blending halves round by round gives what compositing every brick front to back does.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <bit>
+#include <numeric>
+#include <random>
+
+#include "common/wire/pixels.h"
+#include "renderer/swap_plan.h"
+
+namespace tessera::renderer {
+namespace {
+
+proto::FrameParams swapFrame(int renderers, std::vector<int> order, int w, int h) {
+  proto::FrameParams p;
+  p.width = w;
+  p.height = h;
+  proto::SortLastWork work;
+  for (int r = 0; r < renderers; ++r) {
+    work.bricks.push_back({(uint32_t)(10 + r), BrickBox{{r, 0, 0}, {r + 1, 1, 1}}});
+    work.swap.push_back({(uint32_t)(10 + r), "ipc:///tmp/r" + std::to_string(r)});
+  }
+  work.order = std::move(order);
+  p.work = work;
+  return p;
+}
+
+TEST(SwapPlan, PartnersHoldTheSamePartAndBandsTileTheImage) {
+  std::mt19937 rng(7);
+  for (int renderers : {2, 4, 8}) {
+    for (int trial = 0; trial < 5; ++trial) {
+      std::vector<int> order(renderers);
+      std::iota(order.begin(), order.end(), 0);
+      std::shuffle(order.begin(), order.end(), rng);
+      const auto p = swapFrame(renderers, order, 97, 83);
+      std::map<uint32_t, SwapPlan> plans;
+      for (int r = 0; r < renderers; ++r) {
+        auto plan = planSwap(p, 10 + r);
+        ASSERT_TRUE(plan);
+        EXPECT_EQ(plan->rounds.size(), (size_t)std::countr_zero((unsigned)renderers));
+        EXPECT_EQ(p.sortLast()->bricks[plan->brick].renderer, (uint32_t)(10 + r));
+        plans[10 + r] = *plan;
+      }
+      std::vector<int> covered(97 * 83, 0);
+      for (const auto& [me, plan] : plans) {
+        for (size_t j = 0; j < plan.rounds.size(); ++j) {
+          const SwapRound& mine = plan.rounds[j];
+          const SwapRound& theirs = plans.at(mine.partner).rounds[j];
+          EXPECT_EQ(theirs.partner, me);                      // partners pair each other
+          EXPECT_EQ(theirs.keep, mine.send);                  // each sends what the other keeps
+          EXPECT_EQ(theirs.send, mine.keep);
+          EXPECT_NE(theirs.partner_in_front, mine.partner_in_front);
+          EXPECT_EQ(unite(mine.keep, mine.send).area(), mine.keep.area() + mine.send.area());
+        }
+        for (int y = plan.band.y; y < plan.band.y + plan.band.h; ++y)
+          for (int x = plan.band.x; x < plan.band.x + plan.band.w; ++x) ++covered[y * 97 + x];
+      }
+      EXPECT_TRUE(std::all_of(covered.begin(), covered.end(), [](int c) { return c == 1; })) << renderers;
+    }
+  }
+  // No plan: a frame without one, or a renderer without a brick.
+  auto p = swapFrame(2, {0, 1}, 8, 8);
+  EXPECT_FALSE(planSwap(p, 99));
+  std::get<proto::SortLastWork>(p.work).swap.clear();
+  EXPECT_FALSE(planSwap(p, 10));
+}
+
+// A brick image: translucent colour inside `active`, transparent outside.
+ImageF brickImage(int w, int h, const Rect& active, std::mt19937& rng) {
+  ImageF img(w, h);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int y = active.y; y < active.y + active.h; ++y)
+    for (int x = active.x; x < active.x + active.w; ++x) {
+      const float a = u(rng);
+      float* px = img.at(x, y);
+      for (int c = 0; c < 3; ++c) px[c] = a * u(rng);
+      px[3] = a;
+    }
+  return img;
+}
+
+// The swap's result, driven here without sockets, against every brick composited front to back.
+TEST(SwapPlan, RoundsOfBlendsEqualFrontToBackCompositing) {
+  const int w = 61, h = 45, renderers = 4;
+  std::mt19937 rng(3);
+  const std::vector<int> order = {2, 0, 3, 1};
+  const auto p = swapFrame(renderers, order, w, h);
+  std::vector<ImageF> images;
+  std::vector<Rect> actives = {{3, 2, 40, 30}, {20, 10, 41, 35}, {0, 0, 25, 45}, {10, 30, 30, 15}};
+  for (int r = 0; r < renderers; ++r) images.push_back(brickImage(w, h, actives[r], rng));
+  ImageF expected(w, h);  // front to back, in float
+  for (int b : order)
+    for (size_t i = 0; i < expected.px.size(); i += 4) {
+      const float t = 1.0f - expected.px[i + 3];
+      for (int c = 0; c < 4; ++c) expected.px[i + c] += t * images[b].px[i + c];
+    }
+  const auto f = proto::PixelFormat::RGBA16F;
+  std::map<uint32_t, Layer> held;
+  std::map<uint32_t, SwapPlan> plans;
+  for (int r = 0; r < renderers; ++r) plans[10 + r] = *planSwap(p, 10 + r);
+  for (size_t j = 0; j < plans.begin()->second.rounds.size(); ++j) {
+    std::map<uint32_t, std::pair<Rect, std::vector<std::byte>>> sent;  // by receiver
+    std::map<uint32_t, LayerView> kept;
+    for (auto& [me, plan] : plans) {
+      const int b = (int)plan.brick;
+      const SwapRound& r = plan.rounds[j];
+      LayerView out = j == 0 ? viewOf(images[b], actives[b], r.send) : viewOf(held[me], r.send);
+      kept[me] = j == 0 ? viewOf(images[b], actives[b], r.keep) : viewOf(held[me], r.keep);
+      packView(out, f, sent[r.partner].second);
+      sent[r.partner].first = out.rect;
+    }
+    std::map<uint32_t, Layer> next;
+    for (auto& [me, plan] : plans)
+      next[me] = blendLayer(kept[me], sent[me].second, sent[me].first, f, plan.rounds[j].partner_in_front);
+    held = std::move(next);
+  }
+  float worst = 0;
+  int pixels = 0;
+  for (auto& [me, plan] : plans) {
+    const Layer& band = held[me];
+    for (int y = plan.band.y; y < plan.band.y + plan.band.h; ++y)
+      for (int x = plan.band.x; x < plan.band.x + plan.band.w; ++x, ++pixels)
+        for (int c = 0; c < 4; ++c) {
+          const bool inside = x >= band.rect.x && x < band.rect.x + band.rect.w && y >= band.rect.y &&
+                              y < band.rect.y + band.rect.h;
+          const float got = inside ? band.img.at(x - band.rect.x, y - band.rect.y)[c] : 0.0f;
+          worst = std::max(worst, std::abs(got - expected.at(x, y)[c]));
+        }
+  }
+  EXPECT_EQ(pixels, w * h);
+  // Two rounds of half-float rounding (2^-11 relative each), far inside the contract's 1/255.
+  EXPECT_LT(worst, 2e-3f);
+  EXPECT_GT(worst, 0.0f);  // the pieces really were rounded to half floats
+}
+
+}  // namespace
+}  // namespace tessera::renderer
