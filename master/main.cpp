@@ -1,6 +1,7 @@
 // tessera-master: loads the scene, registers the stages and drives the frames.
 #include <map>
 
+#include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/net/stage_main.h"
 #include "master/master.h"
@@ -26,12 +27,14 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"rgba8", "rgba16f", "rgba32f"}));
   app.add_option("--metrics", opt.metrics_path, "JSON-lines metrics file")->envname("TESSERA_METRICS");
   app.add_option("--heartbeat-timeout", opt.heartbeat_timeout_s, "seconds of silence before a stage counts as lost");
-  std::string compositing = "direct-send";
+  std::string compositing = "auto";
   app.add_option("--compositing", compositing,
                  "sort-last: direct-send (every renderer sends each compositor its part) | binary-swap (renderers "
-                 "composite among themselves first; needs 2, 4, 8... renderers, else direct send)")
+                 "composite among themselves first: half the bytes on the busiest link; needs 2, 4, 8... renderers, "
+                 "else direct send) | auto (binary swap when the farm's endpoints leave this host)")
       ->envname("TESSERA_COMPOSITING")
-      ->check(CLI::IsMember({"direct-send", "binary-swap"}));
+      ->check(CLI::IsMember({"auto", "direct-send", "binary-swap"}))
+      ->capture_default_str();
   std::string tiling = "balanced";
   app.add_option("--tiling", tiling,
                  "balanced: re-split work every frame from the last frame's measurements (sort-last: compositor "
@@ -52,7 +55,8 @@ int main(int argc, char** argv) {
     opt.codec = parseCodec(codec);
     opt.format = formats.at(format);
     opt.balance = tiling == "balanced";
-    opt.binary_swap = compositing == "binary-swap";
+    // Bytes count where they cross links; on one host direct send costs a little less CPU.
+    opt.binary_swap = compositing == "binary-swap" || (compositing == "auto" && endpointLeavesHost(endpoints.base));
     return master::run(opt, ctx, stop);
   });
 }

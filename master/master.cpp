@@ -124,7 +124,8 @@ class Master {
     bool joined = false;
     Member& m = members_.join(identity, h, Clock::now(), &joined);
     if (joined && h.role == Role::Compositor) m.endpoint = opt_.endpoints.compositorOn(m.rank, h.endpoint);
-    if (joined && h.role == Role::Renderer) m.endpoint = opt_.endpoints.rendererOn(m.rank, h.endpoint);
+    // A renderer says where its swap socket is (an endpoint it bound, port chosen by the system).
+    if (joined && h.role == Role::Renderer) m.endpoint = h.endpoint;
     sendTo(identity, proto::encode(proto::Welcome{m.role, m.rank}, kMasterRank));
     if (!joined) return;
     spdlog::info("{} {} joined pid={}{}", roleName(h.role), m.rank, h.pid,

@@ -36,7 +36,7 @@ struct RenderKey {
 class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
-      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Renderer, opt.advertise_host), scene_(opt.scene) {
+      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Renderer), scene_(opt.scene) {
     if (opt.scene.mesh) {
       tiles_ = std::make_unique<TileRenderer>(opt.scene);
     } else {
@@ -46,6 +46,12 @@ class Stage {
       steps_ = std::make_unique<StepCache>(scene_, opt.backend, (uint64_t)opt.cache_mb << 20);
       swap_ = std::make_unique<SwapExchange>(ctx, maxPixelMessageBytes(scene_.width, scene_.height),
                                              2 * 16 * size_t(scene_.width) * size_t(scene_.height));
+      // Bound before Hello, which tells the master where it is (no rank is needed for it).
+      std::string id;
+      for (unsigned char c : link_.identity().substr(0, 8)) id += fmt::format("{:02x}", c);
+      swap_->bind(opt.endpoints.swapBind(id));
+      swap_endpoint_ = opt.endpoints.swapAdvertised(swap_->socket().get(zmq::sockopt::last_endpoint), opt.advertise_host);
+      link_.setAdvertised(swap_endpoint_);
     }
   }
 
@@ -64,10 +70,9 @@ class Stage {
       spdlog::error("renderer could not join the master at {}", opt_.endpoints.masterControl());
       return 1;
     }
-    if (swap_) swap_->bind(opt_.endpoints.rendererBind(link_.rank()));
     spdlog::info("renderer rank={} joined backend={} simd={}{}", link_.rank(),
                  scene_.mesh ? "osmesa-mesh" : backendName(opt_.backend), isaName(cpuIsa()),
-                 swap_ ? " swap pieces at " + opt_.endpoints.rendererBind(link_.rank()) : "");
+                 swap_ ? " swap pieces at " + swap_endpoint_ : "");
     while (!stopped()) {
       pump(queued_.empty() ? 100 : 0);
       if (shutdown_) return 0;
@@ -345,6 +350,7 @@ class Stage {
   std::map<std::string, zmq::socket_t> pushes_;  // to compositors and swap partners
   std::unique_ptr<SwapExchange> swap_;  // volume scenes
   size_t swap_rounds_logged_ = 0;
+  std::string swap_endpoint_;  // what Hello tells the master
   std::deque<proto::FrameParams> queued_;
   const std::atomic<bool>* stop_ = nullptr;
   bool shutdown_ = false;

@@ -29,7 +29,7 @@ TcpBase parseTcp(const std::string& base) {
   } catch (const std::exception&) {
     port = -1;
   }
-  if (port <= 0 || port > 65535 - 1400) throw std::invalid_argument("endpoint base '" + base + "': bad port");
+  if (port <= 0 || port > 65535 - 100) throw std::invalid_argument("endpoint base '" + base + "': bad port");
   return {rest.substr(0, colon), port};
 }
 
@@ -83,14 +83,16 @@ std::string Endpoints::compositorOn(uint32_t rank, const std::string& host) cons
 
 std::string Endpoints::compositorBind(uint32_t rank) const { return bind(compositor(rank)); }
 
-std::string Endpoints::renderer(uint32_t rank) const {
-  return named(base, "renderer-" + std::to_string(rank), 300 + (int)rank, "");
+std::string Endpoints::swapBind(const std::string& unique) const {
+  if (!startsWith(base, "tcp://")) return named(base, "renderer-" + unique, 0, "");
+  return "tcp://" + envOr("TESSERA_BIND_HOST", parseTcp(base).host) + ":*";
 }
-std::string Endpoints::rendererOn(uint32_t rank, const std::string& host) const {
-  if (host.empty() || !startsWith(base, "tcp://")) return renderer(rank);
-  return "tcp://" + host + ":" + std::to_string(parseTcp(base).port + 300 + (int)rank);
+
+std::string Endpoints::swapAdvertised(const std::string& bound, const std::string& host) const {
+  if (!startsWith(bound, "tcp://")) return bound;
+  const std::string port = bound.substr(bound.rfind(':') + 1);
+  return "tcp://" + (host.empty() ? parseTcp(base).host : host) + ":" + port;
 }
-std::string Endpoints::rendererBind(uint32_t rank) const { return bind(renderer(rank)); }
 
 std::string resolveAdvertiseHost(const std::string& advertise, const Endpoints& endpoints) {
   if (advertise == "hostname") {

@@ -1,7 +1,7 @@
 // Where the farm's sockets live, derived from one base address so that replicas need no
 // per-process configuration. ipc://DIR puts sockets in DIR; tcp://HOST:PORT uses PORT..PORT+2
-// for the master and display, PORT+10+rank for compositors (rank < 256) and PORT+300+rank for
-// renderers' binary-swap pieces (rank < 1024); inproc://NAME runs a farm
+// for the master and display and PORT+10+rank for compositors (renderers' binary-swap
+// sockets take a port the system picks: swapBind); inproc://NAME runs a farm
 // inside one process (tests). Loopback by default: nothing listens publicly unless asked.
 #pragma once
 #include <cstdint>
@@ -18,10 +18,13 @@ struct Endpoints {
   // The same on a named host (tcp only; containers advertise their own hostname).
   std::string compositorOn(uint32_t rank, const std::string& host) const;
   std::string compositorBind(uint32_t rank) const;   // address a compositor binds
-  // Where a renderer takes its binary-swap partners' pieces (the same forms).
-  std::string renderer(uint32_t rank) const;
-  std::string rendererOn(uint32_t rank, const std::string& host) const;
-  std::string rendererBind(uint32_t rank) const;
+  // Where a renderer binds the socket that takes its binary-swap partners' pieces, before it
+  // has a rank: tcp on TESSERA_BIND_HOST (default the base host) at a port the system picks
+  // (so farms sharing a node never collide), ipc/inproc named by `unique`.
+  std::string swapBind(const std::string& unique) const;
+  // What peers connect to once that socket is bound at `bound` (ZeroMQ's last endpoint):
+  // tcp on `host` ("" = the base host), others as bound.
+  std::string swapAdvertised(const std::string& bound, const std::string& host) const;
   // Bind forms: tcp binds on TESSERA_BIND_HOST (default: the base host) so containers can
   // bind 0.0.0.0 while peers connect by service name.
   std::string bind(const std::string& connect_form) const;

@@ -30,6 +30,9 @@ class StageLink {
   // False if `stop` was raised or no Welcome came within timeout_s.
   bool join(const std::atomic<bool>* stop, double timeout_s = 120);
   uint32_t rank() const { return rank_; }
+  // What Hello says as this stage's endpoint (before join): a compositor's advertised host, a
+  // renderer's swap socket.
+  void setAdvertised(std::string endpoint) { advertise_ = std::move(endpoint); }
   zmq::socket_t& sub() { return sub_; }
   // Drains what the master published (non-blocking): FrameParams in order, and whether it
   // said Shutdown. Its membership probes are skipped; malformed messages are dropped and counted.

@@ -36,7 +36,7 @@ const Setting kSettings[] = {
     {"TESSERA_CODEC", Kind::Word, 0, 0, "none|lzo|lz4|zstd"},
     {"TESSERA_FORMAT", Kind::Word, 0, 0, "rgba16f|rgba8|rgba32f"},
     {"TESSERA_TILING", Kind::Word, 0, 0, "balanced|static"},
-    {"TESSERA_COMPOSITING", Kind::Word, 0, 0, "direct-send|binary-swap"},
+    {"TESSERA_COMPOSITING", Kind::Word, 0, 0, "auto|direct-send|binary-swap"},
     {"TESSERA_WINDOW", Kind::Word, 0, 0, "auto|on|off"},
     {"TESSERA_BACKEND", Kind::Word, 0, 0, "cpu|osmesa"},
     {"TESSERA_CURVE", Kind::Word, 0, 0, "auto|on|off"},

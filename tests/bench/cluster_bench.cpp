@@ -26,8 +26,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Sort-last compositing of every run (--compositing): direct-send or binary-swap.
-std::string g_compositing = "direct-send";
+// Sort-last compositing of every run (--compositing): auto (across these emulated hosts:
+// binary swap), direct-send or binary-swap.
+std::string g_compositing = "auto";
 
 struct Config {
   std::string rate, codec;
@@ -35,7 +36,7 @@ struct Config {
   std::string shape() const { return fmt::format("{}R+{}C", renderers, compositors); }
   std::string name() const {
     return fmt::format("{}-{}-f{}-{}-{}r{}c{}", rate, codec, in_flight, size, renderers, compositors,
-                       g_compositing == "binary-swap" ? "-swap" : "");
+                       g_compositing == "auto" ? "" : "-" + g_compositing);
   }
 };
 
@@ -216,7 +217,7 @@ int main(int argc, char** argv) {
   app.add_option("--frames", frames, "frames per run (twice as many below 512^2)")->check(CLI::Range(6, 1000))->capture_default_str();
   app.add_flag("--quick", quick, "one small run (checks that the benchmark works)");
   app.add_option("--compositing", g_compositing, "sort-last compositing of every run")
-      ->check(CLI::IsMember({"direct-send", "binary-swap"}))
+      ->check(CLI::IsMember({"auto", "direct-send", "binary-swap"}))
       ->capture_default_str();
   app.add_option("--goals", rounds, "instead of the sweep: this many rounds of the goals' runs (efficiency, 100 Mbit/s "
                                     "against unlimited), each ratio within a round")

@@ -16,20 +16,26 @@ namespace {
 
 std::string namespaces() { return runCommand("ip netns list", 10).output; }
 
-TEST(EmulatedCluster, OrbitAcrossHostsMatchesOneProcessRender) {
+// swap: binary swap between the renderers (the default across hosts), over their own links
+// (each renderer binds and advertises its swap socket on its host, as compositors do).
+void expectOrbitAcrossHosts(int renderers, bool swap) {
   if (geteuid() != 0) GTEST_SKIP() << "network namespaces need root";
   if (runCommand("ip netns list && tc -V", 10).exit_code != 0) GTEST_SKIP() << "iproute2 (ip, tc) is not installed";
-  FarmDir dir("cluster");
+  FarmDir dir(swap ? "cluster-swap" : "cluster");
   const int frames = 3;
   const auto scene = dir.writeScene(frames);
   const std::string out = (dir.path() / "out").string();
-  const auto r = runCommand("env TESSERA_PREMULTIPLIED=1 TESSERA_SCENE=" + scene.string() +
-                                " TESSERA_RENDERERS=2 TESSERA_COMPOSITORS=1 TESSERA_FRAMES=" + std::to_string(frames) +
+  const auto r = runCommand("env TESSERA_PREMULTIPLIED=1 TESSERA_SCENE=" + scene.string() + " TESSERA_RENDERERS=" +
+                                std::to_string(renderers) + " TESSERA_COMPOSITORS=1 TESSERA_FRAMES=" +
+                                std::to_string(frames) + (swap ? " TESSERA_COMPOSITING=auto" : " TESSERA_COMPOSITING=direct-send") +
                                 " " TESSERA_SOURCE_DIR "/tests/cluster/emulated_cluster.sh --rate 100mbit --out " + out +
                                 " --bin " TESSERA_BINARY_DIR "/bin",
                             240);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("endpoints tcp://10.77.0.1:5550"), std::string::npos) << r.output;
+  if (swap) {
+    EXPECT_NE(r.output.find("binary swap among " + std::to_string(renderers) + " renderers"), std::string::npos) << r.output;
+  }
   for (int k = 0; k < frames; ++k) EXPECT_TRUE(dir.matches(dir.farmFrame(k), dir.reference(scene, k), 1, "frame_" + std::to_string(k))) << "frame " << k;
 
   std::map<std::string, std::pair<long, long>> links;  // host -> bytes sent, received
@@ -37,13 +43,24 @@ TEST(EmulatedCluster, OrbitAcrossHostsMatchesOneProcessRender) {
   std::string host;
   long sent = 0, received = 0;
   while (in >> host >> sent >> received) links[host] = {sent, received};
-  ASSERT_EQ(links.size(), 5u) << "master, display, 2 renderers, 1 compositor";
+  ASSERT_EQ(links.size(), 3u + renderers) << "master, display, the renderers, 1 compositor";
   // Each renderer sends its pieces of 3 frames (97x83 rgba, compressed, some kB at least);
-  // the display receives the composited frames.
-  for (const char* h : {"renderer-1", "renderer-2", "compositor-1"}) EXPECT_GT(links[h].first, 4000) << h;
+  // the display receives the composited frames. With binary swap every renderer also
+  // receives its partners' halves.
+  for (int i = 1; i <= renderers; ++i) {
+    const std::string h = "renderer-" + std::to_string(i);
+    EXPECT_GT(links[h].first, 4000) << h;
+    if (swap) {
+      EXPECT_GT(links[h].second, 2000) << h << " received no swap pieces";
+    }
+  }
+  EXPECT_GT(links["compositor-1"].first, 4000);
   EXPECT_GT(links["display"].second, 4000);
   EXPECT_EQ(namespaces().find("tcl"), std::string::npos) << "left behind:\n" << namespaces();
 }
+
+TEST(EmulatedCluster, OrbitAcrossHostsMatchesOneProcessRender) { expectOrbitAcrossHosts(2, false); }
+TEST(EmulatedCluster, BinarySwapAcrossHostsMatchesOneProcessRender) { expectOrbitAcrossHosts(4, true); }
 
 }  // namespace
 }  // namespace tessera::test

@@ -95,7 +95,13 @@ void expectBadMessagesDroppedAndCounted(bool swap) {
   push(ctx, "ipc://" + (sockets / "compositor-0").string(), zmq::socket_type::dealer, junk);
   push(ctx, "ipc://" + (sockets / "display").string(), zmq::socket_type::dealer, junk);
   push(ctx, "ipc://" + (sockets / "master-ctl").string(), zmq::socket_type::dealer, junk);
-  if (swap) push(ctx, "ipc://" + (sockets / "renderer-0").string(), zmq::socket_type::dealer, junk);
+  if (swap) {  // every renderer's swap socket (named by its identity, not its rank)
+    int found = 0;
+    for (const auto& e : fs::directory_iterator(sockets))
+      if (e.path().filename().string().rfind("renderer-", 0) == 0)
+        ++found, push(ctx, "ipc://" + e.path().string(), zmq::socket_type::dealer, junk);
+    EXPECT_EQ(found, 2) << "swap sockets of the 2 renderers";
+  }
 
   auto run = farm.get();
   ASSERT_EQ(run.exit_code, 0) << run.output;
