@@ -66,6 +66,7 @@ TEST_P(FarmMatchesOneProcess, EveryFrameWithinOneLevel) {
     EXPECT_GT(j["composite_bytes_raw"].get<uint64_t>(), 0u);
     EXPECT_GT(j["composite_decode_ms_max"].get<double>(), 0.0);
     EXPECT_GT(j["composite_active_pixels"].get<uint64_t>(), 100u);
+    EXPECT_EQ(j.contains("render_swap_ms_max"), swap) << line;
   }
   EXPECT_EQ(lines, frames);
 }
