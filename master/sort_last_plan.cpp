@@ -24,9 +24,10 @@ void SortLastPlan::reassign(const Workers& w) {
   bool joined = tree_.bricks.empty();
   for (uint32_t r : w.renderers) joined = joined || std::find(owner_.begin(), owner_.end(), r) == owner_.end();
   // Binary swap needs one brick per renderer: once the renderers are a power of two again
-  // (a lost one's bricks went to a neighbour meanwhile), everyone gets a new split.
+  // while one holds more (a lost one's bricks went to a neighbour), everyone gets a new split.
+  // (A volume too small for n bricks has fewer: it is not split again and again.)
   const size_t n = w.renderers.size();
-  const bool resplit = binary_swap_ && !joined && n >= 2 && (n & (n - 1)) == 0 && tree_.bricks.size() != n;
+  const bool resplit = binary_swap_ && !joined && n >= 2 && (n & (n - 1)) == 0 && tree_.bricks.size() > n;
   if (resplit) spdlog::info("binary swap: a new split of {} bricks for {} renderers", n, n);
   if (joined || resplit) {
     tree_ = splitBricks(volume_, std::max<int>(1, (int)w.renderers.size()), tf_);
@@ -69,7 +70,7 @@ void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
   auto& work = p.work.emplace<proto::SortLastWork>();
   for (size_t i = 0; i < tree_.bricks.size() && i < owner_.size(); ++i) work.bricks.push_back({owner_[i], tree_.bricks[i]});
   work.order = tree_.visibilityOrder(volume_.shape, p.camera);
-  if (binary_swap_) planSwap(work, w);
+  if (binary_swap_) addSwapPlan(work, w);
   std::vector<Rect> active;
   for (const auto& f : balance_ ? last_active_ : decltype(last_active_){}) {
     const int x0 = (int)std::floor(f[0] * p.width), y0 = (int)std::floor(f[1] * p.height);
@@ -84,7 +85,7 @@ void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
 
 // One brick per renderer, 2^k of them (after a loss a renderer holds two bricks and the
 // frames go by direct send until the renderers are a power of two again).
-void SortLastPlan::planSwap(proto::SortLastWork& work, const Workers& w) const {
+void SortLastPlan::addSwapPlan(proto::SortLastWork& work, const Workers& w) const {
   const size_t n = work.bricks.size();
   if (n < 2 || (n & (n - 1)) != 0) return;
   for (const auto& b : work.bricks) {

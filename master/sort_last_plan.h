@@ -26,7 +26,7 @@ class SortLastPlan : public Plan {
   void stats(const proto::StageStats& s, const Workers& w) override;
 
  private:
-  void planSwap(proto::SortLastWork& work, const Workers& w) const;
+  void addSwapPlan(proto::SortLastWork& work, const Workers& w) const;
   std::optional<uint32_t> nearestAliveOwner(int brick, const std::function<bool(uint32_t)>& alive) const;
 
   VolumeSummary volume_;  // the master never holds the voxels

@@ -46,12 +46,25 @@ class Stage {
       steps_ = std::make_unique<StepCache>(scene_, opt.backend, (uint64_t)opt.cache_mb << 20);
       swap_ = std::make_unique<SwapExchange>(ctx, maxPixelMessageBytes(scene_.width, scene_.height),
                                              2 * 16 * size_t(scene_.width) * size_t(scene_.height));
-      // Bound before Hello, which tells the master where it is (no rank is needed for it).
-      std::string id;
-      for (unsigned char c : link_.identity().substr(0, 8)) id += fmt::format("{:02x}", c);
-      swap_->bind(opt.endpoints.swapBind(id));
-      swap_endpoint_ = opt.endpoints.swapAdvertised(swap_->socket().get(zmq::sockopt::last_endpoint), opt.advertise_host);
+      bindSwap();
+    }
+  }
+
+  // The swap socket is bound before Hello, which tells the master where it is (no rank is
+  // needed for it). A renderer that cannot bind says so and gets direct-send frames only.
+  void bindSwap() {
+    std::string id;
+    for (unsigned char c : link_.identity().substr(0, 8)) id += fmt::format("{:02x}", c);
+    const std::string where = opt_.endpoints.swapBind(id);
+    try {
+      swap_->bind(where);
+      swap_endpoint_ = opt_.endpoints.swapAdvertised(swap_->socket().get(zmq::sockopt::last_endpoint),
+                                                     opt_.advertise_host);
       link_.setAdvertised(swap_endpoint_);
+    } catch (const std::exception& e) {
+      spdlog::warn("binary swap unavailable: cannot bind {} ({}); this renderer takes direct-send frames only "
+                   "(set TESSERA_BIND_HOST to an address of this host)", where, e.what());
+      swap_.reset();
     }
   }
 
@@ -107,6 +120,7 @@ class Stage {
       first_wanted_ = std::max(first_wanted_, p.first_wanted);
       queued_.push_back(std::move(p));
     }
+    if (swap_) swap_->setWanted(epoch_, first_wanted_);
     if (items[1].revents & ZMQ_POLLIN)
       if (auto roster = link_.receiveRoster(drops_); roster && swap_) swap_->setRoster(*roster, drops_);
     if (swap_ && (items[2].revents & ZMQ_POLLIN)) swap_->receive(drops_);
@@ -146,7 +160,11 @@ class Stage {
   void renderBricks(const proto::FrameParams& p, const proto::SortLastWork& work, proto::StageStats& st) {
     if (tiles_) return drops_.drop(~0u, "sort-last FrameParams for a geometry scene");
     if (!holdBricks(p, work, st)) return;
-    if (auto plan = planSwap(p, link_.rank())) return swapBrick(p, *plan, st);
+    closeSocketsNotIn(p, work);
+    if (auto plan = planSwap(p, link_.rank())) {
+      if (!swap_) return drops_.drop(~0u, "binary-swap FrameParams for a renderer without a swap socket");
+      return swapBrick(p, *plan, st);
+    }
     swap_rounds_logged_ = 0;  // direct send: say it when swapping starts again
     for (uint32_t b = 0; b < work.bricks.size(); ++b) {
       if (work.bricks[b].renderer != link_.rank()) continue;
@@ -156,7 +174,7 @@ class Stage {
       st.active = unite(st.active, c.active);
       st.active_pixels += c.active.area();
       auto t1 = Clock::now();
-      for (const auto& region : p.regions) sendPiece(p, b, region, c, st);
+      for (const auto& region : p.regions) sendPiece(p, b, region, viewOf(c.image, c.active, region.region), p.format, st);
       st.encode_ms += msSince(t1);
     }
     st.dropped = drops_.total();
@@ -186,25 +204,8 @@ class Stage {
     auto band = swap_->run(p, link_.rank(), plan, c.image, c.active, send, idle, st, drops_);
     if (!band) return spdlog::info("frame={} epoch={}: binary swap given up", p.frame, p.epoch);
     auto t1 = Clock::now();
-    for (const auto& region : p.regions) {
-      proto::Piece piece;
-      piece.frame = p.frame;
-      piece.epoch = p.epoch;
-      piece.renderer = link_.rank();
-      piece.brick = plan.brick;
-      piece.region = region.region;
-      const LayerView part = viewOf(*band, region.region);
-      piece.active = part.rect;
-      piece.format = proto::PixelFormat::RGBA8;
-      piece.pixels = std::move(packed_);
-      packView(part, piece.format, piece.pixels);
-      piece.render_ms = st.work_ms;
-      auto bytes = proto::encode(piece, link_.rank(), p.codec);
-      st.bytes_raw += piece.pixels.size();
-      packed_ = std::move(piece.pixels);
-      st.bytes_encoded += bytes.size();
-      sendBytes(socketFor(region.endpoint), std::move(bytes));
-    }
+    for (const auto& region : p.regions)
+      sendPiece(p, plan.brick, region, viewOf(*band, region.region), proto::PixelFormat::RGBA8, st);
     swap_->recycle(std::move(*band));
     st.encode_ms += msSince(t1);
     st.dropped = drops_.total();
@@ -305,25 +306,35 @@ class Stage {
     return cache_.back();
   }
 
+  // `part`: the pixels of the region (a brick image's, or a binary swap's finished band).
   void sendPiece(const proto::FrameParams& p, uint32_t brick, const proto::CompositorRegion& region,
-                 const Cached& c, proto::StageStats& st) {
+                 const LayerView& part, proto::PixelFormat format, proto::StageStats& st) {
     proto::Piece piece;
     piece.frame = p.frame;
     piece.epoch = p.epoch;
     piece.renderer = link_.rank();
     piece.brick = brick;
     piece.region = region.region;
-    piece.active = intersect(c.active, region.region);
-    piece.format = p.format;
+    piece.active = part.rect;
+    piece.format = format;
     piece.pixels = std::move(packed_);
-    if (!piece.active.empty()) packPixels(c.image, piece.active, p.format, piece.pixels);
-    else piece.pixels.clear();
+    packView(part, format, piece.pixels);
     piece.render_ms = st.work_ms;
     auto bytes = proto::encode(piece, link_.rank(), p.codec);
     st.bytes_raw += piece.pixels.size();
     packed_ = std::move(piece.pixels);
     st.bytes_encoded += bytes.size();
     sendBytes(socketFor(region.endpoint), std::move(bytes));
+  }
+
+  // Peers come and go (a restarted renderer has a new swap port): connections to endpoints
+  // this frame does not name would retry a dead address forever.
+  void closeSocketsNotIn(const proto::FrameParams& p, const proto::SortLastWork& work) {
+    std::erase_if(pushes_, [&](const auto& kv) {
+      const std::string& e = kv.first;
+      return std::none_of(p.regions.begin(), p.regions.end(), [&](const auto& r) { return r.endpoint == e; }) &&
+             std::none_of(work.swap.begin(), work.swap.end(), [&](const auto& s) { return s.endpoint == e; });
+    });
   }
 
   zmq::socket_t& socketFor(const std::string& endpoint) {

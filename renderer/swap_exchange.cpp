@@ -4,7 +4,6 @@
 
 #include "common/clock.h"
 #include "common/net/transport.h"
-#include "common/wire/pixels.h"
 
 namespace tessera::renderer {
 
@@ -12,8 +11,8 @@ proto::PixelFormat swapFormat(proto::PixelFormat f) {
   return f == proto::PixelFormat::RGBA8 ? proto::PixelFormat::RGBA16F : f;
 }
 
-SwapExchange::SwapExchange(zmq::context_t& ctx, int64_t max_message, size_t max_waiting_bytes)
-    : inbox_(ctx, proto::Role::Renderer, max_message, max_waiting_bytes) {}
+SwapExchange::SwapExchange(zmq::context_t& ctx, int64_t max_message, size_t max_held_bytes)
+    : inbox_(ctx, proto::Role::Renderer, max_message, max_held_bytes), max_held_bytes_(max_held_bytes) {}
 
 void SwapExchange::setRoster(const proto::Roster& roster, DropCounter& drops) {
   accept(inbox_.setRoster(roster, drops), drops);
@@ -23,6 +22,7 @@ void SwapExchange::receive(DropCounter& drops) { accept(inbox_.receive(drops), d
 
 void SwapExchange::accept(std::vector<DataInbox::Message> messages, DropCounter& drops) {
   for (auto& [rank, m] : messages) {
+    auto t0 = Clock::now();
     auto piece = proto::decodePiece(view(m));
     if (!piece) {
       drops.drop(rank, "swap piece: " + piece.error());
@@ -32,21 +32,43 @@ void SwapExchange::accept(std::vector<DataInbox::Message> messages, DropCounter&
       drops.drop(rank, "swap piece claims renderer " + std::to_string(piece->renderer));
       continue;
     }
-    if (held_.size() >= kMaxHeld) {  // the oldest first: frames move forward
-      auto oldest = std::min_element(held_.begin(), held_.end(), [](auto& a, auto& b) { return a.frame < b.frame; });
-      drops.drop(oldest->renderer, "swap piece of frame " + std::to_string(oldest->frame) + " evicted: too many held");
-      held_.erase(oldest);
+    if (stale(*piece)) continue;  // a frame given up or cancelled: expected, not a fault
+    if (piece->pixels.size() > max_held_bytes_) {
+      drops.drop(rank, "swap piece of " + std::to_string(piece->pixels.size()) + " bytes exceeds what may be held");
+      continue;
     }
-    held_.push_back(std::move(*piece));
+    evictFor(piece->pixels.size(), drops);
+    held_bytes_ += piece->pixels.size();
+    held_.push_back({std::move(*piece), msSince(t0)});
   }
 }
 
-std::optional<proto::Piece> SwapExchange::take(const proto::FrameParams& p, uint32_t from, const Rect& region) {
+// Room for `bytes` more: stale pieces first, then the farthest frames (the nearest are the
+// ones a round waits for now).
+void SwapExchange::evictFor(size_t bytes, DropCounter& drops) {
+  std::erase_if(held_, [&](const Held& h) {
+    if (!stale(h.piece)) return false;
+    held_bytes_ -= h.piece.pixels.size();
+    return true;
+  });
+  while (!held_.empty() && (held_.size() >= kMaxHeld || held_bytes_ + bytes > max_held_bytes_)) {
+    auto far = std::max_element(held_.begin(), held_.end(), [](const Held& a, const Held& b) {
+      return std::pair(a.piece.epoch, a.piece.frame) < std::pair(b.piece.epoch, b.piece.frame);
+    });
+    drops.drop(far->piece.renderer, "swap piece of frame " + std::to_string(far->piece.frame) + " evicted: too many held");
+    held_bytes_ -= far->piece.pixels.size();
+    held_.erase(far);
+  }
+}
+
+std::optional<SwapExchange::Held> SwapExchange::take(const proto::FrameParams& p, uint32_t from, const Rect& region) {
   for (auto it = held_.begin(); it != held_.end(); ++it) {
-    if (it->frame != p.frame || it->epoch != p.epoch || it->renderer != from || it->region != region) continue;
-    proto::Piece piece = std::move(*it);
+    const proto::Piece& h = it->piece;
+    if (h.frame != p.frame || h.epoch != p.epoch || h.renderer != from || h.region != region) continue;
+    Held found = std::move(*it);
+    held_bytes_ -= found.piece.pixels.size();
     held_.erase(it);
-    return piece;
+    return found;
   }
   return std::nullopt;
 }
@@ -66,8 +88,12 @@ void SwapExchange::recycle(Layer&& l) {
 std::optional<Layer> SwapExchange::run(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan,
                                        const ImageF& img, const Rect& active, const Send& send, const Idle& idle,
                                        proto::StageStats& st, DropCounter& drops) {
-  // Pieces of frames before this one, or of this frame's older issue, will never be used.
-  std::erase_if(held_, [&](const proto::Piece& h) { return h.frame < p.frame || (h.frame == p.frame && h.epoch < p.epoch); });
+  // Pieces of this frame's older issues, and of older frames of this issue, will never be used.
+  std::erase_if(held_, [&](const Held& h) {
+    const bool old = h.piece.epoch < p.epoch || (h.piece.epoch == p.epoch && h.piece.frame < p.frame);
+    if (old) held_bytes_ -= h.piece.pixels.size();
+    return old;
+  });
   const proto::PixelFormat format = swapFormat(p.format);
   Layer mine;
   for (size_t j = 0; j < plan.rounds.size(); ++j) {
@@ -93,25 +119,19 @@ std::optional<Layer> SwapExchange::run(const proto::FrameParams& p, uint32_t me,
     send(r.endpoint, std::move(bytes));
     st.encode_ms += msSince(t0);
 
-    auto waited = Clock::now();
-    std::optional<proto::Piece> in;
+    std::optional<Held> in;
     for (;;) {
       in = take(p, r.partner, r.keep);
-      if (in && in->format == format) break;
+      if (in && in->piece.format == format) break;
       if (in) drops.drop(r.partner, "swap piece in another pixel format than the frame's");
       if (!idle(50)) return std::nullopt;
-      if (msSince(waited) > kWaitS * 1000) {
-        spdlog::warn("frame={} epoch={}: no swap piece from renderer {} in {:.0f} s; frame given up", p.frame, p.epoch,
-                     r.partner, kWaitS);
-        return std::nullopt;
-      }
     }
     auto t1 = Clock::now();
     const LayerView kept = j == 0 ? viewOf(img, active, r.keep) : viewOf(mine, r.keep);
-    Layer blended = blendLayer(kept, in->pixels, in->active, format, r.partner_in_front, takeSpare());
+    Layer blended = blendLayer(kept, in->piece.pixels, in->piece.active, format, r.partner_in_front, takeSpare());
     recycle(std::move(mine));
     mine = std::move(blended);
-    st.decode_ms += msSince(t1);
+    st.decode_ms += in->decode_ms + msSince(t1);
   }
   return mine;
 }

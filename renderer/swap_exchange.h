@@ -1,8 +1,9 @@
 // A renderer's side of binary swap (swap_plan.h): its peer socket, where partners' pieces
 // arrive (admitted by the master's Roster like the compositors' pieces), and the rounds of
 // one frame. A partner may run ahead into its next frame, so pieces wait here until their
-// round comes; pieces of frames left behind (cancelled, or issued again under a new epoch)
-// are discarded quietly, malformed ones are dropped and counted. Single-threaded.
+// round comes, bounded in count and bytes (the farthest frames go first); pieces of frames
+// left behind (cancelled, or issued again under a new epoch) are discarded quietly, as they
+// arrive or when a frame starts; malformed ones are dropped and counted. Single-threaded.
 #pragma once
 #include <functional>
 #include <optional>
@@ -13,20 +14,21 @@
 
 #include "common/net/data_inbox.h"
 #include "common/net/log.h"
+#include "renderer/swap_layer.h"
 #include "renderer/swap_plan.h"
 
 namespace tessera::renderer {
 
 class SwapExchange {
  public:
-  // No piece for this long means the frame is lost: the master has bumped the epoch long
-  // before (a dead partner misses heartbeats, a silent one its frame deadline).
-  static constexpr double kWaitS = 30.0;
   static constexpr size_t kMaxHeld = 64;  // pieces held for later rounds or frames
 
-  SwapExchange(zmq::context_t& ctx, int64_t max_message, size_t max_waiting_bytes);
+  // `max_held_bytes`: pixel bytes held at most (a few frames' worth).
+  SwapExchange(zmq::context_t& ctx, int64_t max_message, size_t max_held_bytes);
   void bind(const std::string& endpoint) { inbox_.bind(endpoint); }
   zmq::socket_t& socket() { return inbox_.socket(); }
+  // Pieces older than this are of no use (the renderer's newest epoch and first wanted frame).
+  void setWanted(uint32_t epoch, uint64_t first_wanted) { epoch_ = epoch, first_wanted_ = first_wanted; }
   void setRoster(const proto::Roster& roster, DropCounter& drops);
   void receive(DropCounter& drops);  // drains the socket (non-blocking)
 
@@ -36,7 +38,9 @@ class SwapExchange {
   // says whether frame p is still wanted.
   using Idle = std::function<bool(int ms)>;
   // The rounds of frame p for brick image `img` (active within `active`): the finished band,
-  // or nullopt when the frame was given up (no longer wanted, or no piece within kWaitS).
+  // or nullopt when the frame was given up (no longer wanted: a new epoch, a cancel, Shutdown
+  // or the master's loss; a lost partner ends in a new epoch, a silent one at the master's
+  // frame deadline). st gets the bytes sent, encode and decode-and-blend times.
   std::optional<Layer> run(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan, const ImageF& img,
                            const Rect& active, const Send& send, const Idle& idle, proto::StageStats& st,
                            DropCounter& drops);
@@ -44,12 +48,24 @@ class SwapExchange {
   void recycle(Layer&& l);
 
  private:
+  struct Held {
+    proto::Piece piece;
+    double decode_ms = 0;
+  };
+  bool stale(const proto::Piece& p) const {
+    return p.epoch < epoch_ || (p.epoch == epoch_ && p.frame < first_wanted_);
+  }
   void accept(std::vector<DataInbox::Message> messages, DropCounter& drops);
+  void evictFor(size_t bytes, DropCounter& drops);
   std::vector<float> takeSpare();
-  std::optional<proto::Piece> take(const proto::FrameParams& p, uint32_t from, const Rect& region);
+  std::optional<Held> take(const proto::FrameParams& p, uint32_t from, const Rect& region);
 
   DataInbox inbox_;
-  std::vector<proto::Piece> held_;
+  size_t max_held_bytes_;
+  uint32_t epoch_ = 0;
+  uint64_t first_wanted_ = 0;
+  std::vector<Held> held_;
+  size_t held_bytes_ = 0;
   std::vector<std::byte> packed_;
   std::vector<std::vector<float>> spares_;
 };

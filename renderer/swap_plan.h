@@ -12,7 +12,6 @@
 #pragma once
 #include <cstdint>
 #include <optional>
-#include <span>
 #include <string>
 #include <vector>
 
@@ -36,28 +35,5 @@ struct SwapPlan {
 
 // This renderer's rounds in frame p; nullopt when the frame has no swap plan or no brick of it.
 std::optional<SwapPlan> planSwap(const proto::FrameParams& p, uint32_t me);
-
-// Premultiplied float RGBA of screen rectangle `rect` (empty rect: nothing).
-struct Layer {
-  Rect rect;
-  ImageF img;  // rect.w x rect.h
-};
-// Part of a float image that covers screen rect `covers`, without copying it.
-struct LayerView {
-  const ImageF* img = nullptr;
-  Rect covers;  // the screen rect img holds
-  Rect rect;    // the part viewed (inside covers, or empty)
-};
-inline LayerView viewOf(const Layer& l, const Rect& part) { return {&l.img, l.rect, intersect(l.rect, part)}; }
-inline LayerView viewOf(const ImageF& full, const Rect& active, const Rect& part) {
-  return {&full, {0, 0, full.width, full.height}, intersect(active, part)};
-}
-
-// The viewed pixels as wire pixels.
-void packView(const LayerView& v, proto::PixelFormat f, std::vector<std::byte>& out);
-// `mine` blended with a partner's pixels of screen rect `theirs` (wire format f): the partner's
-// run of bricks in front of or behind this renderer's. `storage`: memory to reuse.
-Layer blendLayer(const LayerView& mine, std::span<const std::byte> pixels, const Rect& theirs, proto::PixelFormat f,
-                 bool partner_in_front, std::vector<float>&& storage = {});
 
 }  // namespace tessera::renderer

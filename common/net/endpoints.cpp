@@ -90,8 +90,12 @@ std::string Endpoints::swapBind(const std::string& unique) const {
 
 std::string Endpoints::swapAdvertised(const std::string& bound, const std::string& host) const {
   if (!startsWith(bound, "tcp://")) return bound;
-  const std::string port = bound.substr(bound.rfind(':') + 1);
-  return "tcp://" + (host.empty() ? parseTcp(base).host : host) + ":" + port;
+  const size_t colon = bound.rfind(':');
+  if (!host.empty()) return "tcp://" + host + bound.substr(colon);
+  const std::string bound_host = bound.substr(6, colon - 6);
+  // Bound on every interface: the one that routes to the master is the one peers can reach.
+  if (bound_host == "0.0.0.0" || bound_host == "[::]") return "tcp://" + localAddressTowardMaster() + bound.substr(colon);
+  return bound;
 }
 
 std::string resolveAdvertiseHost(const std::string& advertise, const Endpoints& endpoints) {

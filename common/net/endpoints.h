@@ -23,7 +23,8 @@ struct Endpoints {
   // (so farms sharing a node never collide), ipc/inproc named by `unique`.
   std::string swapBind(const std::string& unique) const;
   // What peers connect to once that socket is bound at `bound` (ZeroMQ's last endpoint):
-  // tcp on `host` ("" = the base host), others as bound.
+  // tcp on `host`, or ("" ) the bound address, or when bound on every interface the address
+  // on the route to the master; others as bound.
   std::string swapAdvertised(const std::string& bound, const std::string& host) const;
   // Bind forms: tcp binds on TESSERA_BIND_HOST (default: the base host) so containers can
   // bind 0.0.0.0 while peers connect by service name.

@@ -79,6 +79,8 @@ struct Header {
 
 // ---- messages ---------------------------------------------------------------------
 // Hello:      role u8 1 (1..Role::Last) | pid u32 4 | endpoint str 4+n | run str 4+n
+//             endpoint: a compositor's advertised host ("" = the base host); a renderer's
+//             binary-swap socket as peers reach it ("" = none: direct send only)
 //             run: the farm's identity (TESSERA_RUN); the master refuses any other
 // Welcome:    role u8 1 (1..Role::Last) | rank u32 4
 // Heartbeat:  role u8 1 (1..Role::Last) | rank u32 4
@@ -170,7 +172,7 @@ struct CompositorRegion {
 //   order                      u32      4     count == bricks count, then:
 //   order[i]                   i32      4     together a permutation of 0..count-1
 //   swap                       u32      4     count 0 (direct send) or == bricks count, a power
-//                                             of two >= 2, then per renderer (>= 8 bytes):
+//                                             of two >= 2, then per renderer (>= 9 bytes):
 //   swap.renderer              u32      4     each renderer of `bricks` exactly once
 //   swap.endpoint              str      4+n   n >= 1: where that renderer takes swap pieces
 // sort-first (mode 2):

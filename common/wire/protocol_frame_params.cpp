@@ -94,7 +94,7 @@ void readBricks(ByteReader& r, SortLastWork& m) {
 
 // A swap plan names every renderer of the bricks once, one brick each, 2^k of them.
 void readSwap(ByteReader& r, SortLastWork& m) {
-  const uint32_t n = r.count("swap", kMaxBricks, 8);
+  const uint32_t n = r.count("swap", kMaxBricks, 4 + 4 + 1);
   if (!r.ok() || n == 0) return;
   if (n != m.bricks.size() || n < 2 || (n & (n - 1)) != 0) {
     r.fail("swap has " + std::to_string(n) + " renderers for " + std::to_string(m.bricks.size()) +

@@ -15,6 +15,23 @@ TEST(Endpoints, TcpPortsFollowTheBase) {
   EXPECT_EQ(ep.compositorOn(1, "10.1.2.9"), "tcp://10.1.2.9:5561");
 }
 
+// A renderer's swap socket: a port the system picks, advertised as a peer can reach it.
+TEST(Endpoints, SwapSocketOnAPortTheSystemPicks) {
+  const Endpoints tcp = makeEndpoints("tcp://127.0.0.1:5550");
+  unsetenv("TESSERA_BIND_HOST");
+  EXPECT_EQ(tcp.swapBind("ab12"), "tcp://127.0.0.1:*");
+  EXPECT_EQ(tcp.swapAdvertised("tcp://127.0.0.1:41234", ""), "tcp://127.0.0.1:41234");
+  EXPECT_EQ(tcp.swapAdvertised("tcp://0.0.0.0:41234", "node7"), "tcp://node7:41234");
+  // Bound on every interface, nothing advertised: the address on the route to the master.
+  EXPECT_EQ(tcp.swapAdvertised("tcp://0.0.0.0:41234", ""), "tcp://127.0.0.1:41234");
+  setenv("TESSERA_BIND_HOST", "0.0.0.0", 1);
+  EXPECT_EQ(tcp.swapBind("ab12"), "tcp://0.0.0.0:*");
+  unsetenv("TESSERA_BIND_HOST");
+  const Endpoints ipc = makeEndpoints("ipc://" + std::string(testing::TempDir()) + "swap-ep");
+  EXPECT_EQ(ipc.swapBind("ab12"), ipc.base + "/renderer-ab12");
+  EXPECT_EQ(ipc.swapAdvertised(ipc.base + "/renderer-ab12", "node7"), ipc.base + "/renderer-ab12");
+}
+
 TEST(Endpoints, DisplayHostFromTheEnvironmentAndEmptyMeansUnset) {
   const Endpoints ep = makeEndpoints("tcp://master:5550");
   setenv("TESSERA_DISPLAY_HOST", "", 1);  // compose.yaml passes unset settings as empty

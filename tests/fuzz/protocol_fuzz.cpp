@@ -79,6 +79,8 @@ void writeSeeds(const std::string& dir) {
   fp.regions = {{0, {0, 0, 64, 16}, "a"}, {1, {0, 16, 64, 16}, "b"}};
   fp.step = 3, fp.next_step = 4;
   writeSeed(dir, n, encode(fp, 1));
+  std::get<SortLastWork>(fp.work).swap = {{0, "ipc:///tmp/r0"}, {1, "tcp://10.0.0.2:40001"}};  // binary swap
+  writeSeed(dir, n, encode(fp, 1));
   fp.work = SortFirstWork{{{0, 1, {0, 0, 32, 32}}, {1, 0, {32, 0, 32, 32}}}};
   writeSeed(dir, n, encode(fp, 1));
   StageStats st;  // fields by name: a partial brace list warns (-Wmissing-field-initializers)

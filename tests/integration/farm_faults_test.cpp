@@ -313,7 +313,8 @@ TEST(FarmFaults, KilledCompositorIsRestartedAndEveryFrameIsDoneOnce) {
 TEST(FarmFaults, FrozenRendererResumesAndGetsWorkAgain) {
   FarmDir dir("stop-renderer");
   constexpr int kFrames = 4 * kFaultFrames;
-  auto scene = dir.writeScene(kFrames, 40, 160, 120);
+  // 320x240: at 160x120 the farm finished all frames (~7 s) before the 5 s hold-out ended.
+  auto scene = dir.writeScene(kFrames, 40, 320, 240);
   const fs::path sockets = dir.path() / "sockets";
   auto run = runWithFault(dir, scene, [&] {
     auto victims = farmPids(sockets, "tessera-renderer");

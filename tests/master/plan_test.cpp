@@ -73,6 +73,47 @@ TEST(SortLastPlan, ALostRendererBricksGoToANeighbourAndNoOtherBrickMoves) {
   EXPECT_EQ(joined[3].renderer, 7u);
 }
 
+// Binary swap: a plan only for 2^k renderers with one brick and a swap endpoint each; after a
+// loss leaves 2^k renderers with one holding two bricks, everyone gets one brick again.
+TEST(SortLastPlan, SwapPlanOnlyForOneBrickEachAndAPowerOfTwo) {
+  Scene scene = defaultScene();
+  scene.volume = GeneratorSpec{"hollow-shell", 64, 1};
+  SortLastPlan plan(summarizeVolume(scene), scene.tf, true, /*binary_swap=*/true);
+  auto fill = [&](const Workers& w) {
+    proto::FrameParams p = sized(64, 48);
+    p.camera = scene.camera;
+    plan.fill(p, w);
+    return *p.sortLast();
+  };
+  Workers w{{0, 1, 2, 4}, {{9, "ep9"}}, {"r0", "r1", "r2", "r4"}};
+  plan.reassign(w);
+  auto work = fill(w);
+  ASSERT_EQ(work.swap.size(), 4u);
+  for (size_t b = 0; b < 4; ++b) {
+    EXPECT_EQ(work.swap[b].renderer, work.bricks[b].renderer);
+    EXPECT_EQ(work.swap[b].endpoint, "r" + std::to_string(work.bricks[b].renderer));
+  }
+  Workers no_socket = w;
+  no_socket.renderer_endpoints[2] = "";  // renderer 2 could not bind its swap socket
+  EXPECT_TRUE(fill(no_socket).swap.empty());
+  w = {{0, 2, 4}, {{9, "ep9"}}, {"r0", "r2", "r4"}};  // renderer 1 lost: 3 renderers, 4 bricks
+  plan.reassign(w);
+  work = fill(w);
+  EXPECT_EQ(work.bricks.size(), 4u);
+  EXPECT_TRUE(work.swap.empty()) << "direct send while a renderer holds two bricks";
+  w = {{0, 2}, {{9, "ep9"}}, {"r0", "r2"}};  // another lost: two renderers, a new split of two
+  plan.reassign(w);
+  work = fill(w);
+  ASSERT_EQ(work.bricks.size(), 2u);
+  EXPECT_EQ(work.swap.size(), 2u);
+  SortLastPlan direct(summarizeVolume(scene), scene.tf, true);
+  direct.reassign(w);
+  proto::FrameParams p = sized(64, 48);
+  p.camera = scene.camera;
+  direct.fill(p, w);
+  EXPECT_TRUE(p.sortLast()->swap.empty()) << "direct send unless asked";
+}
+
 TEST(SortLastPlan, BandsFollowTheLatestFramesActivePixels) {
   Scene scene = defaultScene();
   scene.volume = GeneratorSpec{"hollow-shell", 16, 1};

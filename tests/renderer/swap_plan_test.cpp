@@ -10,6 +10,7 @@
 #include <random>
 
 #include "common/wire/pixels.h"
+#include "renderer/swap_layer.h"
 #include "renderer/swap_plan.h"
 
 namespace tessera::renderer {

@@ -1,0 +1,121 @@
+// The renderer's binary-swap inbox (renderer/swap_exchange.h) over a real ZeroMQ socket:
+// a partner's pieces wait for their round; malformed pieces and pieces that claim another
+// renderer are dropped and counted, pieces of given-up frames are discarded quietly, the
+// held pieces stay bounded (the farthest frames go first), and a round whose frame is no
+// longer wanted ends at once.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+#include "common/net/transport.h"
+#include "renderer/swap_exchange.h"
+
+namespace tessera::renderer {
+namespace {
+
+const std::string kPartner = std::string(16, 'p') + "d";  // a data routing id, as StageLink makes them
+
+proto::Piece piece(uint64_t frame, uint32_t epoch, uint32_t renderer, const Rect& region) {
+  proto::Piece p;
+  p.frame = frame;
+  p.epoch = epoch;
+  p.renderer = renderer;
+  p.region = region;
+  p.active = {region.x, region.y, 2, 2};
+  p.format = proto::PixelFormat::RGBA16F;
+  p.pixels.assign(2 * 2 * 8, std::byte{0});
+  return p;
+}
+
+struct Rig {
+  zmq::context_t ctx;
+  DropCounter drops;
+  SwapExchange ex{ctx, 1 << 20, 4096};
+  zmq::socket_t partner{ctx, zmq::socket_type::dealer};
+  Rig() {
+    ex.bind("inproc://swap-exchange-test");
+    ex.setRoster(proto::Roster{1, {{proto::Role::Renderer, 7, kPartner}}}, drops);
+    partner.set(zmq::sockopt::routing_id, kPartner);
+    partner.connect("inproc://swap-exchange-test");
+  }
+  void send(std::vector<std::byte> bytes) { partner.send(zmq::buffer(bytes.data(), bytes.size()), zmq::send_flags::none); }
+  // Receives until `n` messages were taken in (inproc delivers at once; bounded anyway).
+  void settle() {
+    for (int i = 0; i < 20; ++i) {
+      ex.receive(drops);
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
+};
+
+proto::FrameParams frameOf(uint64_t frame, uint32_t epoch, int w, int h) {
+  proto::FrameParams p;
+  p.frame = frame;
+  p.epoch = epoch;
+  p.width = w;
+  p.height = h;
+  p.format = proto::PixelFormat::RGBA16F;
+  p.codec = Codec::None;
+  return p;
+}
+
+TEST(SwapExchange, BadPiecesAreCountedStaleOnesDiscardedAndTheRightOneTaken) {
+  Rig rig;
+  const Rect keep{0, 0, 8, 4};
+  auto bad = proto::encode(piece(5, 2, 7, keep), 7, Codec::Lzo);
+  bad.back() ^= std::byte{0x5A};  // checksum no longer matches
+  rig.send(bad);
+  rig.send(proto::encode(piece(5, 2, 3, keep), 7, Codec::None));  // claims renderer 3
+  rig.ex.setWanted(2, 5);
+  rig.send(proto::encode(piece(4, 2, 7, keep), 7, Codec::None));  // cancelled frame: quiet
+  rig.send(proto::encode(piece(5, 1, 7, keep), 7, Codec::None));  // older epoch: quiet
+  rig.send(proto::encode(piece(6, 2, 7, keep), 7, Codec::None));  // the next frame: held
+  rig.send(proto::encode(piece(5, 2, 7, keep), 7, Codec::None));  // the one this round needs
+  rig.settle();
+  EXPECT_EQ(rig.drops.total(), 2u);
+
+  // A 2-renderer plan: this renderer (rank 9) is behind renderer 7, keeps the lower half.
+  SwapPlan plan;
+  plan.brick = 1;
+  plan.rounds.push_back({7, "inproc://nowhere", keep, {0, 4, 8, 4}, true});
+  plan.band = keep;
+  ImageF img(8, 8);
+  std::vector<std::string> sent_to;
+  auto send = [&](const std::string& endpoint, std::vector<std::byte>&&) { sent_to.push_back(endpoint); };
+  int idles = 0;
+  auto idle = [&](int) { return ++idles < 5; };
+  proto::StageStats st;
+  auto band = rig.ex.run(frameOf(5, 2, 8, 8), 9, plan, img, {0, 0, 8, 8}, send, idle, st, rig.drops);
+  ASSERT_TRUE(band);
+  EXPECT_EQ(idles, 0) << "the piece was already there";
+  EXPECT_EQ(sent_to, std::vector<std::string>{"inproc://nowhere"});
+  EXPECT_EQ(band->rect, keep);
+  // Frame 6's piece waited; frame 7 has none: its round ends when the frame is no longer wanted.
+  EXPECT_TRUE(rig.ex.run(frameOf(6, 2, 8, 8), 9, plan, img, {0, 0, 8, 8}, send, idle, st, rig.drops));
+  idles = 0;
+  EXPECT_FALSE(rig.ex.run(frameOf(7, 2, 8, 8), 9, plan, img, {0, 0, 8, 8}, send, idle, st, rig.drops));
+  EXPECT_EQ(idles, 5);
+  EXPECT_EQ(rig.drops.total(), 2u);
+}
+
+TEST(SwapExchange, HeldPiecesAreBoundedAndTheFarthestFramesGoFirst) {
+  Rig rig;  // holds at most 4096 pixel bytes: 128 pieces of 32 bytes would not fit
+  const Rect keep{0, 0, 8, 4};
+  for (uint64_t f = 200; f > 10; --f) rig.send(proto::encode(piece(f, 1, 7, keep), 7, Codec::None));
+  rig.settle();
+  EXPECT_GT(rig.drops.total(), 0u) << "evictions are counted";
+  // The nearest frame survived the evictions.
+  SwapPlan plan;
+  plan.rounds.push_back({7, "x", keep, {0, 4, 8, 4}, false});
+  plan.band = keep;
+  ImageF img(8, 8);
+  proto::StageStats st;
+  auto none = [](const std::string&, std::vector<std::byte>&&) {};
+  auto give_up = [](int) { return false; };
+  EXPECT_TRUE(rig.ex.run(frameOf(11, 1, 8, 8), 9, plan, img, {0, 0, 8, 8}, none, give_up, st, rig.drops));
+  EXPECT_FALSE(rig.ex.run(frameOf(200, 1, 8, 8), 9, plan, img, {0, 0, 8, 8}, none, give_up, st, rig.drops));
+}
+
+}  // namespace
+}  // namespace tessera::renderer
