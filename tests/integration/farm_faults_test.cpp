@@ -71,7 +71,7 @@ void expectBadMessagesDroppedAndCounted(bool swap) {
   auto scene = dir.writeScene(frames, 40, 160, 120);
   const fs::path sockets = dir.path() / "sockets";
   auto farm = std::async(std::launch::async, [&] {
-    return dir.runFarm(scene, 2, 1, frames, 180, swap ? "--env TESSERA_COMPOSITING=binary-swap" : "");
+    return dir.runFarm(scene, 2, 1, frames, 180, swap ? "--env TESSERA_COMPOSITING=binary-swap" : "--env TESSERA_COMPOSITING=direct-send");
   });
   ASSERT_TRUE(waitFor([&] { return fs::exists(dir.frame(1)); }, 60s)) << "the farm produced no frame";
 
@@ -257,7 +257,7 @@ void expectKilledRendererReplaced(bool swap) {
     auto victims = farmPids(sockets, "tessera-renderer");
     ASSERT_EQ(victims.size(), 2u);
     ASSERT_EQ(kill(victims[0], SIGKILL), 0);
-  }, kFaultFrames, swap ? "--env TESSERA_COMPOSITING=binary-swap" : "");
+  }, kFaultFrames, swap ? "--env TESSERA_COMPOSITING=binary-swap" : "--env TESSERA_COMPOSITING=direct-send");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("died (signal 9); restarting (restart: on-failure, attempt 1)"), std::string::npos)
       << run.output;

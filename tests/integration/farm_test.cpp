@@ -35,7 +35,7 @@ TEST_P(FarmMatchesOneProcess, EveryFrameWithinOneLevel) {
   const int frames = 3;
   auto scene = dir.writeScene(6);
   auto run = dir.runFarm(scene, renderers, compositors, frames, 120,
-                         swap ? "--env TESSERA_COMPOSITING=binary-swap" : "");
+                         swap ? "--env TESSERA_COMPOSITING=binary-swap" : "--env TESSERA_COMPOSITING=direct-send");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("frame 3 of 3 (100%)"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("run summary: 3 frames in "), std::string::npos) << run.output;
