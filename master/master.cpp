@@ -14,8 +14,7 @@
 #include "common/net/transport.h"
 #include "master/membership.h"
 #include "master/metrics.h"
-#include "master/sort_first_plan.h"
-#include "master/sort_last_plan.h"
+#include "master/plan.h"
 
 namespace tessera::master {
 namespace {
@@ -51,10 +50,7 @@ class Master {
       spdlog::info("interactive run: a frame is rendered when the display window sends input (drag: orbit, wheel: zoom, "
                    "Space: play a series, h: help); without a window only the first frame is rendered (a series plays on). "
                    "Ctrl-C or closing the window stops it");
-    // Sort-first (geometry) scenes need no volume here: renderers own the mesh.
-    plan_ = sortFirst() ? std::unique_ptr<Plan>(std::make_unique<SortFirstPlan>(opt_.balance, opt_.tiles_per_renderer))
-                        : std::make_unique<SortLastPlan>(summarizeVolume(opt_.scene), opt_.scene.tf, opt_.balance,
-                                                         opt_.binary_swap);
+    plan_ = makePlan(opt_.scene, opt_.balance, opt_.tiles_per_renderer, opt_.binary_swap);
   }
 
   int run(const std::atomic<bool>* stop) {
@@ -123,9 +119,8 @@ class Master {
     }
     bool joined = false;
     Member& m = members_.join(identity, h, Clock::now(), &joined);
-    if (joined && h.role == Role::Compositor) m.endpoint = opt_.endpoints.compositorOn(m.rank, h.endpoint);
-    // A renderer says where its swap socket is (an endpoint it bound, port chosen by the system).
-    if (joined && h.role == Role::Renderer) m.endpoint = h.endpoint;
+    // Where peers reach it: a compositor says its host, a renderer its bound swap socket.
+    if (joined) m.endpoint = h.role == Role::Compositor ? opt_.endpoints.compositorOn(m.rank, h.endpoint) : h.endpoint;
     sendTo(identity, proto::encode(proto::Welcome{m.role, m.rank}, kMasterRank));
     if (!joined) return;
     spdlog::info("{} {} joined pid={}{}", roleName(h.role), m.rank, h.pid,
@@ -206,8 +201,7 @@ class Master {
     metrics_.reissued(again.size());
   }
 
-  // Who may send pieces and strips, to the stages that receive them (renderers: swap
-  // pieces), privately (never on PUB).
+  // Who may send pieces (also swap pieces) and strips, to their receivers, privately (never on PUB).
   void sendRoster() {
     const auto roster = members_.roster();
     for (Role role : {Role::Renderer, Role::Compositor, Role::Display})

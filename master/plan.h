@@ -3,9 +3,11 @@
 // stages' Stats (active pixels, tile costs) to balance the next frames.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "common/scene.h"
 #include "common/wire/protocol.h"
 
 namespace tessera::master {
@@ -31,5 +33,9 @@ class Plan {
   // A renderer's accepted Stats.
   virtual void stats(const proto::StageStats& s, const Workers& w) = 0;
 };
+
+// The scene's plan: sort-first for a mesh (the master needs no volume: renderers own the
+// mesh), else sort-last from a streamed summary of the volume.
+std::unique_ptr<Plan> makePlan(const Scene& scene, bool balance, int tiles_per_renderer, bool binary_swap);
 
 }  // namespace tessera::master

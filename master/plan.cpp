@@ -1,0 +1,13 @@
+#include "master/plan.h"
+
+#include "master/sort_first_plan.h"
+#include "master/sort_last_plan.h"
+
+namespace tessera::master {
+
+std::unique_ptr<Plan> makePlan(const Scene& scene, bool balance, int tiles_per_renderer, bool binary_swap) {
+  if (scene.mesh) return std::make_unique<SortFirstPlan>(balance, tiles_per_renderer);
+  return std::make_unique<SortLastPlan>(summarizeVolume(scene), scene.tf, balance, binary_swap);
+}
+
+}  // namespace tessera::master
