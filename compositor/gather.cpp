@@ -29,9 +29,8 @@ std::string Gather::check(const proto::FrameParams& p, const proto::Piece& piece
   if (piece.brick >= work->bricks.size())
     return "piece for brick " + std::to_string(piece.brick) + " of " + std::to_string(work->bricks.size());
   if (work->bricks[piece.brick].renderer != piece.renderer) return "piece from a renderer not assigned that brick";
-  // A binary swap's pieces are finished bands: rgba8, whatever the frame's format.
-  if (piece.format != (work->swap.empty() ? p.format : proto::PixelFormat::RGBA8))
-    return "piece pixel format differs from FrameParams";
+  if (!work->swap.empty()) return "piece for a binary-swap frame (its bands go to the display)";
+  if (piece.format != p.format) return "piece pixel format differs from FrameParams";
   for (const auto& reg : p.regions)
     if (reg.compositor == rank_ && reg.region != piece.region) return "piece cut for another region";
   return "";
@@ -188,7 +187,10 @@ std::optional<Gather::Ready> Gather::pop() {
     Frame& f = it->second;
     if (!f.params || !allOfEpoch(f, f.params->epoch)) continue;  // newer parts: newer FrameParams are coming
     const proto::SortLastWork* sort_last = f.params->sortLast();
-    if (sort_last ? f.pieces.size() != sort_last->bricks.size()
+    // A sort-last frame without a region of ours (a binary swap's) has nothing to wait for.
+    const bool mine = std::any_of(f.params->regions.begin(), f.params->regions.end(),
+                                  [&](const auto& reg) { return reg.compositor == rank_; });
+    if (sort_last ? mine && f.pieces.size() != sort_last->bricks.size()
                   : f.framebuffers.size() != routedRenderers(*f.params).size())
       continue;
     Ready r;

@@ -23,7 +23,7 @@ class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
       : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Compositor, opt.advertise_host),
-        inbox_(ctx, proto::Role::Renderer, maxPixelMessageBytes(opt.width, opt.height),
+        inbox_(ctx, {proto::Role::Renderer}, maxPixelMessageBytes(opt.width, opt.height),
                Gather::waitingBudget(opt.width, opt.height)),
         gather_(0) {}
 
@@ -67,7 +67,7 @@ class Stage {
   // Pieces (sort-last) or framebuffers (sort-first) from roster members; the renderer a
   // message names must be the one its connection belongs to.
   void accept(std::vector<DataInbox::Message> messages) {
-    for (auto& [rank, m] : messages) {
+    for (auto& [rank, m, role] : messages) {
       auto t0 = Clock::now();
       auto h = proto::decodeHeader(view(m));
       if (!h) {
@@ -105,7 +105,11 @@ class Stage {
     st.epoch = r.params.epoch;
     if (auto it = decode_ms_.find(st.frame); it != decode_ms_.end()) st.decode_ms = it->second;
     decode_ms_.erase(decode_ms_.begin(), decode_ms_.upper_bound(st.frame));
-    if (!r.region) return;  // a spare compositor this frame: nothing to report
+    if (!r.region) {  // no part in this frame (a binary swap's, or a spare compositor's)
+      if (drops_.total() == reported_drops_) return;  // nothing to report
+      st.dropped = reported_drops_ = drops_.total();  // else its drops reach the metrics all the same
+      return link_.report(proto::encode(st, link_.rank()));
+    }
     auto t0 = Clock::now();
     const Rect& reg = *r.region;
     if (frame_.width != r.params.width || frame_.height != r.params.height)
@@ -119,7 +123,7 @@ class Stage {
     proto::Strips s;
     s.frame = r.params.frame;
     s.epoch = r.params.epoch;
-    s.compositor = link_.rank();
+    s.sender = link_.rank();
     if (sort_last) {
       s.stream = encodeStrips(frame_, reg, 0);
     } else {
@@ -137,7 +141,7 @@ class Stage {
     st.bytes_raw = s.stream.size();
     st.bytes_encoded = bytes.size();
     sendBytes(display(r.params.display_endpoint), std::move(bytes));
-    st.dropped = drops_.total();
+    st.dropped = reported_drops_ = drops_.total();
     link_.report(proto::encode(st, link_.rank()));
   }
 
@@ -174,6 +178,7 @@ class Stage {
   Image8 frame_;
   std::map<uint64_t, double> decode_ms_;  // by frame
   DropCounter drops_;
+  uint64_t reported_drops_ = 0;
 };
 
 }  // namespace

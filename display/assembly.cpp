@@ -2,17 +2,31 @@
 
 #include <algorithm>
 
+#include <fmt/format.h>
+
 namespace tessera::display {
 namespace {
 
-std::string checkMember(const proto::FrameParams& p, const proto::Strips& s) {
+std::string checkMember(const proto::FrameParams& p, const Assembly::Source& from, const proto::Strips& s) {
   if (s.epoch != p.epoch) return "strips epoch differs from FrameParams";
-  for (const auto& r : p.regions)
-    if (r.compositor == s.compositor) return "";
-  return "strips from compositor " + std::to_string(s.compositor) + " that has no region in the frame";
+  for (const auto& src : Assembly::sourcesOf(p))
+    if (src == from) return "";
+  return fmt::format("strips from {} {} that {}", proto::roleName(from.role), from.rank,
+                     from.role == proto::Role::Renderer ? "has no band in the frame (not a binary-swap frame of it)"
+                                                       : "has no region in the frame");
 }
 
 }  // namespace
+
+std::vector<Assembly::Source> Assembly::sourcesOf(const proto::FrameParams& p) {
+  std::vector<Source> out;
+  if (const auto* work = p.sortLast(); work && !work->swap.empty()) {
+    for (const auto& peer : work->swap) out.push_back({proto::Role::Renderer, peer.renderer});
+    return out;
+  }
+  for (const auto& r : p.regions) out.push_back({proto::Role::Compositor, r.compositor});
+  return out;
+}
 
 void Assembly::addParams(proto::FrameParams p) {
   if (p.epoch < epoch_) return;  // stale: its frames were issued again
@@ -30,21 +44,21 @@ void Assembly::addParams(proto::FrameParams p) {
   Frame& frame = frames_[p.frame];
   frame.params = std::move(p);
   for (auto it = frame.strips.begin(); it != frame.strips.end();) {  // strips that came first
-    std::string why = checkMember(*frame.params, it->second);
-    if (!why.empty()) late_drops_.emplace_back(it->first, why);
+    std::string why = checkMember(*frame.params, it->first, it->second);
+    if (!why.empty()) late_drops_.emplace_back(it->first.rank, why);
     it = why.empty() ? std::next(it) : frame.strips.erase(it);
   }
   for (auto it = frames_.upper_bound(newest_->frame + kAheadWithoutParams); it != frames_.end();)
     it = it->second.params ? std::next(it) : dropWaiting(it, "strips waited too far ahead of the newest FrameParams");
 }
 
-std::string Assembly::addStrips(proto::Strips s, size_t bytes) {
+std::string Assembly::addStrips(Source from, proto::Strips s, size_t bytes) {
   if (s.epoch < epoch_) return "";  // stale, not malformed
   if (cancelled_.contains(s.frame)) return "";
   if (s.frame < next_) return "strips for a frame already shown";
   auto it = frames_.find(s.frame);
   if (it != frames_.end()) {
-    auto held = it->second.strips.find(s.compositor);
+    auto held = it->second.strips.find(from);
     if (held != it->second.strips.end()) {
       if (held->second.epoch == s.epoch) return "duplicate strips";
       if (held->second.epoch > s.epoch) return "strips of an older epoch than the ones held";
@@ -52,18 +66,18 @@ std::string Assembly::addStrips(proto::Strips s, size_t bytes) {
     }
   }
   const bool described = it != frames_.end() && it->second.params && it->second.params->epoch == s.epoch;
-  std::string why = described ? checkMember(*it->second.params, s) : admitWaiting(s);
+  std::string why = described ? checkMember(*it->second.params, from, s) : admitWaiting(from, s);
   if (!why.empty()) return why;
   Frame& frame = frames_[s.frame];
   frame.bytes += bytes;
-  frame.strips.emplace(s.compositor, std::move(s));
+  frame.strips.emplace(from, std::move(s));
   return "";
 }
 
-std::string Assembly::admitWaiting(const proto::Strips& s) {
+std::string Assembly::admitWaiting(const Source& from, const proto::Strips& s) {
   if (newest_ && s.frame > newest_->frame + kAheadWithoutParams) return "strips for a frame too far ahead";
   if (newest_ && s.epoch == newest_->epoch) {
-    if (auto why = checkMember(*newest_, s); !why.empty()) return why + " (waiting for its FrameParams)";
+    if (auto why = checkMember(*newest_, from, s); !why.empty()) return why + " (waiting for its FrameParams)";
   }
   size_t held = waitingBytes();
   while (held + s.stream.size() > waiting_budget_) {
@@ -87,14 +101,14 @@ size_t Assembly::waitingBytes() const {
 
 std::map<uint64_t, Assembly::Frame>::iterator Assembly::dropWaiting(std::map<uint64_t, Frame>::iterator it,
                                                                     const std::string& why) {
-  for (const auto& [c, st] : it->second.strips) late_drops_.emplace_back(c, "frame " + std::to_string(it->first) + ": " + why);
+  for (const auto& [src, st] : it->second.strips) late_drops_.emplace_back(src.rank, "frame " + std::to_string(it->first) + ": " + why);
   return frames_.erase(it);
 }
 
 bool Assembly::complete(const Frame& f) const {
   if (!f.params) return false;
-  for (const auto& r : f.params->regions) {
-    auto it = f.strips.find(r.compositor);
+  for (const auto& src : sourcesOf(*f.params)) {
+    auto it = f.strips.find(src);
     if (it == f.strips.end() || it->second.epoch != f.params->epoch) return false;  // newer: its FrameParams come
   }
   return true;

@@ -1,8 +1,9 @@
-// Assembling each frame from its compositors' strips: they arrive in any order, possibly
-// before the FrameParams that describe them (PUB vs PUSH), possibly from an earlier issue
-// of the frame (older epoch) after a stage came or went. A frame is complete when it has
-// FrameParams and strips of the same epoch from every compositor with a region in it; frames
-// are shown in order.
+// Assembling each frame from its strips: they arrive in any order, possibly before the
+// FrameParams that describe them (PUB vs PUSH), possibly from an earlier issue of the frame
+// (older epoch) after a stage came or went. A frame is complete when it has FrameParams and
+// strips of the same epoch from every source the frame names: the compositors with a region
+// in it, or in a binary-swap frame the renderers of the swap (each sends its finished band);
+// frames are shown in order.
 //
 // Memory is bounded whatever compositors send: frames with FrameParams by the master's
 // frames-in-flight window and their strips by the regions; strips that wait for FrameParams
@@ -28,9 +29,18 @@ class Assembly {
   // The master's --in-flight is at most 64 frames in flight: no real strips are further ahead.
   static constexpr uint64_t kAheadWithoutParams = 64;
 
+  // Who sent strips: ranks of compositors and renderers overlap.
+  struct Source {
+    proto::Role role = proto::Role::Compositor;
+    uint32_t rank = 0;
+    auto operator<=>(const Source&) const = default;
+  };
+  // The sources frame p waits for.
+  static std::vector<Source> sourcesOf(const proto::FrameParams& p);
+
   struct Frame {
     std::optional<proto::FrameParams> params;
-    std::map<uint32_t, proto::Strips> strips;  // by compositor
+    std::map<Source, proto::Strips> strips;
     Clock::time_point first_seen = Clock::now();
     uint64_t bytes = 0;  // of its Strips messages as received (compressed)
   };
@@ -40,17 +50,17 @@ class Assembly {
   void addParams(proto::FrameParams p);
   // "" when accepted or quietly discarded (stale or cancelled: expected, not faults), else
   // why the strips are dropped. `bytes`: the message's size on the wire.
-  std::string addStrips(proto::Strips s, size_t bytes);
+  std::string addStrips(Source from, proto::Strips s, size_t bytes);
   // The next frame in order when it is complete.
   std::optional<Frame> popNext();
   // Whether the next frame's FrameParams are here (strips alone never hold the display up).
   bool nextHasParams() const;
   // Strips dropped after they were accepted (their FrameParams disagreed, or they waited
-  // too far ahead, or were evicted): (compositor, reason), one per message.
+  // too far ahead, or were evicted): (sender's rank, reason), one per message.
   std::vector<std::pair<uint32_t, std::string>> takeLateDrops() { return std::exchange(late_drops_, {}); }
 
  private:
-  std::string admitWaiting(const proto::Strips& s);
+  std::string admitWaiting(const Source& from, const proto::Strips& s);
   size_t waitingBytes() const;
   std::map<uint64_t, Frame>::iterator dropWaiting(std::map<uint64_t, Frame>::iterator it, const std::string& why);
   bool complete(const Frame& f) const;

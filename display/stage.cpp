@@ -25,7 +25,7 @@ class Stage {
   Stage(const StageOptions& opt, zmq::context_t& ctx)
       : opt_(opt), link_(ctx, opt.endpoints, proto::Role::Display),
         waiting_budget_(kWaitingFrames * 4 * size_t(opt.width + kStripHeaderPixels) * size_t(opt.height)),
-        inbox_(ctx, proto::Role::Compositor, maxPixelMessageBytes(opt.width, opt.height), waiting_budget_),
+        inbox_(ctx, {proto::Role::Compositor, proto::Role::Renderer}, maxPixelMessageBytes(opt.width, opt.height), waiting_budget_),
         frames_(waiting_budget_) {
     inbox_.bind(opt_.endpoints.bind(opt_.endpoints.display()));
     // Listening from the start: a viewer may connect before the first frame.
@@ -68,19 +68,20 @@ class Stage {
     countLateDrops();
   }
 
-  // Strips from roster members; the compositor they name must be the one their connection is.
+  // Strips from roster members (compositors, and renderers with a binary swap's bands); the
+  // sender they name must be the one their connection is.
   void readStrips(std::vector<DataInbox::Message> messages) {
-    for (auto& [rank, m] : messages) {
+    for (auto& [rank, m, role] : messages) {
       auto s = proto::decodeStrips(view(m));
       if (!s) {
         drops_.drop(rank, s.error());
         continue;
       }
-      if (s->compositor != rank) {
-        drops_.drop(rank, "claims compositor " + std::to_string(s->compositor) + " from compositor " + std::to_string(rank));
+      if (s->sender != rank) {
+        drops_.drop(rank, fmt::format("claims {0} {1} from {0} {2}", proto::roleName(role), s->sender, rank));
         continue;
       }
-      if (std::string why = frames_.addStrips(std::move(*s), m.size()); !why.empty()) drops_.drop(rank, why);
+      if (std::string why = frames_.addStrips({role, rank}, std::move(*s), m.size()); !why.empty()) drops_.drop(rank, why);
     }
     countLateDrops();
   }
@@ -100,8 +101,7 @@ class Stage {
     else std::fill(image_.px.begin(), image_.px.end(), 0);
     uint64_t rejected = 0;
     double render_ms = 0, composite_ms = 0;
-    for (const auto& r : params.regions) {
-      const auto& s = p.strips.at(r.compositor);
+    for (const auto& [source, s] : p.strips) {
       RouteStats rs = routeStrips(s.stream, image_, 0);
       rejected += rs.strips_rejected + (rs.truncated ? 1 : 0);
       render_ms = std::max(render_ms, s.render_ms);

@@ -11,6 +11,7 @@
 #include "common/net/log.h"
 #include "common/wire/pixels.h"
 #include "common/wire/protocol.h"
+#include "common/wire/strips.h"
 #include "common/net/stage_link.h"
 #include "common/net/transport.h"
 #include "renderer/step_cache.h"
@@ -182,9 +183,9 @@ class Stage {
   }
 
   // Binary swap: this renderer's one brick, composited with the others' by swapping halves;
-  // the finished band goes to the compositors as rgba8 pieces (their blend of disjoint
-  // bands only places them). A frame given up (a new epoch, a lost partner) reports nothing:
-  // the master issues it again.
+  // the finished band goes straight to the display as strips, as a compositor's region
+  // would. A frame given up (a new epoch, a lost partner) reports nothing: the master issues
+  // it again.
   void swapBrick(const proto::FrameParams& p, const SwapPlan& plan, proto::StageStats& st) {
     auto t0 = Clock::now();
     const Cached& c = render(p, p.sortLast()->bricks[plan.brick].brick, st);
@@ -204,8 +205,7 @@ class Stage {
     auto band = swap_->run(p, link_.rank(), plan, c.image, c.active, send, idle, st, drops_);
     if (!band) return spdlog::info("frame={} epoch={}: binary swap given up", p.frame, p.epoch);
     auto t1 = Clock::now();
-    for (const auto& region : p.regions)
-      sendPiece(p, plan.brick, region, viewOf(*band, region.region), proto::PixelFormat::RGBA8, st);
+    sendBand(p, *band, st);
     swap_->recycle(std::move(*band));
     st.encode_ms += msSince(t1);
     st.dropped = drops_.total();
@@ -327,12 +327,35 @@ class Stage {
     sendBytes(socketFor(region.endpoint), std::move(bytes));
   }
 
+  // A finished band, quantized once as the compositors quantize their regions, as strips.
+  void sendBand(const proto::FrameParams& p, const Layer& band, proto::StageStats& st) {
+    if (band8_.width != p.width || band8_.height != p.height) band8_ = Image8(p.width, p.height);
+    for (int y = 0; y < band.rect.h; ++y)
+      quantizeToUnorm8(band.img.at(0, y), band8_.at(band.rect.x, band.rect.y + y), 4 * (size_t)band.rect.w);
+    proto::Strips s;
+    s.frame = p.frame;
+    s.epoch = p.epoch;
+    s.sender = link_.rank();
+    s.stream = encodeStrips(band8_, band.rect, 0);
+    s.render_ms = st.work_ms;
+    s.composite_ms = st.decode_ms;  // the swap's decoding and blending
+    for (int y = 0; y < band.rect.h; ++y) {
+      const uint8_t* row = band8_.at(band.rect.x, band.rect.y + y);
+      for (int x = 0; x < band.rect.w; ++x) s.active_pixels += row[4 * x + 3] != 0;
+    }
+    auto bytes = proto::encode(s, link_.rank(), p.codec);
+    st.bytes_raw += s.stream.size();
+    st.bytes_encoded += bytes.size();
+    sendBytes(socketFor(p.display_endpoint), std::move(bytes));
+  }
+
   // Peers come and go (a restarted renderer has a new swap port): connections to endpoints
   // this frame does not name would retry a dead address forever.
   void closeSocketsNotIn(const proto::FrameParams& p, const proto::SortLastWork& work) {
     std::erase_if(pushes_, [&](const auto& kv) {
       const std::string& e = kv.first;
-      return std::none_of(p.regions.begin(), p.regions.end(), [&](const auto& r) { return r.endpoint == e; }) &&
+      return e != p.display_endpoint &&
+             std::none_of(p.regions.begin(), p.regions.end(), [&](const auto& r) { return r.endpoint == e; }) &&
              std::none_of(work.swap.begin(), work.swap.end(), [&](const auto& s) { return s.endpoint == e; });
     });
   }
@@ -358,7 +381,8 @@ class Stage {
   std::unique_ptr<TileRenderer> tiles_;   // geometry scenes (sort-first)
   std::deque<Cached> cache_;
   std::vector<std::byte> packed_;  // a piece's pixels before encoding, kept (see packPixels)
-  std::map<std::string, zmq::socket_t> pushes_;  // to compositors and swap partners
+  Image8 band8_;                   // a binary swap's band, quantized (the frame's size: strips name screen rows)
+  std::map<std::string, zmq::socket_t> pushes_;  // to compositors, swap partners and the display
   std::unique_ptr<SwapExchange> swap_;  // volume scenes
   size_t swap_rounds_logged_ = 0;
   std::string swap_endpoint_;  // what Hello tells the master

@@ -12,7 +12,7 @@ proto::PixelFormat swapFormat(proto::PixelFormat f) {
 }
 
 SwapExchange::SwapExchange(zmq::context_t& ctx, int64_t max_message, size_t max_held_bytes)
-    : inbox_(ctx, proto::Role::Renderer, max_message, max_held_bytes), max_held_bytes_(max_held_bytes) {}
+    : inbox_(ctx, {proto::Role::Renderer}, max_message, max_held_bytes), max_held_bytes_(max_held_bytes) {}
 
 void SwapExchange::setRoster(const proto::Roster& roster, DropCounter& drops) {
   accept(inbox_.setRoster(roster, drops), drops);
@@ -21,7 +21,7 @@ void SwapExchange::setRoster(const proto::Roster& roster, DropCounter& drops) {
 void SwapExchange::receive(DropCounter& drops) { accept(inbox_.receive(drops), drops); }
 
 void SwapExchange::accept(std::vector<DataInbox::Message> messages, DropCounter& drops) {
-  for (auto& [rank, m] : messages) {
+  for (auto& [rank, m, role] : messages) {
     auto t0 = Clock::now();
     auto piece = proto::decodePiece(view(m));
     if (!piece) {

@@ -24,9 +24,9 @@ uint32_t claimedEpoch(const zmq::message_t& body) {
 
 }  // namespace
 
-DataInbox::DataInbox(zmq::context_t& ctx, proto::Role senders, int64_t max_message, size_t max_waiting_bytes)
+DataInbox::DataInbox(zmq::context_t& ctx, std::vector<proto::Role> senders, int64_t max_message, size_t max_waiting_bytes)
     : socket_(makeSocket(ctx, zmq::socket_type::router, max_message)),
-      filter_(senders, kMaxWaitingMessages, max_waiting_bytes) {
+      filter_(std::move(senders), kMaxWaitingMessages, max_waiting_bytes) {
   socket_.set(zmq::sockopt::rcvhwm, 0);  // bounded by the master's frame window
 }
 
@@ -41,9 +41,9 @@ std::vector<DataInbox::Message> DataInbox::receive(DropCounter& drops, int max) 
     std::string identity = std::move(m->identity);
     zmq::message_t body = std::move(m->body);
     const bool extra = m->extra;
-    if (auto rank = filter_.rankOf(identity)) {
-      if (extra) drops.drop(*rank, "multi-part message");
-      else out.push_back({*rank, std::move(body)});
+    if (auto sender = filter_.senderOf(identity)) {
+      if (extra) drops.drop(sender->rank, "multi-part message");
+      else out.push_back({sender->rank, std::move(body), sender->role});
     } else if (extra || claimedEpoch(body) <= filter_.epoch() || !filter_.hold(std::move(identity), std::move(body))) {
       // Only a message of a newer epoch than the roster may come from a member the master
       // has just announced (its Roster travels on another connection): that one waits.
@@ -56,7 +56,10 @@ std::vector<DataInbox::Message> DataInbox::receive(DropCounter& drops, int max) 
 std::vector<DataInbox::Message> DataInbox::setRoster(const proto::Roster& roster, DropCounter& drops) {
   uint64_t dropped = 0;
   std::vector<Message> out;
-  for (auto& h : filter_.setRoster(roster, dropped)) out.push_back({*filter_.rankOf(h.identity), std::move(h.body)});
+  for (auto& h : filter_.setRoster(roster, dropped)) {
+    const auto sender = *filter_.senderOf(h.identity);
+    out.push_back({sender.rank, std::move(h.body), sender.role});
+  }
   for (uint64_t i = 0; i < dropped; ++i) drops.drop(~0u, "refused peer: not named by the roster");
   return out;
 }

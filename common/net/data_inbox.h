@@ -18,15 +18,16 @@ namespace tessera {
 
 class DataInbox {
  public:
-  // `senders`: the role that may send here; `max_message`: ZMQ_MAXMSGSIZE; `max_waiting_bytes`:
+  // `senders`: the roles that may send here; `max_message`: ZMQ_MAXMSGSIZE; `max_waiting_bytes`:
   // the quarantine for messages that overtake the Roster naming their sender.
-  DataInbox(zmq::context_t& ctx, proto::Role senders, int64_t max_message, size_t max_waiting_bytes);
+  DataInbox(zmq::context_t& ctx, std::vector<proto::Role> senders, int64_t max_message, size_t max_waiting_bytes);
   void bind(const std::string& endpoint);
   zmq::socket_t& socket() { return socket_; }
 
   struct Message {
     uint32_t rank = 0;  // the sender's rank in the roster: check it against what the message claims
     zmq::message_t body;
+    proto::Role role = proto::Role::Renderer;  // and its role
   };
   // Up to `max` messages from members (non-blocking).
   std::vector<Message> receive(DropCounter& drops, int max = 256);

@@ -1,14 +1,16 @@
 // Data-socket admission by routing id (see member_filter.h).
 #include "common/net/member_filter.h"
 
+#include <algorithm>
+
 namespace tessera {
 
-MemberFilter::MemberFilter(proto::Role senders, size_t max_waiting, size_t max_waiting_bytes)
-    : senders_(senders), max_waiting_(max_waiting), max_waiting_bytes_(max_waiting_bytes) {}
+MemberFilter::MemberFilter(std::vector<proto::Role> senders, size_t max_waiting, size_t max_waiting_bytes)
+    : senders_(std::move(senders)), max_waiting_(max_waiting), max_waiting_bytes_(max_waiting_bytes) {}
 
-std::optional<uint32_t> MemberFilter::rankOf(const std::string& identity) const {
-  auto it = ranks_.find(identity);
-  if (it == ranks_.end()) return std::nullopt;
+std::optional<MemberFilter::Sender> MemberFilter::senderOf(const std::string& identity) const {
+  auto it = members_.find(identity);
+  if (it == members_.end()) return std::nullopt;
   return it->second;
 }
 
@@ -24,12 +26,12 @@ std::vector<MemberFilter::Held> MemberFilter::setRoster(const proto::Roster& ros
   if (have_roster_ && roster.epoch < epoch_) return {};
   have_roster_ = true;
   epoch_ = roster.epoch;
-  ranks_.clear();
+  members_.clear();
   for (const auto& m : roster.members)
-    if (m.role == senders_) ranks_[m.identity] = m.rank;
+    if (std::find(senders_.begin(), senders_.end(), m.role) != senders_.end()) members_[m.identity] = {m.role, m.rank};
   std::vector<Held> admitted;
   for (auto& h : held_) {
-    if (ranks_.count(h.identity)) admitted.push_back(std::move(h));
+    if (members_.count(h.identity)) admitted.push_back(std::move(h));
     else ++dropped;
   }
   held_.clear();

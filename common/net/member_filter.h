@@ -21,12 +21,17 @@ namespace tessera {
 
 class MemberFilter {
  public:
-  // `senders`: the role allowed on this socket (renderers for a compositor, compositors for
-  // the display). The quarantine holds at most `max_waiting` messages and `max_waiting_bytes`.
-  MemberFilter(proto::Role senders, size_t max_waiting, size_t max_waiting_bytes);
+  // `senders`: the roles allowed on this socket (renderers at a compositor; compositors, and
+  // renderers with a binary swap's bands, at the display). The quarantine holds at most
+  // `max_waiting` messages and `max_waiting_bytes`.
+  MemberFilter(std::vector<proto::Role> senders, size_t max_waiting, size_t max_waiting_bytes);
 
-  // The rank a routing id holds in the current roster, if it is a member of the right role.
-  std::optional<uint32_t> rankOf(const std::string& identity) const;
+  struct Sender {
+    proto::Role role;
+    uint32_t rank;
+  };
+  // Who a routing id is in the current roster, if a member of an allowed role.
+  std::optional<Sender> senderOf(const std::string& identity) const;
 
   struct Held {
     std::string identity;
@@ -43,11 +48,11 @@ class MemberFilter {
   size_t waiting() const { return held_.size(); }
 
  private:
-  proto::Role senders_;
+  std::vector<proto::Role> senders_;
   size_t max_waiting_, max_waiting_bytes_, held_bytes_ = 0;
   bool have_roster_ = false;
   uint32_t epoch_ = 0;
-  std::map<std::string, uint32_t> ranks_;
+  std::map<std::string, Sender> members_;
   std::deque<Held> held_;
 };
 

@@ -41,12 +41,13 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 8;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
+inline constexpr uint16_t kVersion = 9;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
                                          // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms);
                                          // 5: time steps (FrameParams step, Stats step cache, Input time keys);
                                          // 6: Stats carry the epoch of the FrameParams they answer;
                                          // 7: Piece pixels travel Up-filtered;
-                                         // 8: sort-last FrameParams may carry a binary-swap plan
+                                         // 8: sort-last FrameParams may carry a binary-swap plan;
+                                         // 9: a binary swap's bands go to the display as Strips from the renderers
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -109,7 +110,7 @@ struct RosterEntry {
   Role role = Role::Renderer; uint32_t rank = 0; std::string identity;
   bool operator==(const RosterEntry&) const = default;
 };
-struct Roster {                                                            // master -> compositor, display
+struct Roster {                                                            // master -> every stage
   uint32_t epoch = 0;
   std::vector<RosterEntry> members;
   bool operator==(const Roster&) const = default;
@@ -186,9 +187,10 @@ struct SwapPeer {
   bool operator==(const SwapPeer&) const = default;
 };
 // Sort-last: renderers draw bricks of the volume over the whole image; compositors blend
-// every brick's piece of their region in `order`. With a swap plan the renderers first
-// composite among themselves by binary swap, each ending with its band of the whole
-// image, and send compositors that band (rgba8, already final) as their brick's piece.
+// every brick's piece of their region in `order`. With a swap plan the renderers composite
+// among themselves by binary swap, each ending with its band of the whole image, finished,
+// which it sends the display as Strips (as a compositor would): the frame has no regions and
+// no compositor takes part in it.
 struct SortLastWork {
   std::vector<BrickAssignment> bricks;       // one per renderer that has work
   std::vector<int> order;                    // brick indices (into `bricks`) front to back
@@ -251,14 +253,14 @@ struct Piece {                                 // renderer -> compositor
 };
 
 // Strips (pixel message, header frame = frame; 40 bytes of metadata):
-//   epoch, compositor                   u32 x2  8
+//   epoch, sender                       u32 x2  8    the sending stage's rank
 //   composite_ms, encode_ms, render_ms  f64 x3  24   finite
 //   active_pixels                       u64     8
 //   stream                              codec   rest decodes to raw_size - 40 bytes (parsed later, strips.h)
-struct Strips {                                // compositor -> display
+struct Strips {                                // compositor (or binary-swap renderer) -> display
   uint64_t frame = 0;
   uint32_t epoch = 0;
-  uint32_t compositor = 0;
+  uint32_t sender = 0;                         // a compositor's rank; a renderer's in a binary-swap frame
   std::vector<uint8_t> stream;                 // raw (decoded) strip stream, see strips.h
   double composite_ms = 0, encode_ms = 0;
   double render_ms = 0;                        // slowest piece's render time (for the status line)

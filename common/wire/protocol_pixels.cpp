@@ -113,7 +113,7 @@ std::vector<std::byte> encode(const Strips& m, uint32_t sender, Codec codec) {
   auto msg = detail::beginMessage();
   ByteWriter w(msg);
   w.u32(m.epoch);
-  w.u32(m.compositor);
+  w.u32(m.sender);
   w.f64(m.composite_ms);
   w.f64(m.encode_ms);
   w.f64(m.render_ms);
@@ -130,7 +130,7 @@ Result<Strips> decodeStrips(std::span<const std::byte> msg) {
   Strips m;
   m.frame = o->header.frame;
   m.epoch = r.u32("epoch");
-  m.compositor = r.u32("compositor");
+  m.sender = r.u32("sender");
   m.composite_ms = detail::readFinite(r, "composite_ms");
   m.encode_ms = detail::readFinite(r, "encode_ms");
   m.render_ms = detail::readFinite(r, "render_ms");

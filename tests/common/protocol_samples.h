@@ -74,7 +74,7 @@ inline Strips sampleStrips() {
   s.frame = 9;
   s.epoch = 3;
   s.render_ms = 4.5;
-  s.compositor = 1;
+  s.sender = 1;
   s.stream.assign(1000, 0);
   for (size_t i = 0; i < 300; ++i) s.stream[i] = uint8_t(i);
   s.composite_ms = 3;

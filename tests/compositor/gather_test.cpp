@@ -57,6 +57,26 @@ TEST(Gather, FrameIsReadyOnlyWithParamsAndEveryBrick) {
   EXPECT_EQ(*r->region, (Rect{0, 0, 8, 4}));
 }
 
+// A binary-swap frame has no regions (its renderers send their bands to the display): the
+// compositor has nothing to wait for, and the frames after it are not held up.
+TEST(Gather, ABinarySwapFrameIsNotOurs) {
+  Gather g(0);
+  FrameParams swap = params(0, 2);
+  swap.regions.clear();
+  for (uint32_t b = 0; b < 2; ++b) std::get<proto::SortLastWork>(swap.work).swap.push_back({b, "tcp://x:1"});
+  EXPECT_EQ(g.addParams(swap), "");
+  EXPECT_NE(g.addPiece(piece(0, 0)), "") << "no piece belongs to a binary-swap frame";
+  auto r = g.pop();
+  ASSERT_TRUE(r);
+  EXPECT_FALSE(r->region);
+  EXPECT_TRUE(r->pieces.empty());
+  EXPECT_EQ(g.addParams(params(1, 1)), "");
+  EXPECT_EQ(g.addPiece(piece(1, 0)), "");
+  r = g.pop();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->params.frame, 1u);
+}
+
 TEST(Gather, RejectsDuplicatesStrangersAndStaleEpochs) {
   Gather g(0);
   g.addParams(params(0, 2, 1));

@@ -22,22 +22,28 @@ Strips strips(uint64_t frame, uint32_t compositor, uint32_t epoch = 0, size_t by
   Strips s;
   s.frame = frame;
   s.epoch = epoch;
-  s.compositor = compositor;
+  s.sender = compositor;
   s.stream.assign(bytes, uint8_t(compositor + 1));
   return s;
 }
 
+// Strips as a compositor sends them (the inbox says who sent them: `role`).
+std::string add(Assembly& a, Strips s, size_t bytes, proto::Role role = proto::Role::Compositor) {
+  const uint32_t rank = s.sender;
+  return a.addStrips({role, rank}, std::move(s), bytes);
+}
+
 TEST(Assembly, FramesAreShownInOrderOnlyWithParamsAndEveryRegion) {
   Assembly a(1 << 20);
-  EXPECT_EQ(a.addStrips(strips(0, 0), 100), "") << "strips may beat their FrameParams";
+  EXPECT_EQ(add(a, strips(0, 0), 100), "") << "strips may beat their FrameParams";
   EXPECT_FALSE(a.popNext());
   EXPECT_FALSE(a.nextHasParams());
   a.addParams(params(0, 2));
   a.addParams(params(1, 1));
   EXPECT_TRUE(a.nextHasParams());
-  EXPECT_EQ(a.addStrips(strips(1, 0), 50), "");
+  EXPECT_EQ(add(a, strips(1, 0), 50), "");
   EXPECT_FALSE(a.popNext()) << "frame 1 is complete but frame 0 is not: frames are shown in order";
-  EXPECT_EQ(a.addStrips(strips(0, 1), 100), "");
+  EXPECT_EQ(add(a, strips(0, 1), 100), "");
   auto f0 = a.popNext();
   ASSERT_TRUE(f0);
   EXPECT_EQ(f0->params->frame, 0u);
@@ -53,14 +59,14 @@ TEST(Assembly, FramesAreShownInOrderOnlyWithParamsAndEveryRegion) {
 TEST(Assembly, RejectsDuplicatesStrangersAndShownFramesQuietlySkipsStaleEpochs) {
   Assembly a(1 << 20);
   a.addParams(params(0, 2, 1));
-  EXPECT_EQ(a.addStrips(strips(0, 0, 1), 16), "");
-  EXPECT_EQ(a.addStrips(strips(0, 0, 1), 16), "duplicate strips");
-  EXPECT_NE(a.addStrips(strips(0, 5, 1), 16), "") << "no region of the frame";
-  EXPECT_EQ(a.addStrips(strips(0, 1, 0), 16), "") << "an older epoch: stale, not malformed";
+  EXPECT_EQ(add(a, strips(0, 0, 1), 16), "");
+  EXPECT_EQ(add(a, strips(0, 0, 1), 16), "duplicate strips");
+  EXPECT_NE(add(a, strips(0, 5, 1), 16), "") << "no region of the frame";
+  EXPECT_EQ(add(a, strips(0, 1, 0), 16), "") << "an older epoch: stale, not malformed";
   EXPECT_FALSE(a.popNext()) << "the stale strips completed the frame";
-  EXPECT_EQ(a.addStrips(strips(0, 1, 1), 16), "");
+  EXPECT_EQ(add(a, strips(0, 1, 1), 16), "");
   ASSERT_TRUE(a.popNext());
-  EXPECT_EQ(a.addStrips(strips(0, 1, 1), 16), "strips for a frame already shown");
+  EXPECT_EQ(add(a, strips(0, 1, 1), 16), "strips for a frame already shown");
 }
 
 // A compositor came back right after its loss: epoch 2 re-issues frame 0 while epoch 1's
@@ -70,14 +76,14 @@ TEST(Assembly, RejectsDuplicatesStrangersAndShownFramesQuietlySkipsStaleEpochs) 
 TEST(Assembly, ANewerEpochsStripsBeforeTheirParamsReplaceTheStaleOnes) {
   Assembly a(1 << 20);
   a.addParams(params(0, 2, 1));
-  EXPECT_EQ(a.addStrips(strips(0, 0, 1), 16), "");
-  EXPECT_EQ(a.addStrips(strips(0, 0, 2), 16), "") << "not a duplicate: a newer epoch";
-  EXPECT_NE(a.addStrips(strips(0, 0, 1), 16), "") << "the stale epoch's strips come too late";
-  EXPECT_EQ(a.addStrips(strips(0, 1, 1), 16), "");
+  EXPECT_EQ(add(a, strips(0, 0, 1), 16), "");
+  EXPECT_EQ(add(a, strips(0, 0, 2), 16), "") << "not a duplicate: a newer epoch";
+  EXPECT_NE(add(a, strips(0, 0, 1), 16), "") << "the stale epoch's strips come too late";
+  EXPECT_EQ(add(a, strips(0, 1, 1), 16), "");
   EXPECT_FALSE(a.popNext()) << "epoch 1's FrameParams must not complete with epoch-2 strips";
   a.addParams(params(0, 2, 2));
   EXPECT_FALSE(a.popNext()) << "epoch 1's strips of compositor 1 were stale";
-  EXPECT_EQ(a.addStrips(strips(0, 1, 2), 16), "");
+  EXPECT_EQ(add(a, strips(0, 1, 2), 16), "");
   auto f = a.popNext();
   ASSERT_TRUE(f);
   EXPECT_EQ(f->params->epoch, 2u);
@@ -92,10 +98,10 @@ TEST(Assembly, CancelledFramesAreSkippedAndTheirLateStripsQuietlyDiscarded) {
   FrameParams moved = params(2, 1);
   moved.first_wanted = 2;
   a.addParams(moved);
-  EXPECT_EQ(a.addStrips(strips(0, 0), 16), "");
-  EXPECT_EQ(a.addStrips(strips(1, 0), 16), "");
+  EXPECT_EQ(add(a, strips(0, 0), 16), "");
+  EXPECT_EQ(add(a, strips(1, 0), 16), "");
   EXPECT_FALSE(a.popNext());
-  EXPECT_EQ(a.addStrips(strips(2, 0), 16), "");
+  EXPECT_EQ(add(a, strips(2, 0), 16), "");
   auto f = a.popNext();
   ASSERT_TRUE(f);
   EXPECT_EQ(f->params->frame, 2u);
@@ -105,14 +111,42 @@ TEST(Assembly, CancelledFramesAreSkippedAndTheirLateStripsQuietlyDiscarded) {
 TEST(Assembly, StripsWithoutParamsAreBoundedAheadAndByBytes) {
   Assembly a(100);
   a.addParams(params(0, 1));
-  EXPECT_NE(a.addStrips(strips(Assembly::kAheadWithoutParams + 1, 0), 16), "") << "too far ahead";
-  EXPECT_NE(a.addStrips(strips(1, 3), 16), "") << "not a member of the newest FrameParams' epoch";
-  EXPECT_EQ(a.addStrips(strips(5, 0, 0, 60), 60), "");
-  EXPECT_EQ(a.addStrips(strips(2, 0, 0, 60), 60), "") << "a nearer frame evicts a farther one";
+  EXPECT_NE(add(a, strips(Assembly::kAheadWithoutParams + 1, 0), 16), "") << "too far ahead";
+  EXPECT_NE(add(a, strips(1, 3), 16), "") << "not a member of the newest FrameParams' epoch";
+  EXPECT_EQ(add(a, strips(5, 0, 0, 60), 60), "");
+  EXPECT_EQ(add(a, strips(2, 0, 0, 60), 60), "") << "a nearer frame evicts a farther one";
   const auto late = a.takeLateDrops();
   ASSERT_EQ(late.size(), 1u);
   EXPECT_NE(late[0].second.find("frame 5"), std::string::npos) << late[0].second;
-  EXPECT_NE(a.addStrips(strips(3, 0, 0, 60), 60), "") << "nothing farther to evict: over budget";
+  EXPECT_NE(add(a, strips(3, 0, 0, 60), 60), "") << "nothing farther to evict: over budget";
+}
+
+// A binary-swap frame has no regions: its renderers send their bands. Renderer 0 and
+// compositor 0 are different senders; neither may stand in for the other.
+TEST(Assembly, ABinarySwapFrameWaitsForItsRenderersBands) {
+  Assembly a(1 << 20);
+  FrameParams p = params(0, 0);
+  auto& work = p.work.emplace<proto::SortLastWork>();
+  for (uint32_t r = 0; r < 2; ++r) {
+    work.bricks.push_back({r, {}});
+    work.order.push_back((int)r);
+    work.swap.push_back({r, "tcp://x:1"});
+  }
+  a.addParams(p);
+  a.addParams(params(1, 1));  // a direct-send frame after it (a renderer was lost)
+  using proto::Role;
+  EXPECT_NE(add(a, strips(0, 0), 16), "") << "a compositor has no region in a binary-swap frame";
+  EXPECT_EQ(add(a, strips(0, 0), 16, Role::Renderer), "");
+  EXPECT_NE(add(a, strips(1, 0), 16, Role::Renderer), "") << "a renderer's strips in a direct-send frame";
+  EXPECT_EQ(add(a, strips(1, 0), 16), "");
+  EXPECT_FALSE(a.popNext()) << "renderer 1's band is missing";
+  EXPECT_NE(add(a, strips(0, 2), 16, Role::Renderer), "") << "renderer 2 is not in the swap";
+  EXPECT_EQ(add(a, strips(0, 1), 16, Role::Renderer), "");
+  auto f0 = a.popNext();
+  ASSERT_TRUE(f0);
+  EXPECT_EQ(f0->strips.size(), 2u);
+  for (const auto& [src, st] : f0->strips) EXPECT_EQ(src.role, Role::Renderer);
+  ASSERT_TRUE(a.popNext());
 }
 
 }  // namespace

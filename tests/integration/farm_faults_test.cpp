@@ -215,7 +215,7 @@ TEST(FarmFaults, ForgedPartsFromNonMembersAreRefusedAndFramesStayCorrect) {
       proto::Strips st;
       st.frame = f;
       st.epoch = epoch;
-      st.compositor = 0;
+      st.sender = 0;
       st.stream = encodeStrips(white, {0, 0, 160, 120}, 0);
       strips.push_back(proto::encode(st, 0, Codec::Lz4));
       proto::Piece pc;

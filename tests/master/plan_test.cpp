@@ -83,6 +83,8 @@ TEST(SortLastPlan, SwapPlanOnlyForOneBrickEachAndAPowerOfTwo) {
     proto::FrameParams p = sized(64, 48);
     p.camera = scene.camera;
     plan.fill(p, w);
+    // A binary-swap frame's bands go to the display: no compositor region; else regions tile the image.
+    EXPECT_EQ(p.regions.empty(), !p.sortLast()->swap.empty());
     return *p.sortLast();
   };
   Workers w{{0, 1, 2, 4}, {{9, "ep9"}}, {"r0", "r1", "r2", "r4"}};
