@@ -11,7 +11,6 @@
 #include "common/net/log.h"
 #include "common/wire/pixels.h"
 #include "common/wire/protocol.h"
-#include "common/wire/strips.h"
 #include "common/net/stage_link.h"
 #include "common/net/transport.h"
 #include "renderer/step_cache.h"
@@ -327,22 +326,15 @@ class Stage {
     sendBytes(socketFor(region.endpoint), std::move(bytes));
   }
 
-  // A finished band, quantized once as the compositors quantize their regions, as strips.
+  // A finished band goes to the display as a compositor's region would.
   void sendBand(const proto::FrameParams& p, const Layer& band, proto::StageStats& st) {
-    if (band8_.width != p.width || band8_.height != p.height) band8_ = Image8(p.width, p.height);
-    for (int y = 0; y < band.rect.h; ++y)
-      quantizeToUnorm8(band.img.at(0, y), band8_.at(band.rect.x, band.rect.y + y), 4 * (size_t)band.rect.w);
     proto::Strips s;
     s.frame = p.frame;
     s.epoch = p.epoch;
     s.sender = link_.rank();
-    s.stream = encodeStrips(band8_, band.rect, 0);
+    bandStrips(band, p.width, p.height, band8_, s);
     s.render_ms = st.work_ms;
     s.composite_ms = st.decode_ms;  // the swap's decoding and blending
-    for (int y = 0; y < band.rect.h; ++y) {
-      const uint8_t* row = band8_.at(band.rect.x, band.rect.y + y);
-      for (int x = 0; x < band.rect.w; ++x) s.active_pixels += row[4 * x + 3] != 0;
-    }
     auto bytes = proto::encode(s, link_.rank(), p.codec);
     st.bytes_raw += s.stream.size();
     st.bytes_encoded += bytes.size();

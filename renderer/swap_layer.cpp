@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "common/wire/pixels.h"
+#include "common/wire/strips.h"
 
 namespace tessera::renderer {
 namespace {
@@ -39,6 +40,18 @@ Layer blendLayer(const LayerView& mine, std::span<const std::byte> pixels, const
     }
   }
   return out;
+}
+
+void bandStrips(const Layer& band, int width, int height, Image8& frame8, proto::Strips& out) {
+  if (frame8.width != width || frame8.height != height) frame8 = Image8(width, height);
+  const Rect& r = band.rect;
+  out.active_pixels = 0;
+  for (int y = 0; y < r.h; ++y) {
+    uint8_t* row = frame8.at(r.x, r.y + y);
+    quantizeToUnorm8(band.img.at(0, y), row, 4 * (size_t)r.w);
+    for (int x = 0; x < r.w; ++x) out.active_pixels += row[4 * x + 3] != 0;
+  }
+  out.stream = encodeStrips(frame8, r, 0);
 }
 
 }  // namespace tessera::renderer

@@ -33,4 +33,9 @@ void packView(const LayerView& v, proto::PixelFormat f, std::vector<std::byte>& 
 Layer blendLayer(const LayerView& mine, std::span<const std::byte> pixels, const Rect& theirs, proto::PixelFormat f,
                  bool partner_in_front, std::vector<float>&& storage = {});
 
+// A finished band as a Strips stream (and its count of pixels with alpha > 0), quantized once
+// as the compositors quantize their regions. `frame8`: scratch of the frame's size, kept by
+// the caller (strip headers name screen rows).
+void bandStrips(const Layer& band, int width, int height, Image8& frame8, proto::Strips& out);
+
 }  // namespace tessera::renderer

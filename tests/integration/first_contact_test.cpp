@@ -89,12 +89,15 @@ TEST(FirstContact, AFarmWhoseFramesShowNothingSaysSoOnce) {
                                     "volume: {generator: {name: hollow-shell, size: 24}}\n"
                                     "camera: {eye: [0, 0, 3], target: [0, 0, 6]}\nimage: [48, 32]\n"
                                     "orbit: {frames: 4, axis: [0, 0, 1]}\n");
-  const auto r = dir.runFarm(scene, 1, 1, 4);
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  const std::string warning = "has no visible pixel: is the camera looking at the volume";
-  const size_t at = r.output.find(warning);
-  EXPECT_NE(at, std::string::npos) << r.output;
-  EXPECT_EQ(r.output.find(warning, at + 1), std::string::npos) << "said more than once\n" << r.output;
+  // Binary swap too: there no compositor takes part, the renderers' images say it.
+  for (const char* compositing : {"direct-send", "binary-swap"}) {
+    const auto r = dir.runFarm(scene, 2, 1, 4, 120, std::string("--env TESSERA_COMPOSITING=") + compositing);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::string warning = "has no visible pixel: is the camera looking at the volume";
+    const size_t at = r.output.find(warning);
+    EXPECT_NE(at, std::string::npos) << compositing << "\n" << r.output;
+    EXPECT_EQ(r.output.find(warning, at + 1), std::string::npos) << "said more than once\n" << r.output;
+  }
 }
 
 TEST(FirstContact, AStaticViewIsRenderedOnceAndTheOtherFramesSaySo) {

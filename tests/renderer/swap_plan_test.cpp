@@ -4,12 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <bit>
 #include <numeric>
 #include <random>
 
 #include "common/wire/pixels.h"
+#include "common/wire/strips.h"
 #include "renderer/swap_layer.h"
 #include "renderer/swap_plan.h"
 
@@ -136,6 +138,37 @@ TEST(SwapPlan, RoundsOfBlendsEqualFrontToBackCompositing) {
   // Two rounds of half-float rounding (2^-11 relative each), far inside the contract's 1/255.
   EXPECT_LT(worst, 2e-3f);
   EXPECT_GT(worst, 0.0f);  // the pieces really were rounded to half floats
+}
+
+// The finished band reaches the display as strips: routed into an empty image, it gives
+// each pixel quantized once (as a compositor's region), nothing outside the band, and the
+// count of visible pixels.
+TEST(SwapPlan, AFinishedBandBecomesStripsOfItsRows) {
+  Layer band;
+  band.rect = {3, 5, 6, 4};
+  band.img = ImageF(6, 4);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 6; ++x) {
+      float* px = band.img.at(x, y);
+      const float a = x == 0 ? 0.0f : 0.1f * (float)x + 0.01f * (float)y;
+      px[0] = 0.5f * a, px[1] = 0.25f * a, px[2] = a, px[3] = a;
+    }
+  Image8 scratch;
+  proto::Strips s;
+  bandStrips(band, 16, 12, scratch, s);
+  EXPECT_EQ(s.active_pixels, 4u * 5u) << "column 0 is transparent";
+  Image8 shown(16, 12);
+  RouteStats rs = routeStrips(s.stream, shown, 0);
+  EXPECT_EQ(rs.strips_rejected, 0);
+  EXPECT_EQ(rs.strips_written, 4);
+  for (int y = 0; y < 12; ++y)
+    for (int x = 0; x < 16; ++x) {
+      const bool inside = x >= 3 && x < 9 && y >= 5 && y < 9;
+      for (int c = 0; c < 4; ++c) {
+        const int want = inside ? (int)std::lround(band.img.at(x - 3, y - 5)[c] * 255.0f) : 0;
+        EXPECT_EQ(shown.at(x, y)[c], want) << x << "," << y << " channel " << c;
+      }
+    }
 }
 
 }  // namespace
