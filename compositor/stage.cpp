@@ -106,8 +106,10 @@ class Stage {
     if (auto it = decode_ms_.find(st.frame); it != decode_ms_.end()) st.decode_ms = it->second;
     decode_ms_.erase(decode_ms_.begin(), decode_ms_.upper_bound(st.frame));
     if (!r.region) {  // no part in this frame (a binary swap's, or a spare compositor's)
-      if (drops_.total() == reported_drops_) return;  // nothing to report
-      st.dropped = reported_drops_ = drops_.total();  // else its drops reach the metrics all the same
+      // In a binary-swap farm no compositor reports otherwise: its drops reach the metrics with
+      // a report of its own. (In a direct-send frame one would stand in for the real ones.)
+      if (!r.params.regions.empty() || drops_.total() == reported_drops_) return;
+      st.dropped = reported_drops_ = drops_.total();
       return link_.report(proto::encode(st, link_.rank()));
     }
     auto t0 = Clock::now();

@@ -69,7 +69,7 @@ std::string Assembly::addStrips(Source from, proto::Strips s, size_t bytes) {
   std::string why = described ? checkMember(*it->second.params, from, s) : admitWaiting(from, s);
   if (!why.empty()) return why;
   Frame& frame = frames_[s.frame];
-  frame.bytes += bytes;
+  frame.sizes[from] = bytes;
   frame.strips.emplace(from, std::move(s));
   return "";
 }
@@ -120,6 +120,20 @@ std::optional<Assembly::Frame> Assembly::popNext() {
   Frame f = std::move(it->second);
   frames_.erase(it);
   ++next_;
+  // Strips of a newer issue of the frame from senders it does not name (they waited for their
+  // FrameParams, which will now never be used) are not part of it.
+  const auto sources = sourcesOf(*f.params);
+  for (auto s = f.strips.begin(); s != f.strips.end();) {
+    const bool named = std::find(sources.begin(), sources.end(), s->first) != sources.end();
+    if (named && s->second.epoch == f.params->epoch) {
+      f.bytes += f.sizes[s->first];
+      ++s;
+      continue;
+    }
+    late_drops_.emplace_back(s->first.rank, "strips of another issue of frame " + std::to_string(f.params->frame) +
+                                                " from a sender it does not name");
+    s = f.strips.erase(s);
+  }
   return f;
 }
 

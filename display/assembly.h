@@ -5,8 +5,9 @@
 // in it, or in a binary-swap frame the renderers of the swap (each sends its finished band);
 // frames are shown in order.
 //
-// Memory is bounded whatever compositors send: frames with FrameParams by the master's
-// frames-in-flight window and their strips by the regions; strips that wait for FrameParams
+// Memory is bounded whatever members send: frames with FrameParams by the master's
+// frames-in-flight window and their strips by their sources (the display refuses a stream
+// larger than a whole frame); strips that wait for FrameParams
 // only kAheadWithoutParams frames past the newest FrameParams, only from members of its
 // epoch, and within a byte budget (nearer frames evict farther ones).
 #pragma once
@@ -40,9 +41,10 @@ class Assembly {
 
   struct Frame {
     std::optional<proto::FrameParams> params;
-    std::map<Source, proto::Strips> strips;
+    std::map<Source, proto::Strips> strips;  // popNext: exactly the frame's sources
+    std::map<Source, size_t> sizes;          // of each Strips message as received (compressed)
     Clock::time_point first_seen = Clock::now();
-    uint64_t bytes = 0;  // of its Strips messages as received (compressed)
+    uint64_t bytes = 0;  // popNext: of the frame's Strips messages
   };
 
   explicit Assembly(size_t waiting_budget) : waiting_budget_(waiting_budget) {}

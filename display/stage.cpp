@@ -48,7 +48,7 @@ class Stage {
       pollFor(items, 3, std::chrono::milliseconds(sink_ && sink_->interactive() ? 4 : 20));
       if (items[0].revents & ZMQ_POLLIN) readParams();
       if (link_.masterLost()) return 1;
-      // The roster before the strips: a new compositor's first strips may wait for it.
+      // The roster before the strips: a new sender's first strips may wait for it.
       if (items[1].revents & ZMQ_POLLIN)
         if (auto roster = link_.receiveRoster(drops_)) readStrips(inbox_.setRoster(*roster, drops_));
       if (items[2].revents & ZMQ_POLLIN) readStrips(inbox_.receive(drops_));
@@ -75,6 +75,10 @@ class Stage {
       auto s = proto::decodeStrips(view(m));
       if (!s) {
         drops_.drop(rank, s.error());
+        continue;
+      }
+      if (s->stream.size() > waiting_budget_ / kWaitingFrames) {  // more than every pixel of a frame once
+        drops_.drop(rank, fmt::format("strips of {} bytes: more than a whole frame", s->stream.size()));
         continue;
       }
       if (s->sender != rank) {

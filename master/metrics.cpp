@@ -190,11 +190,12 @@ void Metrics::write(uint64_t frame, Frame& f) {
   if (!path_.empty() && !out_.is_open()) out_.open(path_, std::ios::trunc);
   if (out_.is_open() && out_) out_ << j.dump() << '\n' << std::flush;
   wrote_ = wrote_ || (out_.is_open() && out_);
-  // Nothing visible: no renderer's brick image has a pixel (sort-last; binary-swap frames have
-  // no compositor) and no compositor blended or routed one.
-  const bool reported = j["render_reports"].get<size_t>() + j["composite_reports"].get<size_t>() > 0;
-  if (!warned_empty_ && reported && j["render_active_pixels"].get<double>() == 0 &&
-      j["composite_active_pixels"].get<double>() == 0) {
+  // Nothing visible: the compositors blended or routed no pixel, or in a binary-swap frame
+  // (no compositor takes part) no renderer's brick image has one.
+  const bool empty = f.compositors > 0
+                         ? j["composite_reports"].get<size_t>() > 0 && j["composite_active_pixels"].get<double>() == 0
+                         : j["render_reports"].get<size_t>() > 0 && j["render_active_pixels"].get<double>() == 0;
+  if (!warned_empty_ && empty) {
     warned_empty_ = true;  // once a run: an empty frame is usually the scene, not the farm
     spdlog::warn("frame {} has no visible pixel: is the camera looking at the volume, and does the transfer "
                  "function give the data's values any opacity? (tessera-info SCENE shows the values, the "

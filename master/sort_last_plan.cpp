@@ -71,9 +71,6 @@ void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
   for (size_t i = 0; i < tree_.bricks.size() && i < owner_.size(); ++i) work.bricks.push_back({owner_[i], tree_.bricks[i]});
   work.order = tree_.visibilityOrder(volume_.shape, p.camera);
   if (binary_swap_) addSwapPlan(work, w);
-  // A binary-swap frame has no regions: the renderers send their finished bands straight to
-  // the display, a hop and a decode-and-encode fewer than through a compositor.
-  if (!work.swap.empty()) return;
   std::vector<Rect> active;
   for (const auto& f : balance_ ? last_active_ : decltype(last_active_){}) {
     const int x0 = (int)std::floor(f[0] * p.width), y0 = (int)std::floor(f[1] * p.height);
@@ -81,6 +78,9 @@ void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
   }
   sizes_[p.frame] = {p.width, p.height};
   while (sizes_.size() > 256) sizes_.erase(sizes_.begin());  // frames whose stats never come
+  // A binary-swap frame has no regions: the renderers send their finished bands straight to
+  // the display, a hop and a decode-and-encode fewer than through a compositor.
+  if (!work.swap.empty()) return;
   auto bands = balancedBands(p.width, p.height, (int)w.compositors.size(), active);
   for (size_t i = 0; i < bands.size(); ++i)
     p.regions.push_back({w.compositors[i].rank, bands[i], w.compositors[i].endpoint});

@@ -174,7 +174,7 @@ class Stage {
       st.active = unite(st.active, c.active);
       st.active_pixels += c.active.area();
       auto t1 = Clock::now();
-      for (const auto& region : p.regions) sendPiece(p, b, region, viewOf(c.image, c.active, region.region), p.format, st);
+      for (const auto& region : p.regions) sendPiece(p, b, region, viewOf(c.image, c.active, region.region), st);
       st.encode_ms += msSince(t1);
     }
     st.dropped = drops_.total();
@@ -305,9 +305,9 @@ class Stage {
     return cache_.back();
   }
 
-  // `part`: the pixels of the region (a brick image's, or a binary swap's finished band).
+  // `part`: the pixels of a brick image in the region, in the frame's format.
   void sendPiece(const proto::FrameParams& p, uint32_t brick, const proto::CompositorRegion& region,
-                 const LayerView& part, proto::PixelFormat format, proto::StageStats& st) {
+                 const LayerView& part, proto::StageStats& st) {
     proto::Piece piece;
     piece.frame = p.frame;
     piece.epoch = p.epoch;
@@ -315,9 +315,9 @@ class Stage {
     piece.brick = brick;
     piece.region = region.region;
     piece.active = part.rect;
-    piece.format = format;
+    piece.format = p.format;
     piece.pixels = std::move(packed_);
-    packView(part, format, piece.pixels);
+    packView(part, p.format, piece.pixels);
     piece.render_ms = st.work_ms;
     auto bytes = proto::encode(piece, link_.rank(), p.codec);
     st.bytes_raw += piece.pixels.size();
@@ -356,7 +356,7 @@ class Stage {
     auto it = pushes_.find(endpoint);
     if (it == pushes_.end()) {
       zmq::socket_t s = makeSocket(ctx_, zmq::socket_type::dealer);
-      s.set(zmq::sockopt::routing_id, link_.dataIdentity());  // compositors admit it by this
+      s.set(zmq::sockopt::routing_id, link_.dataIdentity());  // compositors, partners and the display admit it by this
       s.set(zmq::sockopt::linger, 1000);  // let the last pieces leave at shutdown
       connectTo(s, endpoint);
       it = pushes_.emplace(endpoint, std::move(s)).first;

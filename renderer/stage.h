@@ -1,8 +1,8 @@
 // The renderer stage of the farm: renders its bricks for every FrameParams, crops each
 // image to its active region, splits it by the compositors' regions (direct send),
 // compresses and sends one Piece per (brick, compositor) — empty parts as empty pieces.
-// With a binary-swap plan it first composites with the other renderers (swap_exchange.h)
-// and sends the compositors its finished band instead.
+// With a binary-swap plan it composites with the other renderers instead (swap_exchange.h)
+// and sends its finished band straight to the display as strips.
 #pragma once
 #include <atomic>
 

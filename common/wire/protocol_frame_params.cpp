@@ -266,6 +266,8 @@ Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
           readBricks(r, sl);
           readOrder(r, sl);
           readSwap(r, sl);
+          // A binary swap's bands go to the display: no compositor waits for pieces of it.
+          if (r.ok() && !sl.swap.empty() && !m.regions.empty()) r.fail("a binary-swap frame with compositor regions");
         } else if (mode == static_cast<uint8_t>(FrameMode::SortFirst)) {
           readTiles(r, Rect{0, 0, m.width, m.height}, m.work.emplace<SortFirstWork>());
         } else {

@@ -64,6 +64,7 @@ FrameParams swapParams() {
   p.work = SortLastWork{{{0, {{0, 0, 0}, {128, 256, 256}}}, {1, {{128, 0, 0}, {256, 256, 256}}}},
                         {1, 0},
                         {{0, "ipc:///tmp/r0"}, {1, "tcp://10.0.0.2:5851"}}};
+  p.regions.clear();  // the bands go to the display
   return p;
 }
 
@@ -93,6 +94,9 @@ TEST(Protocol, SwapPlanRoundTripsAndIsValidated) {
   p = good;
   std::get<SortLastWork>(p.work).bricks[1].renderer = 0;  // one renderer, two bricks
   EXPECT_TRUE(refused(p, "more than one brick"));
+  p = good;
+  p.regions = sampleParams().regions;  // a compositor would wait for pieces no renderer sends
+  EXPECT_TRUE(refused(p, "binary-swap frame with compositor regions"));
   p = sampleParams();  // three bricks: not a power of two
   std::get<SortLastWork>(p.work).swap = {{0, "a"}, {1, "b"}, {2, "c"}};
   EXPECT_TRUE(refused(p, "power of two"));

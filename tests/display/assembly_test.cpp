@@ -149,5 +149,21 @@ TEST(Assembly, ABinarySwapFrameWaitsForItsRenderersBands) {
   ASSERT_TRUE(a.popNext());
 }
 
+// Frame 0 is complete under epoch 1 (direct send) while renderers' bands of its next issue
+// (epoch 2, binary swap) wait for their FrameParams: it is shown without them, and only its
+// own strips' bytes count.
+TEST(Assembly, AFrameShowsOnlyTheStripsOfItsOwnIssue) {
+  Assembly a(1 << 20);
+  a.addParams(params(0, 1, 1));
+  EXPECT_EQ(add(a, strips(0, 0, 2), 30, proto::Role::Renderer), "") << "a newer issue's strips may wait";
+  EXPECT_EQ(add(a, strips(0, 0, 1), 16), "");
+  auto f = a.popNext();
+  ASSERT_TRUE(f);
+  ASSERT_EQ(f->strips.size(), 1u);
+  EXPECT_EQ(f->strips.begin()->first.role, proto::Role::Compositor);
+  EXPECT_EQ(f->bytes, 16u);
+  EXPECT_EQ(a.takeLateDrops().size(), 1u) << "the renderer's strips are counted as dropped";
+}
+
 }  // namespace
 }  // namespace tessera::display

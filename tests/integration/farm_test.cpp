@@ -24,7 +24,7 @@ namespace {
 
 struct Shape {
   int renderers, compositors;
-  bool swap = false;  // binary swap between the renderers before the compositors
+  bool swap = false;  // binary swap between the renderers, bands straight to the display
 };
 
 class FarmMatchesOneProcess : public ::testing::TestWithParam<Shape> {};
