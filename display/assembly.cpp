@@ -18,6 +18,13 @@ std::string checkMember(const proto::FrameParams& p, const Assembly::Source& fro
 
 }  // namespace
 
+Rect Assembly::areaOf(const proto::FrameParams& p, const Source& s) {
+  if (s.role == proto::Role::Renderer) return proto::swapBand(p, s.rank).value_or(Rect{});
+  for (const auto& r : p.regions)
+    if (r.compositor == s.rank) return r.region;
+  return {};
+}
+
 std::vector<Assembly::Source> Assembly::sourcesOf(const proto::FrameParams& p) {
   std::vector<Source> out;
   if (const auto* work = p.sortLast(); work && !work->swap.empty()) {

@@ -38,6 +38,8 @@ class Assembly {
   };
   // The sources frame p waits for.
   static std::vector<Source> sourcesOf(const proto::FrameParams& p);
+  // The part of the image a source of frame p owns: its region, or its binary-swap band.
+  static Rect areaOf(const proto::FrameParams& p, const Source& s);
 
   struct Frame {
     std::optional<proto::FrameParams> params;

@@ -105,13 +105,13 @@ class Stage {
     else std::fill(image_.px.begin(), image_.px.end(), 0);
     uint64_t rejected = 0;
     double render_ms = 0, composite_ms = 0;
-    for (const auto& [source, s] : p.strips) {
-      RouteStats rs = routeStrips(s.stream, image_, 0);
+    for (const auto& [source, s] : p.strips) {  // each within the part of the image it owns
+      RouteStats rs = routeStrips(s.stream, image_, 0, Assembly::areaOf(params, source));
       rejected += rs.strips_rejected + (rs.truncated ? 1 : 0);
       render_ms = std::max(render_ms, s.render_ms);
       composite_ms = std::max(composite_ms, s.composite_ms);
     }
-    if (rejected) spdlog::warn("frame={} strips_rejected={} (headers pointing outside the image or corrupt)", params.frame, rejected);
+    if (rejected) spdlog::warn("frame={} strips_rejected={} (headers pointing outside the image or outside the part of it their sender owns, or corrupt)", params.frame, rejected);
     rejected_ += rejected;
     double route_ms = msSince(t0);
     openSink(params);

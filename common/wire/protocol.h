@@ -25,6 +25,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <set>
 #include <span>
 #include <string>
@@ -229,6 +230,10 @@ struct FrameParams {                                                       // ma
   bool operator==(const FrameParams&) const = default;
 };
 std::set<uint32_t> renderersWithWork(const FrameParams& p);  // ranks named by its bricks or tiles
+// A binary-swap frame's rows that renderer `me` finishes and sends the display (pairs by places
+// in the visibility order, the lower place keeping the upper half: renderer/swap_plan.h);
+// nullopt without a swap plan or a brick of `me`.
+std::optional<Rect> swapBand(const FrameParams& p, uint32_t me);
 
 // Piece (pixel message, header frame = frame; 61 bytes of metadata). Also what renderers
 // exchange in a binary swap: then `region` is the part of the image the receiver keeps

@@ -226,6 +226,21 @@ std::set<uint32_t> renderersWithWork(const FrameParams& p) {
   return r;
 }
 
+std::optional<Rect> swapBand(const FrameParams& p, uint32_t me) {
+  const SortLastWork* work = p.sortLast();
+  if (!work || work->swap.empty()) return std::nullopt;
+  size_t place = work->order.size();
+  for (size_t i = 0; i < work->order.size(); ++i)
+    if (work->bricks[work->order[i]].renderer == me) place = i;
+  if (place == work->order.size()) return std::nullopt;
+  Rect part{0, 0, p.width, p.height};
+  for (size_t bit = 1; bit < work->order.size(); bit <<= 1) {
+    const int top = part.h / 2;
+    part = (place & bit) == 0 ? Rect{part.x, part.y, part.w, top} : Rect{part.x, part.y + top, part.w, part.h - top};
+  }
+  return part;
+}
+
 Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
   return detail::decodeStructured<FrameParams>(
       msg, Type::FrameParams, [](ByteReader& r, const Header& h, FrameParams& m) {

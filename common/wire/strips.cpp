@@ -80,6 +80,10 @@ std::vector<uint8_t> encodeStrips(const Image8& img, const Rect& r, uint8_t disp
 }
 
 RouteStats routeStrips(std::span<const uint8_t> stream, Image8& dst, uint8_t display) {
+  return routeStrips(stream, dst, display, Rect{0, 0, dst.width, dst.height});
+}
+
+RouteStats routeStrips(std::span<const uint8_t> stream, Image8& dst, uint8_t display, const Rect& within) {
   RouteStats s;
   size_t pos = 0;
   while (pos < stream.size()) {
@@ -99,7 +103,9 @@ RouteStats routeStrips(std::span<const uint8_t> stream, Image8& dst, uint8_t dis
       s.truncated = true;
       break;
     }
-    if (h.display != display || !fits(h, dst)) {
+    const bool inside = h.x >= within.x && h.y >= within.y && h.y < within.y + within.h &&
+                        int(h.x) + int(h.width) <= within.x + within.w;
+    if (h.display != display || !fits(h, dst) || !inside) {
       ++s.strips_rejected;
     } else {
       std::memcpy(dst.at(h.x, h.y), stream.data() + pos, bytes);

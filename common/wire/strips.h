@@ -35,6 +35,8 @@ struct RouteStats {
 };
 // Routes strips into dst by their headers alone. Never writes outside dst, never throws.
 RouteStats routeStrips(std::span<const uint8_t> stream, Image8& dst, uint8_t display);
+// The same, rejecting strips outside `within` too (the part of the image their sender owns).
+RouteStats routeStrips(std::span<const uint8_t> stream, Image8& dst, uint8_t display, const Rect& within);
 
 // Sort-first packing: a renderer with several tiles lays them out in its framebuffer
 // left to right, top to bottom, with two-pixel gaps for the headers.

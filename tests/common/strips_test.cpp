@@ -98,6 +98,23 @@ TEST(Strips, HeadersPointingOutsideDstAreRejectedCountedAndNotWritten) {
   EXPECT_EQ(dst.at(9, 7)[0], 0);
 }
 
+// The display routes each sender's strips within the part of the image it owns (a
+// compositor's region, a renderer's binary-swap band): one cannot write over another's.
+TEST(Strips, StripsOutsideTheSendersPartAreRejected) {
+  Image8 dst(16, 8);
+  const Rect owned{0, 2, 16, 3};  // rows 2..4
+  std::vector<uint8_t> stream;
+  append(stream, strip({0, 1, 4, 1}, 0xEE));   // above
+  append(stream, strip({0, 5, 4, 1}, 0xEE));   // below
+  append(stream, strip({2, 3, 5, 1}, 0x22));   // inside
+  EXPECT_EQ(routeStrips(stream, dst, 1, owned), (RouteStats{1, 2, false, 5}));
+  EXPECT_EQ(dst.at(2, 3)[0], 0x22);
+  EXPECT_EQ(dst.at(0, 1)[0], 0);
+  EXPECT_EQ(dst.at(0, 5)[0], 0);
+  Image8 narrow(16, 8);
+  EXPECT_EQ(routeStrips(stream, narrow, 1, {3, 0, 4, 8}), (RouteStats{0, 3, false})) << "x 2..6 is not inside x 3..6";
+}
+
 TEST(Strips, BadCheckByteRejectsAndStopsTheStream) {
   Image8 dst(16, 8);
   std::vector<uint8_t> stream = strip({0, 0, 4, 0}, 0x22);

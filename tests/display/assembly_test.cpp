@@ -135,6 +135,12 @@ TEST(Assembly, ABinarySwapFrameWaitsForItsRenderersBands) {
   a.addParams(p);
   a.addParams(params(1, 1));  // a direct-send frame after it (a renderer was lost)
   using proto::Role;
+  // Each strip lands only in its sender's part: the swap's bands (order 0, 1: renderer 0 in
+  // front keeps the upper rows), a compositor's region.
+  EXPECT_EQ(Assembly::areaOf(p, {Role::Renderer, 0}), (Rect{0, 0, 8, 2}));
+  EXPECT_EQ(Assembly::areaOf(p, {Role::Renderer, 1}), (Rect{0, 2, 8, 2}));
+  EXPECT_TRUE(Assembly::areaOf(p, {Role::Compositor, 0}).empty());
+  EXPECT_EQ(Assembly::areaOf(params(1, 2), {Role::Compositor, 1}), (Rect{0, 2, 8, 2}));
   EXPECT_NE(add(a, strips(0, 0), 16), "") << "a compositor has no region in a binary-swap frame";
   EXPECT_EQ(add(a, strips(0, 0), 16, Role::Renderer), "");
   EXPECT_NE(add(a, strips(1, 0), 16, Role::Renderer), "") << "a renderer's strips in a direct-send frame";

@@ -59,6 +59,7 @@ TEST(SwapPlan, PartnersHoldTheSamePartAndBandsTileTheImage) {
           EXPECT_NE(theirs.partner_in_front, mine.partner_in_front);
           EXPECT_EQ(unite(mine.keep, mine.send).area(), mine.keep.area() + mine.send.area());
         }
+        EXPECT_EQ(proto::swapBand(p, me), plan.band) << "the display expects the band the renderer sends";
         for (int y = plan.band.y; y < plan.band.y + plan.band.h; ++y)
           for (int x = plan.band.x; x < plan.band.x + plan.band.w; ++x) ++covered[y * 97 + x];
       }
