@@ -3,14 +3,6 @@
 #include <algorithm>
 
 namespace tessera::renderer {
-namespace {
-
-Rect half(const Rect& r, bool upper) {
-  const int top = r.h / 2;
-  return upper ? Rect{r.x, r.y, r.w, top} : Rect{r.x, r.y + top, r.w, r.h - top};
-}
-
-}  // namespace
 
 std::optional<SwapPlan> planSwap(const proto::FrameParams& p, uint32_t me) {
   const proto::SortLastWork* work = p.sortLast();
@@ -37,8 +29,8 @@ std::optional<SwapPlan> planSwap(const proto::FrameParams& p, uint32_t me) {
     SwapRound r;
     r.partner = rank_at[other];
     r.endpoint = endpointOf(r.partner);
-    r.keep = half(part, lower);
-    r.send = half(part, !lower);
+    r.keep = proto::swapHalf(part, lower);
+    r.send = proto::swapHalf(part, !lower);
     r.partner_in_front = other < (size_t)mine;
     plan.rounds.push_back(std::move(r));
     part = plan.rounds.back().keep;

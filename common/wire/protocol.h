@@ -230,9 +230,11 @@ struct FrameParams {                                                       // ma
   bool operator==(const FrameParams&) const = default;
 };
 std::set<uint32_t> renderersWithWork(const FrameParams& p);  // ranks named by its bricks or tiles
+// A binary swap's split of `part` between two partners: the upper half (the lower place keeps
+// it) or the lower one; one rule for the renderers' rounds and the display's bands.
+Rect swapHalf(const Rect& part, bool upper);
 // A binary-swap frame's rows that renderer `me` finishes and sends the display (pairs by places
-// in the visibility order, the lower place keeping the upper half: renderer/swap_plan.h);
-// nullopt without a swap plan or a brick of `me`.
+// in the visibility order: renderer/swap_plan.h); nullopt without a swap plan or a brick of `me`.
 std::optional<Rect> swapBand(const FrameParams& p, uint32_t me);
 
 // Piece (pixel message, header frame = frame; 61 bytes of metadata). Also what renderers

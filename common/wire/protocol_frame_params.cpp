@@ -226,6 +226,11 @@ std::set<uint32_t> renderersWithWork(const FrameParams& p) {
   return r;
 }
 
+Rect swapHalf(const Rect& part, bool upper) {
+  const int top = part.h / 2;
+  return upper ? Rect{part.x, part.y, part.w, top} : Rect{part.x, part.y + top, part.w, part.h - top};
+}
+
 std::optional<Rect> swapBand(const FrameParams& p, uint32_t me) {
   const SortLastWork* work = p.sortLast();
   if (!work || work->swap.empty()) return std::nullopt;
@@ -234,10 +239,7 @@ std::optional<Rect> swapBand(const FrameParams& p, uint32_t me) {
     if (work->bricks[work->order[i]].renderer == me) place = i;
   if (place == work->order.size()) return std::nullopt;
   Rect part{0, 0, p.width, p.height};
-  for (size_t bit = 1; bit < work->order.size(); bit <<= 1) {
-    const int top = part.h / 2;
-    part = (place & bit) == 0 ? Rect{part.x, part.y, part.w, top} : Rect{part.x, part.y + top, part.w, part.h - top};
-  }
+  for (size_t bit = 1; bit < work->order.size(); bit <<= 1) part = swapHalf(part, (place & bit) == 0);
   return part;
 }
 
