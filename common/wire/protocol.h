@@ -42,13 +42,14 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 9;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
+inline constexpr uint16_t kVersion = 10;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
                                          // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms);
                                          // 5: time steps (FrameParams step, Stats step cache, Input time keys);
                                          // 6: Stats carry the epoch of the FrameParams they answer;
                                          // 7: Piece pixels travel Up-filtered;
                                          // 8: sort-last FrameParams may carry a binary-swap plan;
-                                         // 9: a binary swap's bands go to the display as Strips from the renderers
+                                         // 9: a binary swap's bands go to the display as Strips from the renderers;
+                                         // 10: Strips of one width travel strip-filtered
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -259,11 +260,13 @@ struct Piece {                                 // renderer -> compositor
   bool operator==(const Piece&) const = default;
 };
 
-// Strips (pixel message, header frame = frame; 40 bytes of metadata):
+// Strips (pixel message, header frame = frame; 44 bytes of metadata):
 //   epoch, sender                       u32 x2  8    the sending stage's rank
 //   composite_ms, encode_ms, render_ms  f64 x3  24   finite
 //   active_pixels                       u64     8
-//   stream                              codec   rest decodes to raw_size - 40 bytes (parsed later, strips.h)
+//   strip_bytes                         u32     4    0: the stream as it is; else every strip's length,
+//                                                    the stream strip-filtered (row_filter.h)
+//   stream                              codec   rest decodes to raw_size - 44 bytes (parsed later, strips.h)
 struct Strips {                                // compositor (or binary-swap renderer) -> display
   uint64_t frame = 0;
   uint32_t epoch = 0;

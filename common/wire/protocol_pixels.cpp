@@ -8,6 +8,7 @@
 #include "common/wire/protocol.h"
 #include "common/wire/protocol_internal.h"
 #include "common/wire/row_filter.h"
+#include "common/wire/strips.h"
 
 namespace tessera::proto {
 
@@ -118,7 +119,18 @@ std::vector<std::byte> encode(const Strips& m, uint32_t sender, Codec codec) {
   w.f64(m.encode_ms);
   w.f64(m.render_ms);
   w.u64(m.active_pixels);
-  appendPixels(msg, Type::Strips, m.frame, sender, codec, std::as_bytes(std::span(m.stream)));
+  // Strips of one width travel strip-filtered (row_filter.h); any other stream as it is.
+  const auto stream = std::as_bytes(std::span(m.stream));
+  const size_t strip_bytes = uniformStripBytes(m.stream);
+  w.u32(static_cast<uint32_t>(strip_bytes));
+  if (!strip_bytes) {
+    appendPixels(msg, Type::Strips, m.frame, sender, codec, stream);
+    return msg;
+  }
+  thread_local std::vector<std::byte> filtered;
+  filtered.resize(stream.size());
+  stripFilter(stream, filtered, strip_bytes);
+  appendPixels(msg, Type::Strips, m.frame, sender, codec, filtered);
   return msg;
 }
 
@@ -135,9 +147,14 @@ Result<Strips> decodeStrips(std::span<const std::byte> msg) {
   m.encode_ms = detail::readFinite(r, "encode_ms");
   m.render_ms = detail::readFinite(r, "render_ms");
   m.active_pixels = r.u64("active_pixels");
+  const uint32_t strip_bytes = r.u32("strip_bytes");
   if (!r.ok()) return R::fail("Strips: " + r.error());
   auto bytes = pixelBytes(o->header, r);
   if (!bytes) return R::fail("Strips: " + bytes.error());
+  if (strip_bytes && (strip_bytes <= 8 || (strip_bytes - 8) % 4 != 0 || *bytes % strip_bytes != 0)) {
+    return R::fail("Strips: strip_bytes " + std::to_string(strip_bytes) + " does not divide a " +
+                   std::to_string(*bytes) + "-byte stream into strips of a header and whole rgba8 pixels");
+  }
   if (!plausibleRawSize(o->header.codec, r.rest(), *bytes)) {
     return R::fail("Strips: " + std::to_string(r.remaining()) + " " + codecName(o->header.codec) +
                    " bytes cannot hold a " + std::to_string(*bytes) + "-byte stream");
@@ -145,6 +162,7 @@ Result<Strips> decodeStrips(std::span<const std::byte> msg) {
   m.stream.resize(*bytes);
   auto d = decompressInto(o->header.codec, r.rest(), std::as_writable_bytes(std::span(m.stream)));
   if (!d) return R::fail("Strips: stream: " + d.error());
+  if (strip_bytes) stripUnfilter(std::as_writable_bytes(std::span(m.stream)), strip_bytes);
   return m;
 }
 

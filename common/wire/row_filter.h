@@ -15,4 +15,15 @@ void upFilter(std::span<const std::byte> in, std::span<std::byte> out, size_t ro
 // Undoes upFilter in place.
 void upUnfilter(std::span<std::byte> bytes, size_t row_bytes, size_t planes);
 
+// A strip stream (strips.h) whose strips are all `strip_bytes` long (one width): each strip
+// keeps its header and splits its rgba8 pixels into four channel planes, then every byte
+// less the byte one strip before. Strips of one rect are mostly consecutive rows, so this is
+// Up within each channel: on 1024² bands LZO sends 26% fewer bytes than unfiltered (the
+// default scene) and 27% fewer (the head), where Up alone saves 9% and 24%. The headers
+// are filtered like pixels; the receiver checks them only after stripUnfilter.
+// in.size() == out.size(), a multiple of strip_bytes; strip_bytes - 8 a multiple of 4.
+void stripFilter(std::span<const std::byte> in, std::span<std::byte> out, size_t strip_bytes);
+// Undoes stripFilter in place.
+void stripUnfilter(std::span<std::byte> bytes, size_t strip_bytes);
+
 }  // namespace tessera

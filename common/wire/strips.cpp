@@ -79,6 +79,16 @@ std::vector<uint8_t> encodeStrips(const Image8& img, const Rect& r, uint8_t disp
   return out;
 }
 
+size_t uniformStripBytes(std::span<const uint8_t> stream) {
+  StripHeader first, h;
+  if (stream.size() < kHeaderBytes || !unpackHeader(stream.data(), first) || first.width == 0) return 0;
+  const size_t strip = kHeaderBytes + 4 * size_t(first.width);
+  if (stream.size() % strip != 0) return 0;
+  for (size_t at = strip; at < stream.size(); at += strip)
+    if (!unpackHeader(stream.data() + at, h) || h.width != first.width) return 0;
+  return strip;
+}
+
 RouteStats routeStrips(std::span<const uint8_t> stream, Image8& dst, uint8_t display) {
   return routeStrips(stream, dst, display, Rect{0, 0, dst.width, dst.height});
 }

@@ -25,6 +25,9 @@ bool unpackHeader(const uint8_t in[8], StripHeader& h);
 // Encodes rect `r` of `img` (rgba8) as one strip per row; rows whose pixels are all
 // transparent are left out. Output is a sequence of [header][width pixels].
 std::vector<uint8_t> encodeStrips(const Image8& img, const Rect& r, uint8_t display);
+// The length of every strip when all strips of the stream are one width (as encodeStrips
+// makes them), else 0: what the wire's strip filter needs (row_filter.h).
+size_t uniformStripBytes(std::span<const uint8_t> stream);
 
 struct RouteStats {
   int strips_written = 0;

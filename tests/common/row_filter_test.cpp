@@ -8,6 +8,8 @@
 
 #include "common/wire/codec.h"
 #include "common/wire/protocol.h"
+#include "common/wire/strips.h"
+#include "tests/common/protocol_samples.h"
 #include "tests/common/random_bytes.h"
 
 namespace tessera {
@@ -50,6 +52,77 @@ TEST(RowFilter, PiecesTravelFiltered) {
   auto back = proto::decodePiece(msg);
   ASSERT_TRUE(back) << back.error();
   EXPECT_EQ(back->pixels, p.pixels);
+}
+
+TEST(StripFilter, UndoesItselfForAnyStripLengthAndCount) {
+  for (size_t strip : {12, 16, 8 + 4 * 33})
+    for (size_t strips : {0, 1, 2, 7}) {
+      const auto raw = randomBytes(strip * strips, uint32_t(strip * 10 + strips));
+      std::vector<std::byte> f(raw.size());
+      stripFilter(raw, f, strip);
+      stripUnfilter(f, strip);
+      EXPECT_EQ(f, raw) << strips << " strips of " << strip << " bytes";
+    }
+}
+
+TEST(StripFilter, SplitsEachStripsChannelsThenSubtractsTheStripBefore) {
+  // Two strips of a header and two pixels.
+  const std::vector<uint8_t> in = {1, 2, 3, 4, 5, 6, 7, 8, /* px */ 10, 20, 30, 40, 11, 21, 31, 41,
+                                   1, 2, 4, 4, 5, 6, 7, 9, /* px */ 12, 20, 30, 40, 11, 22, 33, 44};
+  std::vector<std::byte> f(in.size());
+  stripFilter(std::as_bytes(std::span(in)), f, 16);
+  const std::vector<uint8_t> want = {1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 20, 21, 30, 31, 40, 41,
+                                     0, 0, 1, 0, 0, 0, 0, 1, 2, 0, 0, 1, 0, 2, 0, 3};
+  for (size_t i = 0; i < in.size(); ++i) EXPECT_EQ(uint8_t(f[i]), want[i]) << "byte " << i;
+}
+
+// A band whose rows differ by a constant: strip-filtered on the wire it compresses to almost
+// nothing; a stream of strips of two widths travels as it is. Both arrive unchanged.
+TEST(StripFilter, StripsOfOneWidthTravelFiltered) {
+  Image8 img(256, 64);
+  const auto base = randomBytes(256 * 4, 9);
+  for (int y = 0; y < 64; ++y)
+    for (size_t i = 0; i < base.size(); ++i) img.px[size_t(y) * base.size() + i] = uint8_t(uint8_t(base[i]) + y);
+  proto::Strips s;
+  s.stream = encodeStrips(img, {0, 0, 256, 64}, 0);
+  ASSERT_EQ(uniformStripBytes(s.stream), 8 + 4 * 256u);
+  ASSERT_GT(compress(Codec::Lzo, std::as_bytes(std::span(s.stream))).size(), s.stream.size() * 9 / 10);
+  const auto msg = proto::encode(s, 1, Codec::Lzo);
+  EXPECT_LT(msg.size(), s.stream.size() / 5);
+  auto back = proto::decodeStrips(msg);
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_EQ(back->stream, s.stream);
+
+  auto narrower = encodeStrips(img, {0, 0, 100, 3}, 0);
+  s.stream.insert(s.stream.end(), narrower.begin(), narrower.end());
+  EXPECT_EQ(uniformStripBytes(s.stream), 0u);
+  const auto mixed = proto::encode(s, 1, Codec::Lzo);
+  EXPECT_GT(mixed.size(), s.stream.size() * 9 / 10) << "two widths: unfiltered";
+  back = proto::decodeStrips(mixed);
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_EQ(back->stream, s.stream);
+}
+
+// strip_bytes comes from the sender: one that does not cut the stream into strips of a
+// header and whole pixels is refused before anything is decompressed.
+TEST(StripFilter, AStripLengthThatDoesNotFitTheStreamIsRefused) {
+  Image8 img(16, 4);
+  for (auto& b : img.px) b = 7;
+  proto::Strips s;
+  s.stream = encodeStrips(img, {0, 0, 16, 4}, 0);
+  auto msg = proto::encode(s, 1, Codec::None);
+  const size_t at = proto::kHeaderSize + 40;  // strip_bytes, after the other metadata
+  uint32_t sent = 0;
+  for (int i = 0; i < 4; ++i) sent |= uint32_t(msg[at + i]) << (8 * i);
+  ASSERT_EQ(sent, 8 + 4 * 16u);
+  for (uint64_t bad : {5ull, 8ull, 8 + 4 * 16 + 2ull, 8 + 4 * 15ull}) {
+    auto m = msg;
+    proto::test::putLE(m, at, bad, 4);
+    proto::test::reseal(m);
+    auto r = proto::decodeStrips(m);
+    ASSERT_FALSE(r) << bad;
+    EXPECT_NE(r.error().find("strip_bytes " + std::to_string(bad)), std::string::npos) << r.error();
+  }
 }
 
 }  // namespace
