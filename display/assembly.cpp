@@ -28,7 +28,8 @@ Rect Assembly::areaOf(const proto::FrameParams& p, const Source& s) {
 std::vector<Assembly::Source> Assembly::sourcesOf(const proto::FrameParams& p) {
   std::vector<Source> out;
   if (const auto* work = p.sortLast(); work && !work->swap.empty()) {
-    for (const auto& peer : work->swap) out.push_back({proto::Role::Renderer, peer.renderer});
+    for (const auto& peer : work->swap)  // those that fold their image into a partner's send no band
+      if (proto::swapBand(p, peer.renderer)) out.push_back({proto::Role::Renderer, peer.renderer});
     return out;
   }
   for (const auto& r : p.regions) out.push_back({proto::Role::Compositor, r.compositor});

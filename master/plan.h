@@ -32,6 +32,8 @@ class Plan {
   virtual void fill(proto::FrameParams& p, const Workers& w) = 0;
   // A renderer's accepted Stats.
   virtual void stats(const proto::StageStats& s, const Workers& w) = 0;
+  // Whether frames need a compositor (a binary-swap farm's renderers send the display its bands).
+  virtual bool needsCompositors(const Workers&) const { return true; }
 };
 
 // The scene's plan: sort-first for a mesh (the master needs no volume: renderers own the

@@ -23,11 +23,11 @@ void SortLastPlan::reassign(const Workers& w) {
   const auto alive = [&](uint32_t r) { return std::find(w.renderers.begin(), w.renderers.end(), r) != w.renderers.end(); };
   bool joined = tree_.bricks.empty();
   for (uint32_t r : w.renderers) joined = joined || std::find(owner_.begin(), owner_.end(), r) == owner_.end();
-  // Binary swap needs one brick per renderer: once the renderers are a power of two again
-  // while one holds more (a lost one's bricks went to a neighbour), everyone gets a new split.
-  // (A volume too small for n bricks has fewer: it is not split again and again.)
+  // Binary swap needs one brick per renderer: when one holds more (a lost one's bricks went
+  // to a neighbour), everyone gets a new split. (A volume too small for n bricks has fewer:
+  // it is not split again and again.)
   const size_t n = w.renderers.size();
-  const bool resplit = binary_swap_ && !joined && n >= 2 && (n & (n - 1)) == 0 && tree_.bricks.size() > n;
+  const bool resplit = binary_swap_ && !joined && n >= 1 && tree_.bricks.size() > n;
   if (resplit) spdlog::info("binary swap: a new split of {} bricks for {} renderers", n, n);
   if (joined || resplit) {
     tree_ = splitBricks(volume_, std::max<int>(1, (int)w.renderers.size()), tf_);
@@ -82,15 +82,15 @@ void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
   // the display, a hop and a decode-and-encode fewer than through a compositor.
   if (!work.swap.empty()) return;
   auto bands = balancedBands(p.width, p.height, (int)w.compositors.size(), active);
-  for (size_t i = 0; i < bands.size(); ++i)
+  for (size_t i = 0; i < bands.size() && i < w.compositors.size(); ++i)
     p.regions.push_back({w.compositors[i].rank, bands[i], w.compositors[i].endpoint});
 }
 
-// One brick per renderer, 2^k of them (after a loss a renderer holds two bricks and the
-// frames go by direct send until the renderers are a power of two again).
+// One brick per renderer, any count of them (a count that is not a power of two folds:
+// proto::swapSlot); one renderer sends its image straight to the display. Direct send when
+// a renderer has no swap socket.
 void SortLastPlan::addSwapPlan(proto::SortLastWork& work, const Workers& w) const {
-  const size_t n = work.bricks.size();
-  if (n < 2 || (n & (n - 1)) != 0) return;
+  if (work.bricks.empty()) return;
   for (const auto& b : work.bricks) {
     auto it = std::find(w.renderers.begin(), w.renderers.end(), b.renderer);
     const size_t i = it - w.renderers.begin();
@@ -101,6 +101,12 @@ void SortLastPlan::addSwapPlan(proto::SortLastWork& work, const Workers& w) cons
     if (endpoint.empty()) return work.swap.clear();
     work.swap.push_back({b.renderer, endpoint});
   }
+}
+
+// Every renderer with a swap socket: every frame is a binary swap's (addSwapPlan).
+bool SortLastPlan::needsCompositors(const Workers& w) const {
+  if (!binary_swap_ || w.renderer_endpoints.size() < w.renderers.size()) return true;
+  return std::any_of(w.renderer_endpoints.begin(), w.renderer_endpoints.end(), [](const auto& e) { return e.empty(); });
 }
 
 void SortLastPlan::stats(const proto::StageStats& s, const Workers&) {

@@ -24,6 +24,7 @@ class SortLastPlan : public Plan {
   void reassign(const Workers& w) override;
   void fill(proto::FrameParams& p, const Workers& w) override;
   void stats(const proto::StageStats& s, const Workers& w) override;
+  bool needsCompositors(const Workers& w) const override;
 
  private:
   void addSwapPlan(proto::SortLastWork& work, const Workers& w) const;

@@ -198,13 +198,14 @@ class Stage {
     };
     if (plan.rounds.size() != swap_rounds_logged_) {  // said when the farm's shape changes
       swap_rounds_logged_ = plan.rounds.size();
-      spdlog::info("frame={} binary swap among {} renderers: {} rounds, band rows [{}, {})", p.frame,
-                   p.sortLast()->swap.size(), plan.rounds.size(), plan.band.y, plan.band.y + plan.band.h);
+      spdlog::info("frame={} binary swap among {} renderers: {} rounds, {}", p.frame, p.sortLast()->swap.size(),
+                   plan.rounds.size(), plan.band.empty() ? fmt::format("image folded into renderer {}'s", plan.rounds[0].partner)
+                                                         : fmt::format("band rows [{}, {})", plan.band.y, plan.band.y + plan.band.h));
     }
     auto band = swap_->run(p, link_.rank(), plan, c.image, c.active, send, idle, st, drops_);
     if (!band) return spdlog::info("frame={} epoch={}: binary swap given up", p.frame, p.epoch);
     auto t1 = Clock::now();
-    sendBand(p, *band, st);
+    if (!plan.band.empty()) sendBand(p, *band, st);  // a renderer that folded has none
     swap_->recycle(std::move(*band));
     st.encode_ms += msSince(t1);
     st.dropped = drops_.total();

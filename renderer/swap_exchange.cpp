@@ -96,28 +96,34 @@ std::optional<Layer> SwapExchange::run(const proto::FrameParams& p, uint32_t me,
   });
   const proto::PixelFormat format = swapFormat(p.format);
   Layer mine;
+  if (plan.rounds.empty())  // a swap of one: the image is the band
+    mine = blendLayer(viewOf(img, active, plan.band), {}, Rect{}, format, false, takeSpare());
   for (size_t j = 0; j < plan.rounds.size(); ++j) {
     const SwapRound& r = plan.rounds[j];
-    auto t0 = Clock::now();
-    proto::Piece out;
-    out.frame = p.frame;
-    out.epoch = p.epoch;
-    out.renderer = me;
-    out.brick = plan.brick;
-    out.region = r.send;
-    out.format = format;
-    out.render_ms = st.work_ms;
     // Round 0 reads the brick image itself; later rounds, the layer blended last round.
-    const LayerView sent = j == 0 ? viewOf(img, active, r.send) : viewOf(mine, r.send);
-    out.active = sent.rect;
-    packView(sent, format, packed_);
-    out.pixels = std::move(packed_);
-    auto bytes = proto::encode(out, me, p.codec);
-    st.bytes_raw += out.pixels.size();
-    st.bytes_encoded += bytes.size();
-    packed_ = std::move(out.pixels);
-    send(r.endpoint, std::move(bytes));
-    st.encode_ms += msSince(t0);
+    auto partOf = [&](const Rect& part) { return j == 0 ? viewOf(img, active, part) : viewOf(mine, part); };
+    if (!r.send.empty()) {  // a fold's receiver only receives
+      auto t0 = Clock::now();
+      proto::Piece out;
+      out.frame = p.frame;
+      out.epoch = p.epoch;
+      out.renderer = me;
+      out.brick = plan.brick;
+      out.region = r.send;
+      out.format = format;
+      out.render_ms = st.work_ms;
+      const LayerView sent = partOf(r.send);
+      out.active = sent.rect;
+      packView(sent, format, packed_);
+      out.pixels = std::move(packed_);
+      auto bytes = proto::encode(out, me, p.codec);
+      st.bytes_raw += out.pixels.size();
+      st.bytes_encoded += bytes.size();
+      packed_ = std::move(out.pixels);
+      send(r.endpoint, std::move(bytes));
+      st.encode_ms += msSince(t0);
+    }
+    if (r.keep.empty()) continue;  // a folding renderer only sends
 
     std::optional<Held> in;
     for (;;) {
@@ -127,8 +133,7 @@ std::optional<Layer> SwapExchange::run(const proto::FrameParams& p, uint32_t me,
       if (!idle(50)) return std::nullopt;
     }
     auto t1 = Clock::now();
-    const LayerView kept = j == 0 ? viewOf(img, active, r.keep) : viewOf(mine, r.keep);
-    Layer blended = blendLayer(kept, in->piece.pixels, in->piece.active, format, r.partner_in_front, takeSpare());
+    Layer blended = blendLayer(partOf(r.keep), in->piece.pixels, in->piece.active, format, r.partner_in_front, takeSpare());
     recycle(std::move(mine));
     mine = std::move(blended);
     st.decode_ms += in->decode_ms + msSince(t1);

@@ -37,8 +37,8 @@ class SwapExchange {
   // Waits up to `ms` for any socket of the stage (this one included, then receive()) and
   // says whether frame p is still wanted.
   using Idle = std::function<bool(int ms)>;
-  // The rounds of frame p for brick image `img` (active within `active`): the finished band,
-  // or nullopt when the frame was given up (no longer wanted: a new epoch, a cancel, Shutdown
+  // The rounds of frame p for brick image `img` (active within `active`): the finished band
+  // (empty when this renderer folded its image into a partner's), or nullopt when the frame was given up (no longer wanted: a new epoch, a cancel, Shutdown
   // or the master's loss; a lost partner ends in a new epoch, a silent one at the master's
   // frame deadline). st gets the bytes sent, encode and decode-and-blend times.
   std::optional<Layer> run(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan, const ImageF& img,

@@ -22,10 +22,21 @@ std::optional<SwapPlan> planSwap(const proto::FrameParams& p, uint32_t me) {
   };
   SwapPlan plan;
   plan.brick = (uint32_t)work->order[mine];
-  Rect part{0, 0, p.width, p.height};
-  for (size_t bit = 1; bit < rank_at.size(); bit <<= 1) {
-    const size_t other = (size_t)mine ^ bit;
-    const bool lower = ((size_t)mine & bit) == 0;
+  const size_t places = rank_at.size();
+  const Rect whole{0, 0, p.width, p.height};
+  const auto slot = proto::swapSlot((size_t)mine, places);
+  // Folding (proto::swapSlot): an odd place among the first 2e sends its whole image to the
+  // place before it (which is in front) and is done; that place blends it in first.
+  if (!slot) {
+    plan.rounds.push_back({rank_at[mine - 1], endpointOf(rank_at[mine - 1]), Rect{}, whole, true});
+    return plan;
+  }
+  if (mine + 1 < (int)places && !proto::swapSlot(mine + 1, places))
+    plan.rounds.push_back({rank_at[mine + 1], endpointOf(rank_at[mine + 1]), whole, Rect{}, false});
+  Rect part = whole;
+  for (size_t bit = 1; bit < proto::swapSlots(places); bit <<= 1) {
+    const size_t other = proto::swapPlaceOf(*slot ^ bit, places);
+    const bool lower = (*slot & bit) == 0;
     SwapRound r;
     r.partner = rank_at[other];
     r.endpoint = endpointOf(r.partner);

@@ -8,7 +8,11 @@
 // Partners are paired by their bricks' places in the frame's visibility order, not by
 // rank: round j pairs places that differ in bit j, so every blend joins two runs of bricks
 // that are consecutive front to back, and "over" (associative) gives the one-process image
-// for any view. The lower place keeps the upper half of the rows.
+// for any view. The lower place keeps the upper half of the rows. A count that is not a
+// power of two folds first (proto::swapSlot): 3 renderers take 2 rounds, 6 take 3.
+//
+// A round with an empty `send` only receives (the fold's receiver keeps the whole frame);
+// one with an empty `keep` only sends (the folding renderer, whose plan has no band).
 #pragma once
 #include <cstdint>
 #include <optional>
@@ -30,7 +34,7 @@ struct SwapRound {
 struct SwapPlan {
   uint32_t brick = 0;           // this renderer's brick (index into FrameParams bricks)
   std::vector<SwapRound> rounds;
-  Rect band;                    // what this renderer holds, finished, after the last round
+  Rect band;                    // what this renderer holds, finished, after the last round (empty: folded)
 };
 
 // This renderer's rounds in frame p; nullopt when the frame has no swap plan or no brick of it.

@@ -234,8 +234,17 @@ std::set<uint32_t> renderersWithWork(const FrameParams& p);  // ranks named by i
 // A binary swap's split of `part` between two partners: the upper half (the lower place keeps
 // it) or the lower one; one rule for the renderers' rounds and the display's bands.
 Rect swapHalf(const Rect& part, bool upper);
+// Binary swap for any count of places (IceT's folding): with P the largest power of two
+// <= places and e = places - P, each odd place among the first 2e first sends its whole image
+// to the place before it and is done; then P slots swap in log2 P rounds. Slot s < e is the
+// merged pair of places 2s, 2s+1, slot s >= e is place s + e: slots keep the places' order,
+// so every blend still joins runs of bricks consecutive front to back.
+size_t swapSlots(size_t places);                              // P
+std::optional<size_t> swapSlot(size_t place, size_t places);  // nullopt: a place that folds away
+size_t swapPlaceOf(size_t slot, size_t places);               // the place that holds slot `slot`
 // A binary-swap frame's rows that renderer `me` finishes and sends the display (pairs by places
-// in the visibility order: renderer/swap_plan.h); nullopt without a swap plan or a brick of `me`.
+// in the visibility order: renderer/swap_plan.h); nullopt without a swap plan or a brick of
+// `me`, or when `me` folds its image into a partner's.
 std::optional<Rect> swapBand(const FrameParams& p, uint32_t me);
 
 // Piece (pixel message, header frame = frame; 61 bytes of metadata). Also what renderers

@@ -2,6 +2,7 @@
 // The decoder checks the cross-field invariants (order is a permutation, regions inside
 // the image), so a stage can index with the decoded values without re-checking.
 #include <algorithm>
+#include <bit>
 #include <string>
 #include <vector>
 
@@ -92,13 +93,13 @@ void readBricks(ByteReader& r, SortLastWork& m) {
   }
 }
 
-// A swap plan names every renderer of the bricks once, one brick each, 2^k of them.
+// A swap plan names every renderer of the bricks once, one brick each.
 void readSwap(ByteReader& r, SortLastWork& m) {
   const uint32_t n = r.count("swap", kMaxBricks, 4 + 4 + 1);
   if (!r.ok() || n == 0) return;
-  if (n != m.bricks.size() || n < 2 || (n & (n - 1)) != 0) {
+  if (n != m.bricks.size()) {
     r.fail("swap has " + std::to_string(n) + " renderers for " + std::to_string(m.bricks.size()) +
-           " bricks (needs one per brick, a power of two >= 2)");
+           " bricks (needs one per brick)");
     return;
   }
   std::set<uint32_t> owners, named;
@@ -238,9 +239,24 @@ std::optional<Rect> swapBand(const FrameParams& p, uint32_t me) {
   for (size_t i = 0; i < work->order.size(); ++i)
     if (work->bricks[work->order[i]].renderer == me) place = i;
   if (place == work->order.size()) return std::nullopt;
+  const auto slot = swapSlot(place, work->order.size());
+  if (!slot) return std::nullopt;
   Rect part{0, 0, p.width, p.height};
-  for (size_t bit = 1; bit < work->order.size(); bit <<= 1) part = swapHalf(part, (place & bit) == 0);
+  for (size_t bit = 1; bit < swapSlots(work->order.size()); bit <<= 1) part = swapHalf(part, (*slot & bit) == 0);
   return part;
+}
+
+size_t swapSlots(size_t places) { return places ? std::bit_floor(places) : 0; }
+
+std::optional<size_t> swapSlot(size_t place, size_t places) {
+  const size_t extra = places - swapSlots(places);
+  if (place < 2 * extra) return place % 2 ? std::nullopt : std::optional<size_t>(place / 2);
+  return place - extra;
+}
+
+size_t swapPlaceOf(size_t slot, size_t places) {
+  const size_t extra = places - swapSlots(places);
+  return slot < extra ? 2 * slot : slot + extra;
 }
 
 Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {

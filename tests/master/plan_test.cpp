@@ -75,7 +75,7 @@ TEST(SortLastPlan, ALostRendererBricksGoToANeighbourAndNoOtherBrickMoves) {
 
 // Binary swap: a plan only for 2^k renderers with one brick and a swap endpoint each; after a
 // loss leaves 2^k renderers with one holding two bricks, everyone gets one brick again.
-TEST(SortLastPlan, SwapPlanOnlyForOneBrickEachAndAPowerOfTwo) {
+TEST(SortLastPlan, SwapPlanForOneBrickEachAndEveryRendererWithASwapSocket) {
   Scene scene = defaultScene();
   scene.volume = GeneratorSpec{"hollow-shell", 64, 1};
   SortLastPlan plan(summarizeVolume(scene), scene.tf, true, /*binary_swap=*/true);
@@ -98,22 +98,27 @@ TEST(SortLastPlan, SwapPlanOnlyForOneBrickEachAndAPowerOfTwo) {
   Workers no_socket = w;
   no_socket.renderer_endpoints[2] = "";  // renderer 2 could not bind its swap socket
   EXPECT_TRUE(fill(no_socket).swap.empty());
-  w = {{0, 2, 4}, {{9, "ep9"}}, {"r0", "r2", "r4"}};  // renderer 1 lost: 3 renderers, 4 bricks
+  EXPECT_TRUE(plan.needsCompositors(no_socket)) << "its frames go by direct send";
+  EXPECT_FALSE(plan.needsCompositors(w));
+  w = {{0, 2, 4}, {{9, "ep9"}}, {"r0", "r2", "r4"}};  // renderer 1 lost: a new split of three, swapped (folding)
   plan.reassign(w);
   work = fill(w);
-  EXPECT_EQ(work.bricks.size(), 4u);
-  EXPECT_TRUE(work.swap.empty()) << "direct send while a renderer holds two bricks";
-  w = {{0, 2}, {{9, "ep9"}}, {"r0", "r2"}};  // another lost: two renderers, a new split of two
+  ASSERT_EQ(work.bricks.size(), 3u);
+  EXPECT_EQ(work.swap.size(), 3u);
+  w = {{2}, {}, {"r2"}};  // one renderer and no compositor left: it sends the display its image
   plan.reassign(w);
   work = fill(w);
-  ASSERT_EQ(work.bricks.size(), 2u);
-  EXPECT_EQ(work.swap.size(), 2u);
+  ASSERT_EQ(work.bricks.size(), 1u);
+  EXPECT_EQ(work.swap.size(), 1u);
+  EXPECT_FALSE(plan.needsCompositors(w));
+  w = {{0, 2}, {{9, "ep9"}}, {"r0", "r2"}};
   SortLastPlan direct(summarizeVolume(scene), scene.tf, true);
   direct.reassign(w);
   proto::FrameParams p = sized(64, 48);
   p.camera = scene.camera;
   direct.fill(p, w);
   EXPECT_TRUE(p.sortLast()->swap.empty()) << "direct send unless asked";
+  EXPECT_TRUE(direct.needsCompositors(w));
 }
 
 TEST(SortLastPlan, BandsFollowTheLatestFramesActivePixels) {
