@@ -30,8 +30,8 @@ int main(int argc, char** argv) {
   std::string compositing = "auto";
   app.add_option("--compositing", compositing,
                  "sort-last: direct-send (every renderer sends each compositor its part) | binary-swap (renderers "
-                 "composite among themselves first: half the bytes on the busiest link; needs 2, 4, 8... renderers, "
-                 "else direct send) | auto (binary swap when the farm's endpoints leave this host)")
+                 "composite among themselves first, any count of them, and send their bands to the display: half the "
+                 "bytes on the busiest link, no compositor needed) | auto (binary swap when the farm's endpoints leave this host)")
       ->envname("TESSERA_COMPOSITING")
       ->check(CLI::IsMember({"auto", "direct-send", "binary-swap"}))
       ->capture_default_str();

@@ -176,7 +176,7 @@ int goals(const fs::path& root, int frames, int rounds) {
          "busiest_bytes_100mbit,busiest_host\n";
   std::map<std::string, std::vector<double>> eff, ratio;
   for (int round = 1; round <= rounds; ++round) {
-    for (auto [nr, nc] : {std::pair{2, 1}, std::pair{4, 2}}) {
+    for (auto [nr, nc] : {std::pair{2, 1}, std::pair{3, 1}, std::pair{4, 2}}) {
       Result slow, fast;
       if (!runFarm({"100mbit", "lzo", 3, 1024, nr, nc}, root, frames, slow)) return 1;
       const double before = oneProcessMs(sceneAt(1024, root), root);
