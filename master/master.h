@@ -26,8 +26,8 @@ struct MasterOptions {
   // rgba16f: rgba8 pieces round twice before the final rounding (up to 1.5 levels),
   // which breaks the 1/255 sort-last contract; half floats keep it (see README).
   proto::PixelFormat format = proto::PixelFormat::RGBA16F;
-  // Sort-last: renderers composite among themselves by binary swap (swap_plan.h) when each
-  // has one brick and they are a power of two; otherwise (and when false) direct send.
+  // Sort-last: renderers composite among themselves by binary swap (swap_plan.h), any count
+  // of them, one brick each; direct send when a renderer has no swap socket (and when false).
   bool binary_swap = false;
   bool balance = true;      // sort-last: compositor regions by active pixels; sort-first: tiles by cost
   int tiles_per_renderer = 1;  // sort-first tiles = renderers x this

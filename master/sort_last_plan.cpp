@@ -23,25 +23,28 @@ void SortLastPlan::reassign(const Workers& w) {
   const auto alive = [&](uint32_t r) { return std::find(w.renderers.begin(), w.renderers.end(), r) != w.renderers.end(); };
   bool joined = tree_.bricks.empty();
   for (uint32_t r : w.renderers) joined = joined || std::find(owner_.begin(), owner_.end(), r) == owner_.end();
-  // Binary swap needs one brick per renderer: when one holds more (a lost one's bricks went
-  // to a neighbour), everyone gets a new split. (A volume too small for n bricks has fewer:
-  // it is not split again and again.)
-  const size_t n = w.renderers.size();
-  const bool resplit = binary_swap_ && !joined && n >= 1 && tree_.bricks.size() > n;
-  if (resplit) spdlog::info("binary swap: a new split of {} bricks for {} renderers", n, n);
-  if (joined || resplit) {
+  auto split = [&] {
     tree_ = splitBricks(volume_, std::max<int>(1, (int)w.renderers.size()), tf_);
     owner_.clear();
     for (size_t i = 0; i < tree_.bricks.size() && i < w.renderers.size(); ++i) owner_.push_back(w.renderers[i]);
-    return;
-  }
+  };
+  if (joined) return split();
   if (w.renderers.empty()) return;
-  for (size_t b = 0; b < owner_.size(); ++b) {
-    if (alive(owner_[b])) continue;
-    const uint32_t heir = nearestAliveOwner((int)b, alive).value_or(w.renderers.front());
-    spdlog::info("brick {} of lost renderer {} goes to renderer {}", b, owner_[b], heir);
-    owner_[b] = heir;
+  std::vector<uint32_t> heirs = owner_;
+  for (size_t b = 0; b < heirs.size(); ++b)
+    if (!alive(heirs[b])) heirs[b] = nearestAliveOwner((int)b, alive).value_or(w.renderers.front());
+  // Binary swap needs one brick per renderer: when a lost one's bricks would go to a renderer
+  // that has one, everyone gets a new split instead. (A volume too small for n bricks has
+  // fewer, each renderer at most one.)
+  std::vector<uint32_t> sorted = heirs;
+  std::sort(sorted.begin(), sorted.end());
+  if (binary_swap_ && std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
+    spdlog::info("binary swap: a new split of {} bricks for {} renderers", w.renderers.size(), w.renderers.size());
+    return split();
   }
+  for (size_t b = 0; b < owner_.size(); ++b)
+    if (heirs[b] != owner_[b]) spdlog::info("brick {} of lost renderer {} goes to renderer {}", b, owner_[b], heirs[b]);
+  owner_ = std::move(heirs);
 }
 
 // The alive owner of a leaf in the subtree of the brick's closest ancestor that has one.
@@ -103,10 +106,13 @@ void SortLastPlan::addSwapPlan(proto::SortLastWork& work, const Workers& w) cons
   }
 }
 
-// Every renderer with a swap socket: every frame is a binary swap's (addSwapPlan).
+// Whether the frames fill() makes now would go by direct send (addSwapPlan gives up).
 bool SortLastPlan::needsCompositors(const Workers& w) const {
-  if (!binary_swap_ || w.renderer_endpoints.size() < w.renderers.size()) return true;
-  return std::any_of(w.renderer_endpoints.begin(), w.renderer_endpoints.end(), [](const auto& e) { return e.empty(); });
+  if (!binary_swap_) return true;
+  proto::SortLastWork work;
+  for (size_t i = 0; i < tree_.bricks.size() && i < owner_.size(); ++i) work.bricks.push_back({owner_[i], tree_.bricks[i]});
+  addSwapPlan(work, w);
+  return work.swap.empty();
 }
 
 void SortLastPlan::stats(const proto::StageStats& s, const Workers&) {

@@ -199,13 +199,13 @@ class Stage {
     if (plan.rounds.size() != swap_rounds_logged_) {  // said when the farm's shape changes
       swap_rounds_logged_ = plan.rounds.size();
       spdlog::info("frame={} binary swap among {} renderers: {} rounds, {}", p.frame, p.sortLast()->swap.size(),
-                   plan.rounds.size(), plan.band.empty() ? fmt::format("image folded into renderer {}'s", plan.rounds[0].partner)
+                   plan.rounds.size(), plan.folded ? fmt::format("image folded into renderer {}'s", plan.rounds[0].partner)
                                                          : fmt::format("band rows [{}, {})", plan.band.y, plan.band.y + plan.band.h));
     }
     auto band = swap_->run(p, link_.rank(), plan, c.image, c.active, send, idle, st, drops_);
     if (!band) return spdlog::info("frame={} epoch={}: binary swap given up", p.frame, p.epoch);
     auto t1 = Clock::now();
-    if (!plan.band.empty()) sendBand(p, *band, st);  // a renderer that folded has none
+    if (!plan.band.empty()) sendBand(p, *band, st);  // folded, or no rows: the display expects none (proto::swapBand)
     swap_->recycle(std::move(*band));
     st.encode_ms += msSince(t1);
     st.dropped = drops_.total();

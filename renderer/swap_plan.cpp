@@ -29,6 +29,7 @@ std::optional<SwapPlan> planSwap(const proto::FrameParams& p, uint32_t me) {
   // place before it (which is in front) and is done; that place blends it in first.
   if (!slot) {
     plan.rounds.push_back({rank_at[mine - 1], endpointOf(rank_at[mine - 1]), Rect{}, whole, true});
+    plan.folded = true;
     return plan;
   }
   if (mine + 1 < (int)places && !proto::swapSlot(mine + 1, places))

@@ -1,9 +1,10 @@
 // Binary swap (Ma et al. 1994; IceT's and Cao et al.'s schedule) between the renderers of a
 // sort-last frame: instead of every renderer sending its whole brick image to the
-// compositors (direct send), renderers pair up in log2(R) rounds; in each round both
-// partners hold the same part of the image, each keeps one half and sends the other, and
-// blends what it receives with what it kept. After the last round every renderer holds the
-// finished image of one band, 1/R of the frame, and sends only that on.
+// compositors (direct send), renderers pair up in log2(R) rounds (R a power of two; others
+// fold first, below); in each round both partners hold the same part of the image, each
+// keeps one half and sends the other, and blends what it receives with what it kept. After
+// the last round every renderer holds the finished image of one band, 1/R of the frame, and
+// sends only that on.
 //
 // Partners are paired by their bricks' places in the frame's visibility order, not by
 // rank: round j pairs places that differ in bit j, so every blend joins two runs of bricks
@@ -34,7 +35,8 @@ struct SwapRound {
 struct SwapPlan {
   uint32_t brick = 0;           // this renderer's brick (index into FrameParams bricks)
   std::vector<SwapRound> rounds;
-  Rect band;                    // what this renderer holds, finished, after the last round (empty: folded)
+  Rect band;                    // what this renderer holds, finished, after the last round (empty: none)
+  bool folded = false;          // it sends its whole image to a partner and is done
 };
 
 // This renderer's rounds in frame p; nullopt when the frame has no swap plan or no brick of it.

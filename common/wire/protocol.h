@@ -244,7 +244,8 @@ std::optional<size_t> swapSlot(size_t place, size_t places);  // nullopt: a plac
 size_t swapPlaceOf(size_t slot, size_t places);               // the place that holds slot `slot`
 // A binary-swap frame's rows that renderer `me` finishes and sends the display (pairs by places
 // in the visibility order: renderer/swap_plan.h); nullopt without a swap plan or a brick of
-// `me`, or when `me` folds its image into a partner's.
+// `me`, when `me` folds its image into a partner's, or when its band has no rows (an image
+// of fewer rows than bands): then it sends the display nothing and the display expects nothing.
 std::optional<Rect> swapBand(const FrameParams& p, uint32_t me);
 
 // Piece (pixel message, header frame = frame; 61 bytes of metadata). Also what renderers

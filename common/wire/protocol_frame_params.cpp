@@ -243,6 +243,7 @@ std::optional<Rect> swapBand(const FrameParams& p, uint32_t me) {
   if (!slot) return std::nullopt;
   Rect part{0, 0, p.width, p.height};
   for (size_t bit = 1; bit < swapSlots(work->order.size()); bit <<= 1) part = swapHalf(part, (*slot & bit) == 0);
+  if (part.empty()) return std::nullopt;  // fewer rows than bands: this renderer finishes none
   return part;
 }
 

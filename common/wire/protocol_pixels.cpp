@@ -119,9 +119,10 @@ std::vector<std::byte> encode(const Strips& m, uint32_t sender, Codec codec) {
   w.f64(m.encode_ms);
   w.f64(m.render_ms);
   w.u64(m.active_pixels);
-  // Strips of one width travel strip-filtered (row_filter.h); any other stream as it is.
+  // Strips of one width travel strip-filtered (row_filter.h) for the codec; any other stream,
+  // or any stream without a codec, as it is.
   const auto stream = std::as_bytes(std::span(m.stream));
-  const size_t strip_bytes = uniformStripBytes(m.stream);
+  const size_t strip_bytes = codec == Codec::None ? 0 : uniformStripBytes(m.stream);
   w.u32(static_cast<uint32_t>(strip_bytes));
   if (!strip_bytes) {
     appendPixels(msg, Type::Strips, m.frame, sender, codec, stream);
@@ -151,7 +152,9 @@ Result<Strips> decodeStrips(std::span<const std::byte> msg) {
   if (!r.ok()) return R::fail("Strips: " + r.error());
   auto bytes = pixelBytes(o->header, r);
   if (!bytes) return R::fail("Strips: " + bytes.error());
-  if (strip_bytes && (strip_bytes <= 8 || (strip_bytes - 8) % 4 != 0 || *bytes % strip_bytes != 0)) {
+  // A strip is a header and at most 65535 pixels (its 16-bit width); the stream holds at least one.
+  if (strip_bytes && (strip_bytes <= 8 || (strip_bytes - 8) % 4 != 0 || strip_bytes > 8 + 4 * 65535u ||
+                      *bytes < strip_bytes || *bytes % strip_bytes != 0)) {
     return R::fail("Strips: strip_bytes " + std::to_string(strip_bytes) + " does not divide a " +
                    std::to_string(*bytes) + "-byte stream into strips of a header and whole rgba8 pixels");
   }

@@ -75,6 +75,7 @@ void stripFilter(std::span<const std::byte> in, std::span<std::byte> out, size_t
   const auto* s = reinterpret_cast<const uint8_t*>(in.data());
   auto* d = reinterpret_cast<uint8_t*>(out.data());
   const size_t strips = strip_bytes ? in.size() / strip_bytes : 0;
+  if (strips == 0) return;
   // Each strip's planes are made in a scratch strip and kept for the next one: out holds
   // only differences once written.
   thread_local std::vector<uint8_t> prev, cur;
@@ -91,6 +92,7 @@ void stripFilter(std::span<const std::byte> in, std::span<std::byte> out, size_t
 void stripUnfilter(std::span<std::byte> bytes, size_t strip_bytes) {
   auto* b = reinterpret_cast<uint8_t*>(bytes.data());
   const size_t strips = strip_bytes ? bytes.size() / strip_bytes : 0;
+  if (strips == 0) return;
   upUnfilter(bytes.first(strips * strip_bytes), strip_bytes, 1);  // the planes of every strip, restored
   thread_local std::vector<uint8_t> planes;
   planes.resize(strip_bytes);

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -110,12 +111,12 @@ TEST(StripFilter, AStripLengthThatDoesNotFitTheStreamIsRefused) {
   for (auto& b : img.px) b = 7;
   proto::Strips s;
   s.stream = encodeStrips(img, {0, 0, 16, 4}, 0);
-  auto msg = proto::encode(s, 1, Codec::None);
+  auto msg = proto::encode(s, 1, Codec::Lzo);
   const size_t at = proto::kHeaderSize + 40;  // strip_bytes, after the other metadata
   uint32_t sent = 0;
   for (int i = 0; i < 4; ++i) sent |= uint32_t(msg[at + i]) << (8 * i);
   ASSERT_EQ(sent, 8 + 4 * 16u);
-  for (uint64_t bad : {5ull, 8ull, 8 + 4 * 16 + 2ull, 8 + 4 * 15ull}) {
+  for (uint64_t bad : {5ull, 8ull, 8 + 4 * 16 + 2ull, 8 + 4 * 15ull, 8 + 4 * 16 * 4 * 2ull, 0xFFFFFFF8ull}) {
     auto m = msg;
     proto::test::putLE(m, at, bad, 4);
     proto::test::reseal(m);
@@ -123,6 +124,18 @@ TEST(StripFilter, AStripLengthThatDoesNotFitTheStreamIsRefused) {
     ASSERT_FALSE(r) << bad;
     EXPECT_NE(r.error().find("strip_bytes " + std::to_string(bad)), std::string::npos) << r.error();
   }
+  // An empty stream (a transparent band) with a strip length: nothing to undo, and no
+  // allocation of the length it claims.
+  proto::Strips none;
+  auto empty = proto::encode(none, 1, Codec::Lzo);
+  proto::test::putLE(empty, at, 0xFFFFFFF8u, 4);
+  proto::test::reseal(empty);
+  EXPECT_FALSE(proto::decodeStrips(empty));
+  // Without a codec the filter would gain nothing: the stream travels as it is.
+  const auto plain = proto::encode(s, 1, Codec::None);
+  ASSERT_EQ(plain.size(), proto::kHeaderSize + 44 + s.stream.size());
+  EXPECT_EQ(uint8_t(plain[at]) | uint8_t(plain[at + 1]) | uint8_t(plain[at + 2]) | uint8_t(plain[at + 3]), 0);
+  EXPECT_TRUE(std::equal(s.stream.begin(), s.stream.end(), reinterpret_cast<const uint8_t*>(plain.data()) + at + 4));
 }
 
 }  // namespace

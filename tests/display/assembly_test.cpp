@@ -155,6 +155,43 @@ TEST(Assembly, ABinarySwapFrameWaitsForItsRenderersBands) {
   ASSERT_TRUE(a.popNext());
 }
 
+// Three renderers fold (proto::swapSlot): the second in the visibility order sends its image to
+// the first and has no band, so the frame is complete with two bands; strips from the folded
+// one are refused. An image of fewer rows than bands: a renderer without rows is not waited for.
+TEST(Assembly, AFoldedRendererHasNoBandAndIsNotWaitedFor) {
+  using proto::Role;
+  auto swapFrame = [](uint64_t frame, int height) {
+    FrameParams p = params(frame, 0);
+    p.height = height;
+    auto& work = p.work.emplace<proto::SortLastWork>();
+    for (uint32_t r = 0; r < 3; ++r) {
+      work.bricks.push_back({r, {}});
+      work.swap.push_back({r, "tcp://x:1"});
+    }
+    work.order = {2, 0, 1};  // places: renderer 2, 0, 1
+    return p;
+  };
+  Assembly a(1 << 20);
+  const FrameParams p = swapFrame(0, 4);
+  a.addParams(p);
+  EXPECT_EQ(Assembly::areaOf(p, {Role::Renderer, 2}), (Rect{0, 0, 8, 2})) << "slot 0: renderer 2 with 0 folded in";
+  EXPECT_TRUE(Assembly::areaOf(p, {Role::Renderer, 0}).empty()) << "renderer 0 folds";
+  EXPECT_EQ(Assembly::areaOf(p, {Role::Renderer, 1}), (Rect{0, 2, 8, 2}));
+  EXPECT_NE(add(a, strips(0, 0), 16, Role::Renderer), "") << "the folded renderer sends no band";
+  EXPECT_EQ(add(a, strips(0, 2), 16, Role::Renderer), "");
+  EXPECT_FALSE(a.popNext());
+  EXPECT_EQ(add(a, strips(0, 1), 16, Role::Renderer), "");
+  auto f = a.popNext();
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->strips.size(), 2u);
+
+  a.addParams(swapFrame(1, 1));  // one row, two bands: slot 0 keeps no row (swapHalf gives it h/2)
+  EXPECT_EQ(add(a, strips(1, 1), 16, Role::Renderer), "");
+  auto one = a.popNext();
+  ASSERT_TRUE(one) << "complete with the one band that has rows";
+  EXPECT_EQ(one->strips.size(), 1u);
+}
+
 // Frame 0 is complete under epoch 1 (direct send) while renderers' bands of its next issue
 // (epoch 2, binary swap) wait for their FrameParams: it is shown without them, and only its
 // own strips' bytes count.

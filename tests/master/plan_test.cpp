@@ -73,8 +73,8 @@ TEST(SortLastPlan, ALostRendererBricksGoToANeighbourAndNoOtherBrickMoves) {
   EXPECT_EQ(joined[3].renderer, 7u);
 }
 
-// Binary swap: a plan only for 2^k renderers with one brick and a swap endpoint each; after a
-// loss leaves 2^k renderers with one holding two bricks, everyone gets one brick again.
+// Binary swap: a plan for any count of renderers with one brick and a swap endpoint each;
+// after a loss would leave one holding two bricks, everyone gets one brick again.
 TEST(SortLastPlan, SwapPlanForOneBrickEachAndEveryRendererWithASwapSocket) {
   Scene scene = defaultScene();
   scene.volume = GeneratorSpec{"hollow-shell", 64, 1};
