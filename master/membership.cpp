@@ -110,7 +110,7 @@ proto::Roster Membership::roster() const {
   return r;
 }
 
-std::string describeWaiting(const Membership& members, const std::vector<uint32_t>& renderers,
+std::string describeWaiting(const Membership& members, uint64_t frame, const std::vector<uint32_t>& renderers,
                             const std::vector<uint32_t>& compositors, bool display, const Member** culprit) {
   std::vector<std::string> parts;
   *culprit = nullptr;
@@ -122,6 +122,21 @@ std::string describeWaiting(const Membership& members, const std::vector<uint32_
   for (uint32_t r : renderers) parts.push_back(name(proto::Role::Renderer, r, "stats from"));
   for (uint32_t c : compositors) parts.push_back(name(proto::Role::Compositor, c, "strips from"));
   if (const Member* d = members.display(); display && d) parts.push_back(name(proto::Role::Display, d->rank, "FrameDone from"));
+  // Follow the waits of a binary swap: a renderer awaiting a partner's piece is not the culprit.
+  std::vector<const Member*> chain;
+  for (const Member* m = *culprit; m && m->role == proto::Role::Renderer && m->waiting_frame == frame &&
+                                   m->waiting_for != proto::kNobody;) {
+    if (std::find(chain.begin(), chain.end(), m) != chain.end()) {  // they await each other: no end to blame
+      *culprit = chain.front();
+      break;
+    }
+    chain.push_back(m);
+    if (std::find(renderers.begin(), renderers.end(), m->waiting_for) == renderers.end()) break;  // it reported
+    const Member* next = members.find(proto::Role::Renderer, m->waiting_for);
+    if (!next || !next->alive) break;
+    parts.push_back(fmt::format("renderer {} awaits renderer {}'s swap piece", m->rank, next->rank));
+    *culprit = m = next;
+  }
   return fmt::format("{}", fmt::join(parts, " and "));
 }
 

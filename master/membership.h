@@ -29,6 +29,8 @@ struct Member {
   Clock::time_point last_seen, lost_at;
   bool alive = true;
   int strikes = 0;               // deadlines missed: each one doubles its quarantine
+  uint64_t waiting_frame = 0;    // its last heartbeat: whose swap piece of which frame it awaits
+  uint32_t waiting_for = proto::kNobody;
 };
 
 class Membership {
@@ -75,9 +77,12 @@ class Membership {
 struct Workers;
 Workers aliveWorkers(const Membership& members);
 
-// Who a frame waits for, e.g. "stats from renderer 1 (pid 1234) and strips from compositor 0
-// (pid 99)"; `culprit` gets the first of them (nullptr if none is a member).
-std::string describeWaiting(const Membership& members, const std::vector<uint32_t>& renderers,
+// Who frame `frame` waits for, e.g. "stats from renderer 1 (pid 1234) and strips from
+// compositor 0 (pid 99)"; `culprit` gets the first of them (nullptr if none is a member), or,
+// when that renderer's heartbeats say it awaits a binary-swap partner's piece of this frame,
+// the renderer at the end of that chain of waits among those the frame waits for (the
+// stalled one, not its silent partners; in a cycle of waits, the first).
+std::string describeWaiting(const Membership& members, uint64_t frame, const std::vector<uint32_t>& renderers,
                             const std::vector<uint32_t>& compositors, bool display, const Member** culprit);
 
 }  // namespace tessera::master

@@ -139,10 +139,8 @@ class Stage {
 
   void renderFrame(const proto::FrameParams& p) {
     proto::StageStats st;
-    st.role = proto::Role::Renderer;
-    st.rank = link_.rank();
-    st.frame = p.frame;
-    st.epoch = p.epoch;
+    st.role = proto::Role::Renderer, st.rank = link_.rank();
+    st.frame = p.frame, st.epoch = p.epoch;
     if (const proto::SortFirstWork* work = p.sortFirst()) return renderTiles(p, *work, st);
     renderBricks(p, *p.sortLast(), st);
   }
@@ -189,10 +187,10 @@ class Stage {
     auto t0 = Clock::now();
     const Cached& c = render(p, p.sortLast()->bricks[plan.brick].brick, st);
     st.work_ms += msSince(t0);
-    st.active = c.active;
-    st.active_pixels = c.active.area();
+    st.active = c.active, st.active_pixels = c.active.area();
     auto send = [&](const std::string& endpoint, std::vector<std::byte>&& bytes) { sendBytes(socketFor(endpoint), std::move(bytes)); };
-    auto idle = [&](int ms) {
+    auto idle = [&](int ms, uint32_t partner) {
+      link_.setWaiting(p.frame, partner);  // said in the heartbeats, for the master's blame
       pump(ms);
       return !stopped() && !link_.masterLost() && wanted(p);
     };
@@ -203,6 +201,7 @@ class Stage {
                                                          : fmt::format("band rows [{}, {})", plan.band.y, plan.band.y + plan.band.h));
     }
     auto band = swap_->run(p, link_.rank(), plan, c.image, c.active, send, idle, st, drops_);
+    link_.clearWaiting();
     if (!band) return spdlog::info("frame={} epoch={}: binary swap given up", p.frame, p.epoch);
     auto t1 = Clock::now();
     if (!plan.band.empty()) sendBand(p, *band, st);  // folded, or no rows: the display expects none (proto::swapBand)

@@ -34,9 +34,9 @@ class SwapExchange {
 
   // Sends `bytes` to a partner's endpoint.
   using Send = std::function<void(const std::string& endpoint, std::vector<std::byte>&& bytes)>;
-  // Waits up to `ms` for any socket of the stage (this one included, then receive()) and
-  // says whether frame p is still wanted.
-  using Idle = std::function<bool(int ms)>;
+  // Waits up to `ms` for any socket of the stage (this one included, then receive()) while
+  // renderer `partner`'s piece is awaited, and says whether frame p is still wanted.
+  using Idle = std::function<bool(int ms, uint32_t partner)>;
   // The rounds of frame p for brick image `img` (active within `active`): the finished band
   // (empty when this renderer folded its image into a partner's), or nullopt when the frame was given up (no longer wanted: a new epoch, a cancel, Shutdown
   // or the master's loss; a lost partner ends in a new epoch, a silent one at the master's

@@ -104,11 +104,21 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
     hb.set(zmq::sockopt::routing_id, heartbeatIdentity(identity_));
     connectTo(hb, ep_.masterControl());
     while (!quit_) {
-      sendBytes(hb, proto::encode(proto::Heartbeat{role_, rank_}, rank_), false, true);
+      proto::Heartbeat h{role_, rank_};
+      {
+        std::lock_guard lock(waiting_mutex_);
+        h.waiting_frame = waiting_frame_, h.waiting_for = waiting_for_;
+      }
+      sendBytes(hb, proto::encode(h, rank_), false, true);
       for (int i = 0; i < 5 && !quit_; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
   });
   return true;
+}
+
+void StageLink::setWaiting(uint64_t frame, uint32_t partner) {
+  std::lock_guard lock(waiting_mutex_);
+  waiting_frame_ = frame, waiting_for_ = partner;
 }
 
 StageLink::Published StageLink::receive(DropCounter& drops, int max_messages) {

@@ -8,6 +8,7 @@
 #pragma once
 #include <atomic>
 #include <chrono>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -57,6 +58,10 @@ class StageLink {
   // returns the newest Roster among them; anything else is dropped and counted.
   std::optional<proto::Roster> receiveRoster(DropCounter& drops, int max_messages = 64);
   zmq::socket_t& control() { return ctl_; }
+  // What the heartbeats say this stage waits for: a binary swap's partner in a frame (the
+  // master's deadline then blames whoever the chain of waits ends at), or nothing.
+  void setWaiting(uint64_t frame, uint32_t partner);
+  void clearWaiting() { setWaiting(0, proto::kNobody); }
 
  private:
   zmq::context_t& ctx_;
@@ -67,6 +72,9 @@ class StageLink {
   zmq::socket_t sub_, ctl_;
   uint32_t rank_ = 0;
   std::atomic<bool> quit_{false};
+  std::mutex waiting_mutex_;  // the heartbeat thread reads both fields together
+  uint64_t waiting_frame_ = 0;
+  uint32_t waiting_for_ = proto::kNobody;
   std::chrono::steady_clock::time_point last_heard_ = std::chrono::steady_clock::now();
   std::thread heartbeat_;
 };

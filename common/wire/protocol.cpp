@@ -211,12 +211,16 @@ std::vector<std::byte> encode(const Heartbeat& m, uint32_t sender) {
   return encodeStructured(Type::Heartbeat, 0, sender, [&](ByteWriter& w) {
     w.u8(static_cast<uint8_t>(m.role));
     w.u32(m.rank);
+    w.u64(m.waiting_frame);
+    w.u32(m.waiting_for);
   });
 }
 Result<Heartbeat> decodeHeartbeat(std::span<const std::byte> msg) {
   return decodeStructured<Heartbeat>(msg, Type::Heartbeat, [](ByteReader& r, const Header&, Heartbeat& m) {
     m.role = readRole(r);
     m.rank = r.u32("rank");
+    m.waiting_frame = r.u64("waiting_frame");
+    m.waiting_for = r.u32("waiting_for");
   });
 }
 

@@ -49,7 +49,8 @@ inline constexpr uint16_t kVersion = 10;  // 2: FrameParams carries its mode, He
                                          // 7: Piece pixels travel Up-filtered;
                                          // 8: sort-last FrameParams may carry a binary-swap plan;
                                          // 9: a binary swap's bands go to the display as Strips from the renderers;
-                                         // 10: Strips of one width travel strip-filtered
+                                         // 10: Strips of one width travel strip-filtered; Heartbeats say
+                                         //     which swap partner a renderer waits for
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -86,7 +87,9 @@ struct Header {
 //             binary-swap socket as peers reach it ("" = none: direct send only)
 //             run: the farm's identity (TESSERA_RUN); the master refuses any other
 // Welcome:    role u8 1 (1..Role::Last) | rank u32 4
-// Heartbeat:  role u8 1 (1..Role::Last) | rank u32 4
+// Heartbeat:  role u8 1 (1..Role::Last) | rank u32 4 | waiting_frame u64 8 | waiting_for u32 4
+//             waiting_for: the renderer whose binary-swap piece of frame waiting_frame this
+//             renderer waits for, or kNobody: the master's deadline blames the end of the chain
 struct Hello {                                                             // stage -> master
   Role role = Role::Renderer; uint32_t pid = 0; std::string endpoint; std::string run;
   bool operator==(const Hello&) const = default;
@@ -95,8 +98,10 @@ struct Welcome {                                                           // ma
   Role role = Role::Renderer; uint32_t rank = 0;
   bool operator==(const Welcome&) const = default;
 };
+inline constexpr uint32_t kNobody = 0xFFFFFFFFu;
 struct Heartbeat {                                                         // stage -> master
   Role role = Role::Renderer; uint32_t rank = 0;
+  uint64_t waiting_frame = 0; uint32_t waiting_for = kNobody;
   bool operator==(const Heartbeat&) const = default;
 };
 // Who may send on a stage's data socket: the data-connection routing ids of the members

@@ -74,5 +74,32 @@ TEST(Membership, HeartbeatIdentityOnlyForOurForm) {
   EXPECT_EQ(StageLink::heartbeatIdentity(std::string(16, 'x') + "h"), "");
 }
 
+// Binary swap: renderers 0 and 1 await renderer 2's piece of frame 7 (0 through 1), so the
+// deadline blames 2, not 0, the first the frame waits for. A wait for another frame, for a
+// renderer that already reported, or a cycle of waits leaves the blame where it was.
+TEST(Membership, ADeadlineInASwapBlamesTheRendererTheOthersAwait) {
+  Membership m;
+  Member* r[4];
+  for (char c = 0; c < 4; ++c) r[(int)c] = &m.join(controlId('a' + c), {Role::Renderer, 20u + c, "", ""}, t0);
+  r[0]->waiting_frame = 7, r[0]->waiting_for = 1;
+  r[1]->waiting_frame = 7, r[1]->waiting_for = 2;
+  const Member* culprit = nullptr;
+  const std::string who = describeWaiting(m, 7, {0, 1, 2}, {}, false, &culprit);
+  ASSERT_NE(culprit, nullptr);
+  EXPECT_EQ(culprit->rank, 2u) << who;
+  EXPECT_NE(who.find("renderer 1 awaits renderer 2's swap piece"), std::string::npos) << who;
+  describeWaiting(m, 8, {0, 1, 2}, {}, false, &culprit);
+  EXPECT_EQ(culprit->rank, 0u) << "the waits are for frame 7";
+  describeWaiting(m, 7, {0, 1}, {}, false, &culprit);
+  EXPECT_EQ(culprit->rank, 1u) << "renderer 2 reported: 1 awaits a piece that was lost, blame stays with 1";
+  r[2]->waiting_frame = 7, r[2]->waiting_for = 0;
+  describeWaiting(m, 7, {0, 1, 2}, {}, false, &culprit);
+  EXPECT_EQ(culprit->rank, 0u) << "a cycle of waits";
+  r[2]->waiting_for = proto::kNobody;
+  m.missedDeadline(*r[2], t0);
+  describeWaiting(m, 7, {0, 1, 2}, {}, false, &culprit);
+  EXPECT_EQ(culprit->rank, 1u) << "renderer 2 is already lost";
+}
+
 }  // namespace
 }  // namespace tessera::master

@@ -84,7 +84,8 @@ TEST(SwapExchange, BadPiecesAreCountedStaleOnesDiscardedAndTheRightOneTaken) {
   std::vector<std::string> sent_to;
   auto send = [&](const std::string& endpoint, std::vector<std::byte>&&) { sent_to.push_back(endpoint); };
   int idles = 0;
-  auto idle = [&](int) { return ++idles < 5; };
+  uint32_t awaited = 0;
+  auto idle = [&](int, uint32_t partner) { return awaited = partner, ++idles < 5; };
   proto::StageStats st;
   auto band = rig.ex.run(frameOf(5, 2, 8, 8), 9, plan, img, {0, 0, 8, 8}, send, idle, st, rig.drops);
   ASSERT_TRUE(band);
@@ -96,6 +97,7 @@ TEST(SwapExchange, BadPiecesAreCountedStaleOnesDiscardedAndTheRightOneTaken) {
   idles = 0;
   EXPECT_FALSE(rig.ex.run(frameOf(7, 2, 8, 8), 9, plan, img, {0, 0, 8, 8}, send, idle, st, rig.drops));
   EXPECT_EQ(idles, 5);
+  EXPECT_EQ(awaited, 7u) << "the heartbeats say whose piece is awaited";
   EXPECT_EQ(rig.drops.total(), 2u);
 }
 
@@ -112,7 +114,7 @@ TEST(SwapExchange, HeldPiecesAreBoundedAndTheFarthestFramesGoFirst) {
   ImageF img(8, 8);
   proto::StageStats st;
   auto none = [](const std::string&, std::vector<std::byte>&&) {};
-  auto give_up = [](int) { return false; };
+  auto give_up = [](int, uint32_t) { return false; };
   EXPECT_TRUE(rig.ex.run(frameOf(11, 1, 8, 8), 9, plan, img, {0, 0, 8, 8}, none, give_up, st, rig.drops));
   EXPECT_FALSE(rig.ex.run(frameOf(200, 1, 8, 8), 9, plan, img, {0, 0, 8, 8}, none, give_up, st, rig.drops));
 }
