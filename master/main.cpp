@@ -15,7 +15,7 @@ int main(int argc, char** argv) {
   master::MasterOptions opt;
   addStageArgs(app, args, "scene file (default: the built-in scene)");
   app.add_option("--renderers", opt.renderers, "renderers to wait for")->envname("TESSERA_RENDERERS")->check(CLI::Range(1, 1024));
-  app.add_option("--compositors", opt.compositors, "compositors to wait for")->envname("TESSERA_COMPOSITORS")->check(CLI::Range(1, 256));
+  app.add_option("--compositors", opt.compositors, "compositors to wait for")->envname("TESSERA_COMPOSITORS")->check(CLI::Range(0, 256));
   app.add_option("--frames", opt.frames, "frames to render (-1: the scene's orbit; 0: interactive)")->envname("TESSERA_FRAMES");
   app.add_option("--in-flight", opt.in_flight, "frames in flight")->envname("TESSERA_IN_FLIGHT")->check(CLI::Range(1, 64));
   app.add_option("--codec", codec, "none | lzo | lz4 | zstd")->envname("TESSERA_CODEC");
@@ -57,6 +57,11 @@ int main(int argc, char** argv) {
     opt.balance = tiling == "balanced";
     // Bytes count where they cross links; on one host direct send costs a little less CPU.
     opt.binary_swap = compositing == "binary-swap" || (compositing == "auto" && endpointLeavesHost(endpoints.base));
+    if (opt.compositors == 0 && (opt.scene.mesh || !opt.binary_swap))
+      throw std::invalid_argument(std::string("TESSERA_COMPOSITORS=0: only binary swap (a volume scene, ") +
+                                  "TESSERA_COMPOSITING=binary-swap) runs without compositors; this farm " +
+                                  (opt.scene.mesh ? "renders a mesh (sort-first)" : "composites by direct send") +
+                                  ": give it at least one compositor");
     return master::run(opt, ctx, stop);
   });
 }

@@ -27,7 +27,7 @@ const Setting kSettings[] = {
     {"TESSERA_KEYS", Kind::Path},
     {"TESSERA_METRICS", Kind::Path},
     {"TESSERA_RENDERERS", Kind::Int, 1, 1024, "", "renderer processes"},
-    {"TESSERA_COMPOSITORS", Kind::Int, 1, 256, "", "compositor processes"},
+    {"TESSERA_COMPOSITORS", Kind::Int, 0, 256, "", "compositor processes (0: a binary-swap farm needs none)"},
     {"TESSERA_FRAMES", Kind::Int, -1, 100000000, "",
      "frames to render; -1: the scene's orbit, 0: interactive until the window closes or Ctrl-C"},
     {"TESSERA_IN_FLIGHT", Kind::Int, 1, 64},

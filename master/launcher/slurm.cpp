@@ -148,6 +148,7 @@ std::vector<SlurmStep> slurmSteps(const ComposeProject& project, int het_size) {
     throw LaunchError("tessera-up --slurm runs at most 89 compositors, not " + std::to_string(c->replicas));
   std::vector<SlurmStep> steps(het_size == 2 ? 2 : 1);
   for (const auto& s : project.services) {
+    if (s.replicas == 0) continue;  // e.g. no compositor for a binary-swap farm
     SlurmStep& step = het_size == 2 && s.name != "display" ? steps[1] : steps[0];
     step.ranges.push_back({step.tasks, step.tasks + s.replicas - 1, s.name});
     step.tasks += s.replicas;

@@ -93,7 +93,8 @@ TEST(FarmShaded, FourRenderersMatchOneProcess) {
 
 INSTANTIATE_TEST_SUITE_P(Shapes, FarmMatchesOneProcess,
                          ::testing::Values(Shape{1, 1}, Shape{2, 1}, Shape{2, 2}, Shape{4, 2}, Shape{2, 1, true},
-                                           Shape{3, 1, true}, Shape{4, 2, true}, Shape{6, 2, true}, Shape{8, 3, true}),
+                                           Shape{3, 1, true}, Shape{3, 0, true}, Shape{4, 2, true}, Shape{6, 2, true},
+                                           Shape{8, 3, true}),
                          [](const auto& param_info) {
                            return std::to_string(param_info.param.renderers) + "r" + std::to_string(param_info.param.compositors) + "c" +
                                   (param_info.param.swap ? "Swap" : "");

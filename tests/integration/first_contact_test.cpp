@@ -100,6 +100,17 @@ TEST(FirstContact, AFarmWhoseFramesShowNothingSaysSoOnce) {
   }
 }
 
+// No compositor: fine for binary swap (the renderers send the display their bands, checked in
+// farm_test.cpp), refused at start for direct send, with what to change.
+TEST(FirstContact, NoCompositorIsRefusedUnlessTheFarmSwaps) {
+  FarmDir dir("no-compositor");
+  const auto scene = dir.writeScene(2);
+  const auto r = dir.runFarm(scene, 2, 0, 2, 60, "--env TESSERA_COMPOSITING=direct-send");
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("TESSERA_COMPOSITORS=0: only binary swap"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("composites by direct send: give it at least one compositor"), std::string::npos) << r.output;
+}
+
 TEST(FirstContact, AStaticViewIsRenderedOnceAndTheOtherFramesSaySo) {
   FarmDir dir("static-view");
   const auto scene =
