@@ -191,7 +191,7 @@ class Master {
     metrics_.reassigned();
     Workers w = workers();
     plan_->reassign(w);
-    if (!canRun(w)) {
+    if (!plan_->canRun(w)) {
       spdlog::warn("no {} left: waiting for one to join", w.renderers.empty() ? "renderer" : "compositor");
       return;  // frames in flight are issued again when one joins (its Hello bumps the epoch)
     }
@@ -210,14 +210,10 @@ class Master {
 
   // ---- frames ---------------------------------------------------------------------------
   bool sortFirst() const { return opt_.scene.mesh.has_value(); }
-  // A binary-swap farm keeps running with no compositor left.
-  bool canRun(const Workers& w) const {
-    return !w.renderers.empty() && (!w.compositors.empty() || !plan_->needsCompositors(w));
-  }
 
   void issueFrames() {
     Workers w = workers();
-    while (canRun(w)) {
+    while (plan_->canRun(w)) {
       if (total_frames_ > 0) {
         if (!window_.hasRoom() || next_frame_ >= (uint64_t)total_frames_) return;
         publish(next_frame_, orbitFrame(opt_.scene, next_frame_), w);

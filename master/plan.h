@@ -34,6 +34,8 @@ class Plan {
   virtual void stats(const proto::StageStats& s, const Workers& w) = 0;
   // Whether frames need a compositor (a binary-swap farm's renderers send the display its bands).
   virtual bool needsCompositors(const Workers&) const { return true; }
+  // Whether frames can be issued to these stages (a binary-swap farm runs with no compositor).
+  bool canRun(const Workers& w) const { return !w.renderers.empty() && (!w.compositors.empty() || !needsCompositors(w)); }
 };
 
 // The scene's plan: sort-first for a mesh (the master needs no volume: renderers own the
