@@ -4,6 +4,8 @@
 
 #include <fmt/format.h>
 
+#include "common/wire/swap_rule.h"
+
 namespace tessera::display {
 namespace {
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "common/wire/swap_rule.h"
+
 namespace tessera::renderer {
 
 std::optional<SwapPlan> planSwap(const proto::FrameParams& p, uint32_t me) {

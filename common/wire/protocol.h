@@ -42,15 +42,10 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 10;  // 2: FrameParams carries its mode, Hello its run; 3: Stats its reuse and loads;
-                                         // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms);
-                                         // 5: time steps (FrameParams step, Stats step cache, Input time keys);
-                                         // 6: Stats carry the epoch of the FrameParams they answer;
-                                         // 7: Piece pixels travel Up-filtered;
-                                         // 8: sort-last FrameParams may carry a binary-swap plan;
-                                         // 9: a binary swap's bands go to the display as Strips from the renderers;
-                                         // 10: Strips of one width travel strip-filtered; Heartbeats say
-                                         //     which swap partner a renderer waits for
+inline constexpr uint16_t kVersion = 10;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
+  // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms); 5: time steps; 6: Stats
+  // carry their FrameParams' epoch; 7: Piece pixels Up-filtered; 8: binary-swap plans in FrameParams; 9: swap
+  // bands go to the display as Strips; 10: Strips strip-filtered, Heartbeats name the awaited swap partner
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -236,22 +231,6 @@ struct FrameParams {                                                       // ma
   bool operator==(const FrameParams&) const = default;
 };
 std::set<uint32_t> renderersWithWork(const FrameParams& p);  // ranks named by its bricks or tiles
-// A binary swap's split of `part` between two partners: the upper half (the lower place keeps
-// it) or the lower one; one rule for the renderers' rounds and the display's bands.
-Rect swapHalf(const Rect& part, bool upper);
-// Binary swap for any count of places (IceT's folding): with P the largest power of two
-// <= places and e = places - P, each odd place among the first 2e first sends its whole image
-// to the place before it and is done; then P slots swap in log2 P rounds. Slot s < e is the
-// merged pair of places 2s, 2s+1, slot s >= e is place s + e: slots keep the places' order,
-// so every blend still joins runs of bricks consecutive front to back.
-size_t swapSlots(size_t places);                              // P
-std::optional<size_t> swapSlot(size_t place, size_t places);  // nullopt: a place that folds away
-size_t swapPlaceOf(size_t slot, size_t places);               // the place that holds slot `slot`
-// A binary-swap frame's rows that renderer `me` finishes and sends the display (pairs by places
-// in the visibility order: renderer/swap_plan.h); nullopt without a swap plan or a brick of
-// `me`, when `me` folds its image into a partner's, or when its band has no rows (an image
-// of fewer rows than bands): then it sends the display nothing and the display expects nothing.
-std::optional<Rect> swapBand(const FrameParams& p, uint32_t me);
 
 // Piece (pixel message, header frame = frame; 61 bytes of metadata). Also what renderers
 // exchange in a binary swap: then `region` is the part of the image the receiver keeps

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "common/wire/swap_rule.h"
+
 namespace tessera::display {
 namespace {
 

@@ -12,6 +12,7 @@
 
 #include "common/wire/pixels.h"
 #include "common/wire/strips.h"
+#include "common/wire/swap_rule.h"
 #include "renderer/swap_layer.h"
 #include "renderer/swap_plan.h"
 
