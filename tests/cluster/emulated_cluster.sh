@@ -8,6 +8,8 @@
 #     --rate   link rate per host, tc syntax (100mbit, 1gbit) or "unlimited" (default)
 #     --out    folder for frames, metrics.jsonl, farm.log and links.tsv (default out/cluster)
 #     --bin    folder of the tessera binaries (default build/bin)
+#     --cut A,B,K  once K frames are done, host A loses its route to host B (a blackhole
+#              route: what A sends to B vanishes, as behind a failed link; B still reaches A)
 # The farm's settings come from the environment as for tessera-up (TESSERA_RENDERERS,
 # TESSERA_COMPOSITORS, TESSERA_FRAMES, TESSERA_CODEC, TESSERA_SCENE...). links.tsv has one
 # line per host: host, bytes it sent, bytes it received (counted on the switch side).
@@ -15,12 +17,13 @@
 # that was killed with SIGKILL are removed by the next run.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
-rate=unlimited out=out/cluster bin="$root/build/bin"
+rate=unlimited out=out/cluster bin="$root/build/bin" cut=
 while [ $# -gt 0 ]; do
   case "$1" in
     --rate) rate=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --bin) bin=$2; shift 2 ;;
+    --cut) cut=$2; shift 2 ;;
     --) shift; break ;;
     *) echo "emulated_cluster.sh: unknown option $1" >&2; exit 2 ;;
   esac
@@ -31,7 +34,9 @@ mkdir -p "$out"; out=$(cd "$out" && pwd); bin=$(cd "$bin" && pwd)
 
 tag="tcl$$"                       # namespaces and links of this run
 state=$(mktemp -d "/tmp/tessera-cluster.XXXXXX")
+cutter=
 cleanup() {
+  [ -n "$cutter" ] && kill "$cutter" 2>/dev/null || true
   for ns in $(ip netns list | awk '{print $1}' | grep "^$tag-" || true); do ip netns pids "$ns" 2>/dev/null | xargs -r kill -9 2>/dev/null || true; ip netns del "$ns" 2>/dev/null || true; done
   rm -rf "$state"
 }
@@ -78,6 +83,23 @@ export TESSERA_DISPLAY_HOST=$(cat "$state/hosts/display.ip")
 export TESSERA_KEYS="$state/keys" TESSERA_CURVE=on TESSERA_WINDOW=off TESSERA_OUT="$out"
 export EMULATED_CLUSTER_STATE="$state"
 echo "emulated cluster: ${#hosts[@]} hosts, links $rate, endpoints $TESSERA_ENDPOINTS, output $out"
+if [ -n "$cut" ]; then
+  IFS=, read -r cut_from cut_to cut_after <<< "$cut"
+  [ -f "$state/hosts/$cut_from.ns" ] && [ -f "$state/hosts/$cut_to.ip" ] && [[ "$cut_after" =~ ^[0-9]+$ ]] ||
+    { echo "emulated_cluster.sh: --cut $cut: expected HOST,HOST,FRAMES of this cluster's hosts" >&2; exit 2; }
+  rm -f "$out/metrics.jsonl"
+  (  # polls the master's metrics (one line per frame done) for at most 10 minutes
+    for ((i = 0; i < 6000; i++)); do
+      if [ "$(cat "$out/metrics.jsonl" 2>/dev/null | wc -l)" -ge "$cut_after" ]; then
+        ip -n "$(cat "$state/hosts/$cut_from.ns")" route add blackhole "$(cat "$state/hosts/$cut_to.ip")/32"
+        echo "emulated cluster: after $cut_after frames, $cut_from's link to $cut_to is cut"
+        exit 0
+      fi
+      sleep 0.1
+    done
+  ) &
+  cutter=$!
+fi
 set +e
 "$bin/tessera-up" "$root/compose.yaml" --launch-with "$root/tests/cluster/on_host.sh" "$@" 2>&1 | tee "$out/farm.log"
 status=${PIPESTATUS[0]}

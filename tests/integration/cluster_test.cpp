@@ -8,6 +8,7 @@
 #include <bit>
 #include <fstream>
 #include <map>
+#include <regex>
 #include <sstream>
 
 #include "tests/integration/farm_util.h"
@@ -69,6 +70,36 @@ void expectOrbitAcrossHosts(int renderers, bool swap) {
 TEST(EmulatedCluster, OrbitAcrossHostsMatchesOneProcessRender) { expectOrbitAcrossHosts(2, false); }
 // Three renderers: binary swap with folding (proto::swapSlot) across hosts.
 TEST(EmulatedCluster, BinarySwapAcrossHostsMatchesOneProcessRender) { expectOrbitAcrossHosts(3, true); }
+
+// A failed link between two renderers that swap, while both still reach the master: the
+// piece one sends the other vanishes (tests/cluster/emulated_cluster.sh --cut). Frames stall
+// until the master's deadline, a renderer is dropped and its work split anew, and the farm
+// goes on: every frame is written and equals the one-process render.
+TEST(EmulatedCluster, ALinkCutBetweenSwapPartnersStallsFramesButLosesNone) {
+  if (geteuid() != 0) GTEST_SKIP() << "network namespaces need root";
+  if (runCommand("ip netns list && tc -V", 10).exit_code != 0) GTEST_SKIP() << "iproute2 (ip, tc) is not installed";
+  FarmDir dir("cluster-cut");
+  const int frames = 200, cut_after = 10;  // the cut lands a few frames later: the script polls
+  const auto scene = dir.writeScene(frames);
+  const auto r = runCommand("env TESSERA_PREMULTIPLIED=1 TESSERA_SCENE=" + scene.string() +
+                                " TESSERA_RENDERERS=2 TESSERA_COMPOSITORS=1 TESSERA_COMPOSITING=binary-swap TESSERA_FRAMES=" +
+                                std::to_string(frames) + " " TESSERA_SOURCE_DIR "/tests/cluster/emulated_cluster.sh --out " +
+                                (dir.path() / "out").string() + " --cut renderer-2,renderer-1," + std::to_string(cut_after) +
+                                " --bin " TESSERA_BINARY_DIR "/bin",
+                            240);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_NE(r.output.find("renderer-2's link to renderer-1 is cut"), std::string::npos) << r.output;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"(frame=(\d+) missed its deadline)")))
+      << "the cut stalled no frame:\n" << r.output;
+  const int stalled = std::stoi(m[1]);
+  EXPECT_GE(stalled, cut_after);
+  ASSERT_LT(stalled, frames - 3) << "the farm was done before the cut mattered";
+  for (int k : {0, stalled - 1, stalled, stalled + 1, stalled + 2, stalled + 3, frames - 1})
+    EXPECT_TRUE(dir.matches(dir.farmFrame(k), dir.reference(scene, k), 1, "frame_" + std::to_string(k))) << "frame " << k;
+  for (int k = 0; k < frames; ++k) EXPECT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " was not written";
+  EXPECT_EQ(namespaces().find("tcl"), std::string::npos) << "left behind:\n" << namespaces();
+}
 
 }  // namespace
 }  // namespace tessera::test
