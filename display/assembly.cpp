@@ -115,6 +115,17 @@ std::map<uint64_t, Assembly::Frame>::iterator Assembly::dropWaiting(std::map<uin
   return frames_.erase(it);
 }
 
+std::optional<std::pair<uint64_t, Assembly::Source>> Assembly::awaited() const {
+  auto it = frames_.find(next_);
+  if (it == frames_.end() || !it->second.params) return std::nullopt;
+  const Frame& f = it->second;
+  for (const auto& src : sourcesOf(*f.params)) {
+    auto s = f.strips.find(src);
+    if (s == f.strips.end() || s->second.epoch != f.params->epoch) return std::make_pair(next_, src);
+  }
+  return std::nullopt;
+}
+
 bool Assembly::complete(const Frame& f) const {
   if (!f.params) return false;
   for (const auto& src : sourcesOf(*f.params)) {

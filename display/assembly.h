@@ -59,6 +59,9 @@ class Assembly {
   std::optional<Frame> popNext();
   // Whether the next frame's FrameParams are here (strips alone never hold the display up).
   bool nextHasParams() const;
+  // The next frame in order and the first of its sources whose strips (of its epoch) are not
+  // here, when its FrameParams are: what the display's heartbeats tell the master it awaits.
+  std::optional<std::pair<uint64_t, Source>> awaited() const;
   // Strips dropped after they were accepted (their FrameParams disagreed, or they waited
   // too far ahead, or were evicted): (sender's rank, reason), one per message.
   std::vector<std::pair<uint32_t, std::string>> takeLateDrops() { return std::exchange(late_drops_, {}); }

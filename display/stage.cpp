@@ -53,6 +53,8 @@ class Stage {
         if (auto roster = link_.receiveRoster(drops_)) readStrips(inbox_.setRoster(*roster, drops_));
       if (items[2].revents & ZMQ_POLLIN) readStrips(inbox_.receive(drops_));
       presentReady();
+      if (auto a = frames_.awaited()) link_.setWaiting(a->first, a->second.rank);  // the master's blame
+      else link_.clearWaiting();
       if (sink_ && pollInput()) return 0;
       if (shutdown_ && !frames_.nextHasParams()) break;  // strips without FrameParams never hold the display up
     }

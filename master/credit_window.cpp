@@ -52,6 +52,7 @@ CreditWindow::Waiting CreditWindow::waiting(uint64_t frame) const {
   for (uint32_t c : f.compositors)
     if (!f.compositors_in.count(c)) w.compositors.push_back(c);
   w.display = w.renderers.empty() && w.compositors.empty();
+  if (f.compositors.empty()) w.display_sources = proto::Role::Renderer;
   return w;
 }
 

@@ -40,6 +40,9 @@ class CreditWindow {
   struct Waiting {
     std::vector<uint32_t> renderers, compositors;
     bool display = false;
+    // Who sends the display this frame's strips: its compositors, or in a binary-swap frame
+    // (one without compositors) its renderers, their bands.
+    proto::Role display_sources = proto::Role::Compositor;
   };
 
   CreditWindow(int in_flight, DeadlineOptions deadline) : in_flight_(in_flight), deadline_(deadline) {}

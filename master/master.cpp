@@ -168,7 +168,7 @@ class Master {
     // (pid 99)"; `culprit` is the first of them.
     const Member* culprit = nullptr;
     const auto w = window_.waiting(oldest->first);
-    const std::string who = describeWaiting(members_, oldest->first, w.renderers, w.compositors, w.display, &culprit);
+    const std::string who = describeWaiting(members_, oldest->first, w, &culprit);
     if (oldest->second >= window_.deadlineMs() && culprit && culprit->alive) {  // dead ones: already handled
       spdlog::warn("frame={} missed its deadline of {:.0f} ms waiting for {}: {} {} (pid {}) lost; reassigning its work",
                    oldest->first, window_.deadlineMs(), who, roleName(culprit->role), culprit->rank, culprit->pid);

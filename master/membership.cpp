@@ -110,8 +110,9 @@ proto::Roster Membership::roster() const {
   return r;
 }
 
-std::string describeWaiting(const Membership& members, uint64_t frame, const std::vector<uint32_t>& renderers,
-                            const std::vector<uint32_t>& compositors, bool display, const Member** culprit) {
+std::string describeWaiting(const Membership& members, uint64_t frame, const CreditWindow::Waiting& w,
+                            const Member** culprit) {
+  const auto& renderers = w.renderers;
   std::vector<std::string> parts;
   *culprit = nullptr;
   auto name = [&](proto::Role role, uint32_t rank, const char* what) {
@@ -120,8 +121,17 @@ std::string describeWaiting(const Membership& members, uint64_t frame, const std
     return fmt::format("{} {} {} (pid {})", what, proto::roleName(role), rank, m ? m->pid : 0);
   };
   for (uint32_t r : renderers) parts.push_back(name(proto::Role::Renderer, r, "stats from"));
-  for (uint32_t c : compositors) parts.push_back(name(proto::Role::Compositor, c, "strips from"));
-  if (const Member* d = members.display(); display && d) parts.push_back(name(proto::Role::Display, d->rank, "FrameDone from"));
+  for (uint32_t c : w.compositors) parts.push_back(name(proto::Role::Compositor, c, "strips from"));
+  if (const Member* d = members.display(); w.display && d) {
+    parts.push_back(name(proto::Role::Display, d->rank, "FrameDone from"));
+    const Member* s = d->waiting_frame == frame && d->waiting_for != proto::kNobody
+                          ? members.find(w.display_sources, d->waiting_for)
+                          : nullptr;
+    if (s && s->alive) {
+      parts.push_back(fmt::format("the display awaits {} {}'s strips", proto::roleName(s->role), s->rank));
+      *culprit = s;
+    }
+  }
   // Follow the waits of a binary swap: a renderer awaiting a partner's piece is not the culprit.
   std::vector<const Member*> chain;
   for (const Member* m = *culprit; m && m->role == proto::Role::Renderer && m->waiting_frame == frame &&

@@ -13,6 +13,7 @@
 
 #include "common/clock.h"
 #include "common/wire/protocol.h"
+#include "master/credit_window.h"
 
 namespace tessera::master {
 
@@ -29,7 +30,8 @@ struct Member {
   Clock::time_point last_seen, lost_at;
   bool alive = true;
   int strikes = 0;               // deadlines missed: each one doubles its quarantine
-  uint64_t waiting_frame = 0;    // its last heartbeat: whose swap piece of which frame it awaits
+  uint64_t waiting_frame = 0;    // its last heartbeat: whose swap piece (a renderer) or strips
+                                 // (the display) of which frame it awaits
   uint32_t waiting_for = proto::kNobody;
 };
 
@@ -77,12 +79,15 @@ class Membership {
 struct Workers;
 Workers aliveWorkers(const Membership& members);
 
-// Who frame `frame` waits for, e.g. "stats from renderer 1 (pid 1234) and strips from
+// Who frame `frame` waits for (`w`), e.g. "stats from renderer 1 (pid 1234) and strips from
 // compositor 0 (pid 99)"; `culprit` gets the first of them (nullptr if none is a member), or,
 // when that renderer's heartbeats say it awaits a binary-swap partner's piece of this frame,
 // the renderer at the end of that chain of waits among those the frame waits for (the
-// stalled one, not its silent partners; in a cycle of waits, the first).
-std::string describeWaiting(const Membership& members, uint64_t frame, const std::vector<uint32_t>& renderers,
-                            const std::vector<uint32_t>& compositors, bool display, const Member** culprit);
+// stalled one, not its silent partners; in a cycle of waits, the first). When only the
+// display is left and its heartbeats say whose strips of this frame it awaits, that sender
+// is the culprit although it reported: its strips were lost on the way (a failed link), and
+// the farm can go on without it, never without the display.
+std::string describeWaiting(const Membership& members, uint64_t frame, const CreditWindow::Waiting& w,
+                            const Member** culprit);
 
 }  // namespace tessera::master

@@ -58,6 +58,33 @@ TEST(Assembly, FramesAreShownInOrderOnlyWithParamsAndEveryRegion) {
   EXPECT_TRUE(a.takeLateDrops().empty());
 }
 
+// What the display's heartbeats say it awaits: the next frame's first sender without strips
+// of its issue, only once its FrameParams are here.
+TEST(Assembly, SaysWhoseStripsTheNextFrameAwaits) {
+  Assembly a(1 << 20);
+  EXPECT_FALSE(a.awaited());
+  EXPECT_EQ(add(a, strips(0, 0), 16), "");
+  EXPECT_FALSE(a.awaited()) << "no FrameParams yet: the master's to send, not a sender's";
+  a.addParams(params(0, 3, 1));
+  a.addParams(params(1, 1, 1));
+  auto w = a.awaited();
+  ASSERT_TRUE(w);
+  EXPECT_EQ(w->first, 0u);
+  EXPECT_EQ(w->second.rank, 0u) << "its strips are of an older issue (epoch 0)";
+  EXPECT_EQ(add(a, strips(0, 0, 1), 16), "");
+  EXPECT_EQ(add(a, strips(0, 2, 1), 16), "");
+  EXPECT_EQ(add(a, strips(1, 0, 1), 16), "");
+  w = a.awaited();
+  ASSERT_TRUE(w);
+  EXPECT_EQ(w->first, 0u) << "frame 1 is complete, frame 0 is shown first";
+  EXPECT_EQ(w->second.role, proto::Role::Compositor);
+  EXPECT_EQ(w->second.rank, 1u);
+  EXPECT_EQ(add(a, strips(0, 1, 1), 16), "");
+  while (a.popNext()) {
+  }
+  EXPECT_FALSE(a.awaited()) << "nothing left to wait for";
+}
+
 TEST(Assembly, RejectsDuplicatesStrangersAndShownFramesQuietlySkipsStaleEpochs) {
   Assembly a(1 << 20);
   a.addParams(params(0, 2, 1));

@@ -71,11 +71,12 @@ TEST(EmulatedCluster, OrbitAcrossHostsMatchesOneProcessRender) { expectOrbitAcro
 // Three renderers: binary swap with folding (proto::swapSlot) across hosts.
 TEST(EmulatedCluster, BinarySwapAcrossHostsMatchesOneProcessRender) { expectOrbitAcrossHosts(3, true); }
 
-// A failed link between two renderers that swap, while both still reach the master: the
-// piece one sends the other vanishes (tests/cluster/emulated_cluster.sh --cut). Frames stall
-// until the master's deadline, a renderer is dropped and its work split anew, and the farm
-// goes on: every frame is written and equals the one-process render.
-TEST(EmulatedCluster, ALinkCutBetweenSwapPartnersStallsFramesButLosesNone) {
+// A link fails during a binary-swap orbit of 200 frames while both ends still reach the
+// master (tests/cluster/emulated_cluster.sh --cut): what `from` sends `to` vanishes. Frames
+// stall until the master's deadline, the sender is dropped and its work split anew, and the
+// farm goes on: every frame is written and equals the one-process render. `blame`: what the
+// master's deadline message must say.
+void expectFarmOutlivesACut(const std::string& from, const std::string& to, const std::string& blame) {
   if (geteuid() != 0) GTEST_SKIP() << "network namespaces need root";
   if (runCommand("ip netns list && tc -V", 10).exit_code != 0) GTEST_SKIP() << "iproute2 (ip, tc) is not installed";
   FarmDir dir("cluster-cut");
@@ -84,14 +85,15 @@ TEST(EmulatedCluster, ALinkCutBetweenSwapPartnersStallsFramesButLosesNone) {
   const auto r = runCommand("env TESSERA_PREMULTIPLIED=1 TESSERA_SCENE=" + scene.string() +
                                 " TESSERA_RENDERERS=2 TESSERA_COMPOSITORS=1 TESSERA_COMPOSITING=binary-swap TESSERA_FRAMES=" +
                                 std::to_string(frames) + " " TESSERA_SOURCE_DIR "/tests/cluster/emulated_cluster.sh --out " +
-                                (dir.path() / "out").string() + " --cut renderer-2,renderer-1," + std::to_string(cut_after) +
+                                (dir.path() / "out").string() + " --cut " + from + "," + to + "," + std::to_string(cut_after) +
                                 " --bin " TESSERA_BINARY_DIR "/bin",
                             240);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  ASSERT_NE(r.output.find("renderer-2's link to renderer-1 is cut"), std::string::npos) << r.output;
+  ASSERT_NE(r.output.find(from + "'s link to " + to + " is cut"), std::string::npos) << r.output;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"(frame=(\d+) missed its deadline)")))
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"(frame=(\d+) missed its deadline[^\n]*)")))
       << "the cut stalled no frame:\n" << r.output;
+  EXPECT_NE(m.str().find(blame), std::string::npos) << m.str();
   const int stalled = std::stoi(m[1]);
   EXPECT_GE(stalled, cut_after);
   ASSERT_LT(stalled, frames - 3) << "the farm was done before the cut mattered";
@@ -99,6 +101,18 @@ TEST(EmulatedCluster, ALinkCutBetweenSwapPartnersStallsFramesButLosesNone) {
     EXPECT_TRUE(dir.matches(dir.farmFrame(k), dir.reference(scene, k), 1, "frame_" + std::to_string(k))) << "frame " << k;
   for (int k = 0; k < frames; ++k) EXPECT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " was not written";
   EXPECT_EQ(namespaces().find("tcl"), std::string::npos) << "left behind:\n" << namespaces();
+}
+
+// Between swap partners: one awaits the other's piece (whichever the master drops, the other
+// renders the whole volume).
+TEST(EmulatedCluster, ALinkCutBetweenSwapPartnersStallsFramesButLosesNone) {
+  expectFarmOutlivesACut("renderer-2", "renderer-1", "lost; reassigning its work");
+}
+
+// A renderer's link to the display: the display, whose loss would end the farm, says in its
+// heartbeats whose band it awaits, and the master drops that renderer instead.
+TEST(EmulatedCluster, ALinkCutBetweenARendererAndTheDisplayCostsTheRendererNotTheFarm) {
+  expectFarmOutlivesACut("renderer-2", "display", "the display awaits renderer");
 }
 
 }  // namespace

@@ -74,6 +74,15 @@ TEST(Membership, HeartbeatIdentityOnlyForOurForm) {
   EXPECT_EQ(StageLink::heartbeatIdentity(std::string(16, 'x') + "h"), "");
 }
 
+// A frame that waits for these renderers' Stats (a binary-swap frame: no compositors).
+CreditWindow::Waiting waitingFor(std::vector<uint32_t> renderers) {
+  CreditWindow::Waiting w;
+  w.renderers = std::move(renderers);
+  w.display = w.renderers.empty();
+  w.display_sources = Role::Renderer;
+  return w;
+}
+
 // Binary swap: renderers 0 and 1 await renderer 2's piece of frame 7 (0 through 1), so the
 // deadline blames 2, not 0, the first the frame waits for. A wait for another frame, for a
 // renderer that already reported, or a cycle of waits leaves the blame where it was.
@@ -84,21 +93,50 @@ TEST(Membership, ADeadlineInASwapBlamesTheRendererTheOthersAwait) {
   r[0]->waiting_frame = 7, r[0]->waiting_for = 1;
   r[1]->waiting_frame = 7, r[1]->waiting_for = 2;
   const Member* culprit = nullptr;
-  const std::string who = describeWaiting(m, 7, {0, 1, 2}, {}, false, &culprit);
+  const std::string who = describeWaiting(m, 7, waitingFor({0, 1, 2}), &culprit);
   ASSERT_NE(culprit, nullptr);
   EXPECT_EQ(culprit->rank, 2u) << who;
   EXPECT_NE(who.find("renderer 1 awaits renderer 2's swap piece"), std::string::npos) << who;
-  describeWaiting(m, 8, {0, 1, 2}, {}, false, &culprit);
+  describeWaiting(m, 8, waitingFor({0, 1, 2}), &culprit);
   EXPECT_EQ(culprit->rank, 0u) << "the waits are for frame 7";
-  describeWaiting(m, 7, {0, 1}, {}, false, &culprit);
+  describeWaiting(m, 7, waitingFor({0, 1}), &culprit);
   EXPECT_EQ(culprit->rank, 1u) << "renderer 2 reported: 1 awaits a piece that was lost, blame stays with 1";
   r[2]->waiting_frame = 7, r[2]->waiting_for = 0;
-  describeWaiting(m, 7, {0, 1, 2}, {}, false, &culprit);
+  describeWaiting(m, 7, waitingFor({0, 1, 2}), &culprit);
   EXPECT_EQ(culprit->rank, 0u) << "a cycle of waits";
   r[2]->waiting_for = proto::kNobody;
   m.missedDeadline(*r[2], t0);
-  describeWaiting(m, 7, {0, 1, 2}, {}, false, &culprit);
+  describeWaiting(m, 7, waitingFor({0, 1, 2}), &culprit);
   EXPECT_EQ(culprit->rank, 1u) << "renderer 2 is already lost";
+}
+
+// Every stage reported frame 7 and the display waits: when it says whose strips it lacks (a
+// renderer's band in a swap frame, a compositor's region otherwise), that sender is blamed, as
+// its strips were lost on the way; without that, the display (whose loss ends the farm).
+TEST(Membership, ADeadlineTheDisplayWaitsOutBlamesTheSenderItAwaits) {
+  Membership m;
+  Member* r[2];
+  for (char c = 0; c < 2; ++c) r[(int)c] = &m.join(controlId('a' + c), {Role::Renderer, 20u + c, "", ""}, t0);
+  Member& comp = m.join(controlId('c'), {Role::Compositor, 30, "", ""}, t0);
+  Member& display = m.join(controlId('d'), {Role::Display, 40, "", ""}, t0);
+  const Member* culprit = nullptr;
+  std::string who = describeWaiting(m, 7, waitingFor({}), &culprit);
+  ASSERT_NE(culprit, nullptr);
+  EXPECT_EQ(culprit->role, Role::Display) << who;
+  display.waiting_frame = 7, display.waiting_for = 1;
+  who = describeWaiting(m, 7, waitingFor({}), &culprit);
+  EXPECT_EQ(culprit, r[1]) << who;
+  EXPECT_NE(who.find("the display awaits renderer 1's strips"), std::string::npos) << who;
+  CreditWindow::Waiting direct = waitingFor({});
+  direct.display_sources = Role::Compositor;
+  display.waiting_for = 0;
+  describeWaiting(m, 7, direct, &culprit);
+  EXPECT_EQ(culprit, &comp) << "a direct-send frame: compositor 0's strips";
+  describeWaiting(m, 8, direct, &culprit);
+  EXPECT_EQ(culprit->role, Role::Display) << "the display awaits frame 7, not 8";
+  m.missedDeadline(comp, t0);
+  describeWaiting(m, 7, direct, &culprit);
+  EXPECT_EQ(culprit->role, Role::Display) << "compositor 0 is already lost";
 }
 
 }  // namespace
