@@ -182,6 +182,22 @@ std::string Gather::addFramebuffer(proto::Framebuffer fb) {
   return add(std::move(fb), key, &Frame::framebuffers, "framebuffer");
 }
 
+std::optional<std::pair<uint64_t, uint32_t>> Gather::awaited() const {
+  for (const auto& [frame, f] : frames_) {
+    if (!f.params || !allOfEpoch(f, f.params->epoch)) continue;
+    if (const proto::SortLastWork* work = f.params->sortLast()) {
+      const bool mine = std::any_of(f.params->regions.begin(), f.params->regions.end(),
+                                    [&](const auto& reg) { return reg.compositor == rank_; });
+      for (uint32_t b = 0; mine && b < work->bricks.size(); ++b)
+        if (!f.pieces.count(b)) return std::make_pair(frame, work->bricks[b].renderer);
+    } else {
+      for (uint32_t r : routedRenderers(*f.params))
+        if (!f.framebuffers.count(r)) return std::make_pair(frame, r);
+    }
+  }
+  return std::nullopt;
+}
+
 std::optional<Gather::Ready> Gather::pop() {
   for (auto it = frames_.begin(); it != frames_.end(); ++it) {
     Frame& f = it->second;

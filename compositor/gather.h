@@ -51,6 +51,9 @@ class Gather {
   // The oldest frame that is complete, removed from the pending set.
   std::optional<Ready> pop();
   size_t pending() const { return frames_.size(); }
+  // The oldest frame with FrameParams this compositor waits on and the first renderer whose
+  // part of it is not here: what its heartbeats tell the master it awaits.
+  std::optional<std::pair<uint64_t, uint32_t>> awaited() const;
   // Pixel bytes held by parts that wait for their FrameParams.
   size_t waitingBytes() const;
   // Reasons for parts dropped after they were accepted (their FrameParams disagreed, or

@@ -51,6 +51,8 @@ class Stage {
       if (items[2].revents & ZMQ_POLLIN) accept(inbox_.receive(drops_));
       for (auto& why : gather_.takeLateDrops()) drops_.drop(~0u, why);
       while (auto ready = gather_.pop()) composite(*ready);
+      if (auto a = gather_.awaited()) link_.setWaiting(a->first, a->second);  // the master's blame
+      else link_.clearWaiting();
     }
     return 0;
   }

@@ -122,13 +122,16 @@ std::string describeWaiting(const Membership& members, uint64_t frame, const Cre
   };
   for (uint32_t r : renderers) parts.push_back(name(proto::Role::Renderer, r, "stats from"));
   for (uint32_t c : w.compositors) parts.push_back(name(proto::Role::Compositor, c, "strips from"));
-  if (const Member* d = members.display(); w.display && d) {
-    parts.push_back(name(proto::Role::Display, d->rank, "FrameDone from"));
-    const Member* s = d->waiting_frame == frame && d->waiting_for != proto::kNobody
-                          ? members.find(w.display_sources, d->waiting_for)
-                          : nullptr;
-    if (s && s->alive) {
-      parts.push_back(fmt::format("the display awaits {} {}'s strips", proto::roleName(s->role), s->rank));
+  if (const Member* d = members.display(); w.display && d) parts.push_back(name(proto::Role::Display, d->rank, "FrameDone from"));
+  // A compositor or the display that says whose parts of this frame it lacks, from a sender
+  // that has reported: they were lost on the way (a failed link). The sender is the one to
+  // drop; the display never is while it can name one (its loss ends the farm).
+  if (const Member* c = *culprit; c && c->role != proto::Role::Renderer && c->waiting_frame == frame &&
+                                  c->waiting_for != proto::kNobody) {
+    const proto::Role from = c->role == proto::Role::Display ? w.display_sources : proto::Role::Renderer;
+    if (const Member* s = members.find(from, c->waiting_for); s && s->alive) {
+      parts.push_back(fmt::format("{} {} awaits {} {}'s {}", proto::roleName(c->role), c->rank, proto::roleName(from),
+                                  s->rank, c->role == proto::Role::Display ? "strips" : "piece"));
       *culprit = s;
     }
   }

@@ -30,8 +30,8 @@ struct Member {
   Clock::time_point last_seen, lost_at;
   bool alive = true;
   int strikes = 0;               // deadlines missed: each one doubles its quarantine
-  uint64_t waiting_frame = 0;    // its last heartbeat: whose swap piece (a renderer) or strips
-                                 // (the display) of which frame it awaits
+  uint64_t waiting_frame = 0;    // its last heartbeat: whose swap piece (a renderer), piece (a
+                                 // compositor) or strips (the display) of which frame it awaits
   uint32_t waiting_for = proto::kNobody;
 };
 
@@ -83,10 +83,10 @@ Workers aliveWorkers(const Membership& members);
 // compositor 0 (pid 99)"; `culprit` gets the first of them (nullptr if none is a member), or,
 // when that renderer's heartbeats say it awaits a binary-swap partner's piece of this frame,
 // the renderer at the end of that chain of waits among those the frame waits for (the
-// stalled one, not its silent partners; in a cycle of waits, the first). When only the
-// display is left and its heartbeats say whose strips of this frame it awaits, that sender
-// is the culprit although it reported: its strips were lost on the way (a failed link), and
-// the farm can go on without it, never without the display.
+// stalled one, not its silent partners; in a cycle of waits, the first). When the first is
+// a compositor or the display and its heartbeats say whose piece or strips of this frame it
+// lacks, that sender is the culprit although it reported: its parts were lost on the way (a
+// failed link), and the farm can go on without it (never without the display).
 std::string describeWaiting(const Membership& members, uint64_t frame, const CreditWindow::Waiting& w,
                             const Member** culprit);
 

@@ -58,9 +58,9 @@ class StageLink {
   // returns the newest Roster among them; anything else is dropped and counted.
   std::optional<proto::Roster> receiveRoster(DropCounter& drops, int max_messages = 64);
   zmq::socket_t& control() { return ctl_; }
-  // What the heartbeats say this stage waits for: a binary swap's partner in a frame, or the
-  // sender of strips the display lacks (the master's deadline then blames whoever the chain
-  // of waits ends at), or nothing.
+  // What the heartbeats say this stage waits for in a frame: a binary swap's partner, the
+  // renderer whose piece a compositor lacks, the sender of strips the display lacks (the
+  // master's deadline then blames whoever the chain of waits ends at), or nothing.
   void setWaiting(uint64_t frame, uint32_t partner);
   void clearWaiting() { setWaiting(0, proto::kNobody); }
 

@@ -83,8 +83,8 @@ struct Header {
 //             run: the farm's identity (TESSERA_RUN); the master refuses any other
 // Welcome:    role u8 1 (1..Role::Last) | rank u32 4
 // Heartbeat:  role u8 1 (1..Role::Last) | rank u32 4 | waiting_frame u64 8 | waiting_for u32 4
-//             waiting_for: the swap partner whose piece of frame waiting_frame a renderer awaits, or the
-//             sender whose strips the display awaits; kNobody: none (the master's deadline blames)
+//             waiting_for: whose part of frame waiting_frame it awaits (a renderer: its swap partner's;
+//             a compositor: a renderer's piece; the display: a sender's strips), or kNobody
 struct Hello {                                                             // stage -> master
   Role role = Role::Renderer; uint32_t pid = 0; std::string endpoint; std::string run;
   bool operator==(const Hello&) const = default;

@@ -57,6 +57,25 @@ TEST(Gather, FrameIsReadyOnlyWithParamsAndEveryBrick) {
   EXPECT_EQ(*r->region, (Rect{0, 0, 8, 4}));
 }
 
+// What the compositor's heartbeats say it awaits: in the oldest frame it waits on, the
+// renderer of the first brick whose piece is not here (nothing before FrameParams).
+TEST(Gather, SaysWhoseRenderersPieceItAwaits) {
+  Gather g(0);
+  EXPECT_EQ(g.addPiece(piece(0, 0)), "");
+  EXPECT_FALSE(g.awaited()) << "no FrameParams yet";
+  FrameParams p0 = params(0, 3);
+  std::get<proto::SortLastWork>(p0.work).bricks[2].renderer = 7;
+  EXPECT_EQ(g.addParams(p0), "");
+  EXPECT_EQ(g.addParams(params(1, 3)), "");
+  auto a = g.awaited();
+  ASSERT_TRUE(a);
+  EXPECT_EQ(*a, (std::pair<uint64_t, uint32_t>{0, 1}));
+  EXPECT_EQ(g.addPiece(piece(0, 1)), "");
+  a = g.awaited();
+  ASSERT_TRUE(a);
+  EXPECT_EQ(*a, (std::pair<uint64_t, uint32_t>{0, 7})) << "brick 2 is renderer 7's";
+}
+
 // A binary-swap frame has no regions (its renderers send their bands to the display): the
 // compositor has nothing to wait for, and the frames after it are not held up.
 TEST(Gather, ABinarySwapFrameIsNotOurs) {

@@ -71,19 +71,21 @@ TEST(EmulatedCluster, OrbitAcrossHostsMatchesOneProcessRender) { expectOrbitAcro
 // Three renderers: binary swap with folding (proto::swapSlot) across hosts.
 TEST(EmulatedCluster, BinarySwapAcrossHostsMatchesOneProcessRender) { expectOrbitAcrossHosts(3, true); }
 
-// A link fails during a binary-swap orbit of 200 frames while both ends still reach the
+// A link fails during an orbit of 200 frames by 2 renderers while both ends still reach the
 // master (tests/cluster/emulated_cluster.sh --cut): what `from` sends `to` vanishes. Frames
 // stall until the master's deadline, the sender is dropped and its work split anew, and the
 // farm goes on: every frame is written and equals the one-process render. `blame`: what the
 // master's deadline message must say.
-void expectFarmOutlivesACut(const std::string& from, const std::string& to, const std::string& blame) {
+void expectFarmOutlivesACut(const std::string& compositing, int compositors, const std::string& from,
+                            const std::string& to, const std::string& blame) {
   if (geteuid() != 0) GTEST_SKIP() << "network namespaces need root";
   if (runCommand("ip netns list && tc -V", 10).exit_code != 0) GTEST_SKIP() << "iproute2 (ip, tc) is not installed";
   FarmDir dir("cluster-cut");
   const int frames = 200, cut_after = 10;  // the cut lands a few frames later: the script polls
   const auto scene = dir.writeScene(frames);
   const auto r = runCommand("env TESSERA_PREMULTIPLIED=1 TESSERA_SCENE=" + scene.string() +
-                                " TESSERA_RENDERERS=2 TESSERA_COMPOSITORS=1 TESSERA_COMPOSITING=binary-swap TESSERA_FRAMES=" +
+                                " TESSERA_RENDERERS=2 TESSERA_COMPOSITORS=" + std::to_string(compositors) +
+                                " TESSERA_COMPOSITING=" + compositing + " TESSERA_FRAMES=" +
                                 std::to_string(frames) + " " TESSERA_SOURCE_DIR "/tests/cluster/emulated_cluster.sh --out " +
                                 (dir.path() / "out").string() + " --cut " + from + "," + to + "," + std::to_string(cut_after) +
                                 " --bin " TESSERA_BINARY_DIR "/bin",
@@ -106,13 +108,19 @@ void expectFarmOutlivesACut(const std::string& from, const std::string& to, cons
 // Between swap partners: one awaits the other's piece (whichever the master drops, the other
 // renders the whole volume).
 TEST(EmulatedCluster, ALinkCutBetweenSwapPartnersStallsFramesButLosesNone) {
-  expectFarmOutlivesACut("renderer-2", "renderer-1", "lost; reassigning its work");
+  expectFarmOutlivesACut("binary-swap", 1, "renderer-2", "renderer-1", "lost; reassigning its work");
 }
 
 // A renderer's link to the display: the display, whose loss would end the farm, says in its
 // heartbeats whose band it awaits, and the master drops that renderer instead.
 TEST(EmulatedCluster, ALinkCutBetweenARendererAndTheDisplayCostsTheRendererNotTheFarm) {
-  expectFarmOutlivesACut("renderer-2", "display", "the display awaits renderer");
+  expectFarmOutlivesACut("binary-swap", 1, "renderer-2", "display", "display 0 awaits renderer");
+}
+
+// Direct send: a compositor says whose piece it lacks, and the master drops that renderer
+// (before, the compositor, whose loss did not mend the link).
+TEST(EmulatedCluster, ALinkCutBetweenARendererAndACompositorCostsTheRenderer) {
+  expectFarmOutlivesACut("direct-send", 2, "renderer-2", "compositor-1", "awaits renderer");
 }
 
 }  // namespace

@@ -126,7 +126,7 @@ TEST(Membership, ADeadlineTheDisplayWaitsOutBlamesTheSenderItAwaits) {
   display.waiting_frame = 7, display.waiting_for = 1;
   who = describeWaiting(m, 7, waitingFor({}), &culprit);
   EXPECT_EQ(culprit, r[1]) << who;
-  EXPECT_NE(who.find("the display awaits renderer 1's strips"), std::string::npos) << who;
+  EXPECT_NE(who.find("display 0 awaits renderer 1's strips"), std::string::npos) << who;
   CreditWindow::Waiting direct = waitingFor({});
   direct.display_sources = Role::Compositor;
   display.waiting_for = 0;
@@ -137,6 +137,23 @@ TEST(Membership, ADeadlineTheDisplayWaitsOutBlamesTheSenderItAwaits) {
   m.missedDeadline(comp, t0);
   describeWaiting(m, 7, direct, &culprit);
   EXPECT_EQ(culprit->role, Role::Display) << "compositor 0 is already lost";
+}
+
+// A direct-send frame whose renderers all reported: compositor 0 waits, and says it lacks
+// renderer 1's piece (lost on the way): renderer 1 is blamed, not the compositor.
+TEST(Membership, ADeadlineACompositorWaitsOutBlamesTheRendererWhosePieceItLacks) {
+  Membership m;
+  Member& r1 = (m.join(controlId('a'), {Role::Renderer, 20, "", ""}, t0), m.join(controlId('b'), {Role::Renderer, 21, "", ""}, t0));
+  Member& comp = m.join(controlId('c'), {Role::Compositor, 30, "", ""}, t0);
+  CreditWindow::Waiting w;
+  w.compositors = {0};
+  const Member* culprit = nullptr;
+  describeWaiting(m, 7, w, &culprit);
+  EXPECT_EQ(culprit, &comp);
+  comp.waiting_frame = 7, comp.waiting_for = 1;
+  const std::string who = describeWaiting(m, 7, w, &culprit);
+  EXPECT_EQ(culprit, &r1) << who;
+  EXPECT_NE(who.find("compositor 0 awaits renderer 1's piece"), std::string::npos) << who;
 }
 
 }  // namespace
