@@ -232,6 +232,14 @@ class Supervisor {
       // leader is (or, without a leader, when everything has finished).
       if (have_leader_) say(c.plan.label + " finished");
     } else if (v.kind == RestartVerdict::Kind::GiveUp) {
+      // One replica that keeps dying while others of its service run (its host lost its route
+      // to the master, say) is left out: the farm goes on with them. A service with none left
+      // stops the farm, as a single one always did (a crash loop everywhere is a setup error).
+      if (const int others = otherLiveReplicas(c)) {
+        say(ended + "; giving up on it: " + v.reason + "; the farm goes on with " + std::to_string(others) +
+            " other " + c.plan.service + (others > 1 ? " replicas" : " replica"));
+        return;
+      }
       say(ended + "; giving up on it: " + v.reason + "; stopping the farm");
       exit_code_ = 1;
       beginStop();
@@ -246,6 +254,13 @@ class Supervisor {
       exit_code_ = 1;
       beginStop();
     }
+  }
+
+  // Replicas of c's service other than c that run or wait out a restart's backoff.
+  int otherLiveReplicas(const Child& c) const {
+    int n = 0;
+    for (const auto& o : children_) n += o.get() != &c && o->plan.service == c.plan.service && (o->running || o->restart_at);
+    return n;
   }
 
   // Starts children whose backoff is over, with their original plan.

@@ -1,6 +1,7 @@
 // tessera-up's `restart:` policies with real processes (/bin/sh scripts in DIR): a child
 // that dies is started again with the same plan, exit 0 is not a failure, `always`
-// restarts anyway, crash loops and retry limits stop the farm, and nothing is restarted
+// restarts anyway, crash loops and retry limits stop the farm (unless other replicas of the
+// service run: then only that replica is given up), and nothing is restarted
 // once the farm is stopping. Every wait inside a script is bounded by a count.
 #include <gtest/gtest.h>
 
@@ -98,6 +99,28 @@ services:
                       "each within 10000 ms of starting; stopping the farm"))
       << allLines();
   EXPECT_EQ(fileLines("starts").size(), 3u);
+}
+
+// One replica in a crash loop while the other runs (its host cannot reach the master, say):
+// it is given up, the farm goes on; the display ends the run normally.
+TEST_F(RestartTest, ACrashLoopingReplicaIsLeftOutWhileItsSiblingRuns) {
+  restart_limits_.crash_loop = 3;
+  script("renderer", std::string(kLogStart) + "[ $TESSERA_REPLICA = 1 ] && exit 1\nexec sleep 30\n");
+  // Ends once the launcher has logged its verdict on replica 1 (bounded: 30 s).
+  script("display", "for i in $(seq 600); do grep -q given \"$DIR/verdict\" 2>/dev/null && break; "
+                    "[ \"$(grep -c '^1 ' \"$DIR/starts\" 2>/dev/null)\" -ge 3 ] && sleep 0.5 && echo given > \"$DIR/verdict\"; "
+                    "sleep 0.05; done\n");
+  const int code = run(R"(
+services:
+  renderer: {command: 'sh ${DIR}/renderer.sh', restart: on-failure, deploy: {replicas: 2}}
+  display: {command: 'sh ${DIR}/display.sh'}
+)");
+  EXPECT_EQ(code, 0) << allLines();
+  EXPECT_TRUE(hasLine("tessera-up | renderer-1 died (exit code 1); giving up on it: crash loop: 3 deaths in a row, "
+                      "each within 10000 ms of starting; the farm goes on with 1 other renderer replica"))
+      << allLines();
+  EXPECT_TRUE(hasLine("tessera-up | display finished; stopping the farm")) << allLines();
+  EXPECT_FALSE(hasLineStarting("tessera-up | renderer-2 died")) << allLines();
 }
 
 TEST_F(RestartTest, RetryLimitStopsTheFarm) {
