@@ -164,15 +164,14 @@ class Master {
   void watchOldestFrame() {
     auto oldest = window_.oldest(Clock::now());
     if (!oldest || oldest->second < window_.stallMs()) return;
-    // Whom it waits for, e.g. "stats from renderer 1 (pid 1234) and strips from compositor 0
-    // (pid 99)"; `culprit` is the first of them.
-    const Member* culprit = nullptr;
+    // Whom it waits for, e.g. "stats from renderer 1 (pid 1234)"; `culprit`: who to drop.
+    const Member *culprit = nullptr, *named_by = nullptr;  // named_by: a receiver naming it
     const auto w = window_.waiting(oldest->first);
-    const std::string who = describeWaiting(members_, oldest->first, w, &culprit);
+    const std::string who = describeWaiting(members_, oldest->first, w, Clock::now(), &culprit, &named_by);
     if (oldest->second >= window_.deadlineMs() && culprit && culprit->alive) {  // dead ones: already handled
       spdlog::warn("frame={} missed its deadline of {:.0f} ms waiting for {}: {} {} (pid {}) lost; reassigning its work",
                    oldest->first, window_.deadlineMs(), who, roleName(culprit->role), culprit->rank, culprit->pid);
-      members_.missedDeadline(*members_.find(culprit->role, culprit->rank), Clock::now());
+      members_.missedDeadline(*members_.find(culprit->role, culprit->rank), Clock::now(), named_by);
       return afterLoss();
     }
     if (msSince(last_stall_warning_) < 2000) return;

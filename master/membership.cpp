@@ -63,15 +63,18 @@ std::vector<Member*> Membership::expire(Clock::time_point now, double timeout_s)
     if (!m.alive || std::chrono::duration<double>(now - m.last_seen).count() < timeout_s) continue;
     m.alive = false;
     m.lost_at = now;
+    m.waiting_for = proto::kNobody;  // until its next heartbeat
     lost.push_back(&m);
   }
   return lost;
 }
 
-void Membership::missedDeadline(Member& m, Clock::time_point now) {
+void Membership::missedDeadline(Member& m, Clock::time_point now, const Member* named_by) {
   m.alive = false;
   m.lost_at = now;
+  m.waiting_for = proto::kNobody;  // until its next heartbeat
   ++m.strikes;
+  if (Member* r = named_by ? find(named_by->role, named_by->rank) : nullptr) r->named = m.rank, r->named_at = now;
 }
 
 int Membership::count(Role r) const {
@@ -111,7 +114,7 @@ proto::Roster Membership::roster() const {
 }
 
 std::string describeWaiting(const Membership& members, uint64_t frame, const CreditWindow::Waiting& w,
-                            const Member** culprit) {
+                            Clock::time_point now, const Member** culprit, const Member** named_by) {
   const auto& renderers = w.renderers;
   std::vector<std::string> parts;
   *culprit = nullptr;
@@ -126,13 +129,19 @@ std::string describeWaiting(const Membership& members, uint64_t frame, const Cre
   // A compositor or the display that says whose parts of this frame it lacks, from a sender
   // that has reported: they were lost on the way (a failed link). The sender is the one to
   // drop; the display never is while it can name one (its loss ends the farm).
-  if (const Member* c = *culprit; c && c->role != proto::Role::Renderer && c->waiting_frame == frame &&
-                                  c->waiting_for != proto::kNobody) {
+  using std::chrono::seconds;
+  if (const Member* c = *culprit; c && c->role != proto::Role::Renderer && c->alive && now - c->last_seen < seconds(1) &&
+                                  c->waiting_frame == frame && c->waiting_for != proto::kNobody) {
     const proto::Role from = c->role == proto::Role::Display ? w.display_sources : proto::Role::Renderer;
-    if (const Member* s = members.find(from, c->waiting_for); s && s->alive) {
+    const bool shedding = c->named != proto::kNobody && c->named != c->waiting_for && now - c->named_at < seconds(60);
+    if (const Member* s = members.find(from, c->waiting_for); s && !shedding) {
       parts.push_back(fmt::format("{} {} awaits {} {}'s {}", proto::roleName(c->role), c->rank, proto::roleName(from),
                                   s->rank, c->role == proto::Role::Display ? "strips" : "piece"));
       *culprit = s;
+      if (named_by) *named_by = c;
+    } else if (s) {
+      parts.push_back(fmt::format("{} {} awaits {} {}'s {}, another than the one it lacked last", proto::roleName(c->role),
+                                  c->rank, proto::roleName(from), s->rank, c->role == proto::Role::Display ? "strips" : "piece"));
     }
   }
   // Follow the waits of a binary swap: a renderer awaiting a partner's piece is not the culprit.

@@ -33,6 +33,9 @@ struct Member {
   uint64_t waiting_frame = 0;    // its last heartbeat: whose swap piece (a renderer), piece (a
                                  // compositor) or strips (the display) of which frame it awaits
   uint32_t waiting_for = proto::kNobody;
+  // A receiver (compositor, display): the sender a deadline last dropped because it named it.
+  uint32_t named = proto::kNobody;
+  Clock::time_point named_at;
 };
 
 class Membership {
@@ -55,8 +58,9 @@ class Membership {
   bool heard(Member& m, Clock::time_point now);
   // Marks alive members silent for longer than timeout_s lost; returns them.
   std::vector<Member*> expire(Clock::time_point now, double timeout_s);
-  // `m` missed a frame's deadline: lost, with one strike more.
-  void missedDeadline(Member& m, Clock::time_point now);
+  // `m` missed a frame's deadline: lost, with one strike more; `named_by`: the receiver whose
+  // heartbeats named it (describeWaiting), which remembers that.
+  void missedDeadline(Member& m, Clock::time_point now, const Member* named_by = nullptr);
 
   int count(proto::Role r) const;  // alive members of role r
   std::vector<const Member*> alive(proto::Role r) const;  // by rank
@@ -86,8 +90,13 @@ Workers aliveWorkers(const Membership& members);
 // stalled one, not its silent partners; in a cycle of waits, the first). When the first is
 // a compositor or the display and its heartbeats say whose piece or strips of this frame it
 // lacks, that sender is the culprit although it reported: its parts were lost on the way (a
-// failed link), and the farm can go on without it (never without the display).
+// failed link), and the farm can go on without it (never without the display). Only a
+// receiver that is alive and heard from within the last second counts (a frozen one's last
+// heartbeat is stale), and not one that names another sender than the last one a deadline
+// dropped for it within a minute: a receiver whose senders fail one after the other is at
+// fault itself. A named sender already lost is the culprit too: nobody is dropped, and the
+// frame waits for its replacement. `named_by` (if given) gets the receiver that named it.
 std::string describeWaiting(const Membership& members, uint64_t frame, const CreditWindow::Waiting& w,
-                            const Member** culprit);
+                            Clock::time_point now, const Member** culprit, const Member** named_by = nullptr);
 
 }  // namespace tessera::master

@@ -236,6 +236,7 @@ class Supervisor {
       // to the master, say) is left out: the farm goes on with them. A service with none left
       // stops the farm, as a single one always did (a crash loop everywhere is a setup error).
       if (const int others = otherLiveReplicas(c)) {
+        if (kill(-c.pid, 0) == 0) kill(-c.pid, SIGKILL);  // no stray helpers of it stay behind
         say(ended + "; giving up on it: " + v.reason + "; the farm goes on with " + std::to_string(others) +
             " other " + c.plan.service + (others > 1 ? " replicas" : " replica"));
         return;

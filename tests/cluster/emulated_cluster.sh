@@ -9,7 +9,8 @@
 #     --out    folder for frames, metrics.jsonl, farm.log and links.tsv (default out/cluster)
 #     --bin    folder of the tessera binaries (default build/bin)
 #     --cut A,B,K  once K frames are done, host A loses its route to host B (a blackhole
-#              route: what A sends to B vanishes, as behind a failed link; B still reaches A)
+#              route: what A sends to B vanishes, as behind a failed link, and so B's TCP to A
+#              stalls too, its acknowledgements lost; both still reach the other hosts)
 # The farm's settings come from the environment as for tessera-up (TESSERA_RENDERERS,
 # TESSERA_COMPOSITORS, TESSERA_FRAMES, TESSERA_CODEC, TESSERA_SCENE...). links.tsv has one
 # line per host: host, bytes it sent, bytes it received (counted on the switch side).
@@ -53,6 +54,13 @@ hosts=(master display)
 for ((i = 1; i <= renderers; i++)); do hosts+=("renderer-$i"); done
 for ((i = 1; i <= compositors; i++)); do hosts+=("compositor-$i"); done
 
+if [ -n "$cut" ]; then
+  IFS=, read -r cut_from cut_to cut_after <<< "$cut"
+  [[ " ${hosts[*]} " == *" $cut_from "* && " ${hosts[*]} " == *" $cut_to "* && "$cut_from" != "$cut_to" &&
+     "$cut_after" =~ ^[0-9]+$ ]] ||
+    { echo "emulated_cluster.sh: --cut $cut: expected HOST,HOST,FRAMES with two of: ${hosts[*]}" >&2; exit 2; }
+fi
+
 . "$root/tests/cluster/tbf.sh"
 sw="$tag-sw"
 ip netns add "$sw"
@@ -84,9 +92,6 @@ export TESSERA_KEYS="$state/keys" TESSERA_CURVE=on TESSERA_WINDOW=off TESSERA_OU
 export EMULATED_CLUSTER_STATE="$state"
 echo "emulated cluster: ${#hosts[@]} hosts, links $rate, endpoints $TESSERA_ENDPOINTS, output $out"
 if [ -n "$cut" ]; then
-  IFS=, read -r cut_from cut_to cut_after <<< "$cut"
-  [ -f "$state/hosts/$cut_from.ns" ] && [ -f "$state/hosts/$cut_to.ip" ] && [[ "$cut_after" =~ ^[0-9]+$ ]] ||
-    { echo "emulated_cluster.sh: --cut $cut: expected HOST,HOST,FRAMES of this cluster's hosts" >&2; exit 2; }
   rm -f "$out/metrics.jsonl"
   (  # polls the master's metrics (one line per frame done) for at most 10 minutes
     for ((i = 0; i < 6000; i++)); do

@@ -63,23 +63,31 @@ TEST(Assembly, FramesAreShownInOrderOnlyWithParamsAndEveryRegion) {
 TEST(Assembly, SaysWhoseStripsTheNextFrameAwaits) {
   Assembly a(1 << 20);
   EXPECT_FALSE(a.awaited());
-  EXPECT_EQ(add(a, strips(0, 0), 16), "");
+  EXPECT_EQ(add(a, strips(0, 0, 1), 16), "");
   EXPECT_FALSE(a.awaited()) << "no FrameParams yet: the master's to send, not a sender's";
   a.addParams(params(0, 3, 1));
   a.addParams(params(1, 1, 1));
   auto w = a.awaited();
   ASSERT_TRUE(w);
   EXPECT_EQ(w->first, 0u);
-  EXPECT_EQ(w->second.rank, 0u) << "its strips are of an older issue (epoch 0)";
-  EXPECT_EQ(add(a, strips(0, 0, 1), 16), "");
-  EXPECT_EQ(add(a, strips(0, 2, 1), 16), "");
-  EXPECT_EQ(add(a, strips(1, 0, 1), 16), "");
+  EXPECT_EQ(w->second.role, proto::Role::Compositor);
+  EXPECT_EQ(w->second.rank, 1u) << "compositor 0's strips are here";
+  EXPECT_EQ(add(a, strips(0, 1, 2), 16), "") << "a newer issue's strips, ahead of their FrameParams";
+  w = a.awaited();
+  ASSERT_TRUE(w);
+  EXPECT_EQ(w->second.rank, 1u) << "compositor 1's strips are of another issue (epoch 2)";
+  a.addParams(params(0, 3, 2));
+  a.addParams(params(1, 1, 2));
+  w = a.awaited();
+  ASSERT_TRUE(w);
+  EXPECT_EQ(w->second.rank, 0u) << "under epoch 2, compositor 0's strips (epoch 1) are not the frame's";
+  EXPECT_EQ(add(a, strips(0, 0, 2), 16), "");
+  EXPECT_EQ(add(a, strips(1, 0, 2), 16), "");
   w = a.awaited();
   ASSERT_TRUE(w);
   EXPECT_EQ(w->first, 0u) << "frame 1 is complete, frame 0 is shown first";
-  EXPECT_EQ(w->second.role, proto::Role::Compositor);
-  EXPECT_EQ(w->second.rank, 1u);
-  EXPECT_EQ(add(a, strips(0, 1, 1), 16), "");
+  EXPECT_EQ(w->second.rank, 2u);
+  EXPECT_EQ(add(a, strips(0, 2, 2), 16), "");
   while (a.popNext()) {
   }
   EXPECT_FALSE(a.awaited()) << "nothing left to wait for";

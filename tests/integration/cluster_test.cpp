@@ -108,7 +108,7 @@ void expectFarmOutlivesACut(const std::string& compositing, int compositors, con
 // Between swap partners: one awaits the other's piece (whichever the master drops, the other
 // renders the whole volume).
 TEST(EmulatedCluster, ALinkCutBetweenSwapPartnersStallsFramesButLosesNone) {
-  expectFarmOutlivesACut("binary-swap", 1, "renderer-2", "renderer-1", "lost; reassigning its work");
+  expectFarmOutlivesACut("binary-swap", 1, "renderer-2", "renderer-1", "): renderer ");
 }
 
 // A renderer's link to the display: the display, whose loss would end the farm, says in its

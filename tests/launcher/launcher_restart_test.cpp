@@ -106,9 +106,10 @@ services:
 TEST_F(RestartTest, ACrashLoopingReplicaIsLeftOutWhileItsSiblingRuns) {
   restart_limits_.crash_loop = 3;
   script("renderer", std::string(kLogStart) + "[ $TESSERA_REPLICA = 1 ] && exit 1\nexec sleep 30\n");
-  // Ends once the launcher has logged its verdict on replica 1 (bounded: 30 s).
+  // Ends 3 s after replica 1's third start, time for the launcher to reap it and log its
+  // verdict (bounded: 30 s).
   script("display", "for i in $(seq 600); do grep -q given \"$DIR/verdict\" 2>/dev/null && break; "
-                    "[ \"$(grep -c '^1 ' \"$DIR/starts\" 2>/dev/null)\" -ge 3 ] && sleep 0.5 && echo given > \"$DIR/verdict\"; "
+                    "[ \"$(grep -c '^1 ' \"$DIR/starts\" 2>/dev/null)\" -ge 3 ] && sleep 3 && echo given > \"$DIR/verdict\"; "
                     "sleep 0.05; done\n");
   const int code = run(R"(
 services:

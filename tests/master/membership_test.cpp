@@ -93,20 +93,20 @@ TEST(Membership, ADeadlineInASwapBlamesTheRendererTheOthersAwait) {
   r[0]->waiting_frame = 7, r[0]->waiting_for = 1;
   r[1]->waiting_frame = 7, r[1]->waiting_for = 2;
   const Member* culprit = nullptr;
-  const std::string who = describeWaiting(m, 7, waitingFor({0, 1, 2}), &culprit);
+  const std::string who = describeWaiting(m, 7, waitingFor({0, 1, 2}), t0, &culprit);
   ASSERT_NE(culprit, nullptr);
   EXPECT_EQ(culprit->rank, 2u) << who;
   EXPECT_NE(who.find("renderer 1 awaits renderer 2's swap piece"), std::string::npos) << who;
-  describeWaiting(m, 8, waitingFor({0, 1, 2}), &culprit);
+  describeWaiting(m, 8, waitingFor({0, 1, 2}), t0, &culprit);
   EXPECT_EQ(culprit->rank, 0u) << "the waits are for frame 7";
-  describeWaiting(m, 7, waitingFor({0, 1}), &culprit);
+  describeWaiting(m, 7, waitingFor({0, 1}), t0, &culprit);
   EXPECT_EQ(culprit->rank, 1u) << "renderer 2 reported: 1 awaits a piece that was lost, blame stays with 1";
   r[2]->waiting_frame = 7, r[2]->waiting_for = 0;
-  describeWaiting(m, 7, waitingFor({0, 1, 2}), &culprit);
+  describeWaiting(m, 7, waitingFor({0, 1, 2}), t0, &culprit);
   EXPECT_EQ(culprit->rank, 0u) << "a cycle of waits";
   r[2]->waiting_for = proto::kNobody;
   m.missedDeadline(*r[2], t0);
-  describeWaiting(m, 7, waitingFor({0, 1, 2}), &culprit);
+  describeWaiting(m, 7, waitingFor({0, 1, 2}), t0, &culprit);
   EXPECT_EQ(culprit->rank, 1u) << "renderer 2 is already lost";
 }
 
@@ -120,23 +120,38 @@ TEST(Membership, ADeadlineTheDisplayWaitsOutBlamesTheSenderItAwaits) {
   Member& comp = m.join(controlId('c'), {Role::Compositor, 30, "", ""}, t0);
   Member& display = m.join(controlId('d'), {Role::Display, 40, "", ""}, t0);
   const Member* culprit = nullptr;
-  std::string who = describeWaiting(m, 7, waitingFor({}), &culprit);
+  std::string who = describeWaiting(m, 7, waitingFor({}), t0, &culprit);
   ASSERT_NE(culprit, nullptr);
   EXPECT_EQ(culprit->role, Role::Display) << who;
   display.waiting_frame = 7, display.waiting_for = 1;
-  who = describeWaiting(m, 7, waitingFor({}), &culprit);
+  who = describeWaiting(m, 7, waitingFor({}), t0, &culprit);
   EXPECT_EQ(culprit, r[1]) << who;
   EXPECT_NE(who.find("display 0 awaits renderer 1's strips"), std::string::npos) << who;
   CreditWindow::Waiting direct = waitingFor({});
   direct.display_sources = Role::Compositor;
   display.waiting_for = 0;
-  describeWaiting(m, 7, direct, &culprit);
+  describeWaiting(m, 7, direct, t0, &culprit);
   EXPECT_EQ(culprit, &comp) << "a direct-send frame: compositor 0's strips";
-  describeWaiting(m, 8, direct, &culprit);
+  describeWaiting(m, 8, direct, t0, &culprit);
   EXPECT_EQ(culprit->role, Role::Display) << "the display awaits frame 7, not 8";
-  m.missedDeadline(comp, t0);
-  describeWaiting(m, 7, direct, &culprit);
-  EXPECT_EQ(culprit->role, Role::Display) << "compositor 0 is already lost";
+  const Member* named_by = nullptr;
+  describeWaiting(m, 7, direct, t0, &culprit, &named_by);
+  EXPECT_EQ(named_by, &display);
+  describeWaiting(m, 7, direct, t0 + 2s, &culprit);
+  EXPECT_EQ(culprit->role, Role::Display) << "the display's last heartbeat is 2 s old";
+  m.missedDeadline(comp, t0, &display);
+  describeWaiting(m, 7, direct, t0, &culprit);
+  EXPECT_EQ(culprit, &comp) << "compositor 0 is already lost: nobody more is dropped, the frame waits for it";
+  EXPECT_FALSE(culprit->alive);
+  display.waiting_for = 1;
+  who = describeWaiting(m, 7, waitingFor({}), t0 + 10s, &culprit);
+  EXPECT_EQ(culprit->role, Role::Display) << "naming another sender than the one dropped 10 s before: " << who;
+  display.last_seen = t0 + 61s;
+  describeWaiting(m, 7, waitingFor({}), t0 + 61s, &culprit);
+  EXPECT_EQ(culprit, r[1]) << "a minute later, a new failure";
+  m.missedDeadline(display, t0);
+  describeWaiting(m, 7, waitingFor({}), t0 + 61s, &culprit);
+  EXPECT_EQ(culprit, nullptr) << "a lost display names nobody";
 }
 
 // A direct-send frame whose renderers all reported: compositor 0 waits, and says it lacks
@@ -148,10 +163,10 @@ TEST(Membership, ADeadlineACompositorWaitsOutBlamesTheRendererWhosePieceItLacks)
   CreditWindow::Waiting w;
   w.compositors = {0};
   const Member* culprit = nullptr;
-  describeWaiting(m, 7, w, &culprit);
+  describeWaiting(m, 7, w, t0, &culprit);
   EXPECT_EQ(culprit, &comp);
   comp.waiting_frame = 7, comp.waiting_for = 1;
-  const std::string who = describeWaiting(m, 7, w, &culprit);
+  const std::string who = describeWaiting(m, 7, w, t0, &culprit);
   EXPECT_EQ(culprit, &r1) << who;
   EXPECT_NE(who.find("compositor 0 awaits renderer 1's piece"), std::string::npos) << who;
 }
