@@ -134,9 +134,11 @@ TEST(Slurm, TwoFarmsSubmittedAtOnceBothFinishWithoutCrossTalk) {
 // the other renderer's process (its task restarts it): the step still completes.
 TEST(Slurm, KilledRendererTasksAndProcessesAreSurvivedWithEveryFrame) {
   FarmDir dir("slurm-renderer");
-  const int frames = 40;
+  // Enough frames after the 12th for the second kill to land while the farm still runs: the
+  // survivor renders this small volume at ~35 frames a second (40 frames were too few once).
+  const int frames = 150;
   const fs::path farm = farmFolder(dir, "farm", frames, 64, 256, 256);
-  const auto r = inCluster(dir, submit(farm, "TESSERA_FRAMES=40 TESSERA_IN_FLIGHT=1") +
+  const auto r = inCluster(dir, submit(farm, "TESSERA_FRAMES=150 TESSERA_IN_FLIGHT=1") +
                                     "wait_file " + (farm / "out/frame_000003.png").string() + " 60 || exit 1\n"
                                     "kill_task " + farm.string() + " renderer\n"
                                     "wait_file " + (farm / "out/frame_000012.png").string() + " 60 || exit 1\n"
