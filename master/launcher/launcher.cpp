@@ -151,10 +151,15 @@ class Supervisor {
   }
 
   bool failStart(Child& c, const std::string& why) {
-    say(c.plan.label + " could not be started (" + why + "); stopping the farm");
+    stopFailed(c.plan.label + " could not be started (" + why + "); stopping the farm");
+    return false;
+  }
+
+  // The farm cannot go on: says why, stops everything, and tessera-up exits 1.
+  void stopFailed(const std::string& why) {
+    say(why);
     exit_code_ = 1;
     beginStop();
-    return false;
   }
 
   void beginStop() {
@@ -232,28 +237,21 @@ class Supervisor {
       // leader is (or, without a leader, when everything has finished).
       if (have_leader_) say(c.plan.label + " finished");
     } else if (v.kind == RestartVerdict::Kind::GiveUp) {
-      // One replica that keeps dying while others of its service run (its host lost its route
-      // to the master, say) is left out: the farm goes on with them. A service with none left
-      // stops the farm, as a single one always did (a crash loop everywhere is a setup error).
+      // A replica that keeps dying while others of its service run (its host lost its route to
+      // the master, say) is left out; with none left it stops the farm (a setup error, likely).
       if (const int others = otherLiveReplicas(c)) {
         if (kill(-c.pid, 0) == 0) kill(-c.pid, SIGKILL);  // no stray helpers of it stay behind
         say(ended + "; giving up on it: " + v.reason + "; the farm goes on with " + std::to_string(others) +
             " other " + c.plan.service + (others > 1 ? " replicas" : " replica"));
         return;
       }
-      say(ended + "; giving up on it: " + v.reason + "; stopping the farm");
-      exit_code_ = 1;
-      beginStop();
+      stopFailed(ended + "; giving up on it: " + v.reason + "; stopping the farm");
     } else if (WIFEXITED(status)) {
       // An error exit, not a crash: the process said why just above (a bad scene, say).
-      say(c.plan.label + " stopped with an error (" + describe(status) +
-          "; its message is above): the farm cannot continue without it; stopping");
-      exit_code_ = 1;
-      beginStop();
+      stopFailed(c.plan.label + " stopped with an error (" + describe(status) +
+                 "; its message is above): the farm cannot continue without it; stopping");
     } else {
-      say(ended + ": the farm cannot continue without it; stopping");
-      exit_code_ = 1;
-      beginStop();
+      stopFailed(ended + ": the farm cannot continue without it; stopping");
     }
   }
 
