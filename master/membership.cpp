@@ -134,14 +134,12 @@ std::string describeWaiting(const Membership& members, uint64_t frame, const Cre
                                   c->waiting_frame == frame && c->waiting_for != proto::kNobody) {
     const proto::Role from = c->role == proto::Role::Display ? w.display_sources : proto::Role::Renderer;
     const bool shedding = c->named != proto::kNobody && c->named != c->waiting_for && now - c->named_at < seconds(60);
-    if (const Member* s = members.find(from, c->waiting_for); s && !shedding) {
-      parts.push_back(fmt::format("{} {} awaits {} {}'s {}", proto::roleName(c->role), c->rank, proto::roleName(from),
-                                  s->rank, c->role == proto::Role::Display ? "strips" : "piece"));
-      *culprit = s;
-      if (named_by) *named_by = c;
-    } else if (s) {
-      parts.push_back(fmt::format("{} {} awaits {} {}'s {}, another than the one it lacked last", proto::roleName(c->role),
-                                  c->rank, proto::roleName(from), s->rank, c->role == proto::Role::Display ? "strips" : "piece"));
+    if (const Member* s = members.find(from, c->waiting_for)) {
+      parts.push_back(fmt::format("{} {} awaits {} {}'s {}{}", proto::roleName(c->role), c->rank, proto::roleName(from),
+                                  s->rank, c->role == proto::Role::Display ? "strips" : "piece",
+                                  shedding ? ", another than the one it lacked last" : ""));
+      if (!shedding) *culprit = s;
+      if (!shedding && named_by) *named_by = c;
     }
   }
   // Follow the waits of a binary swap: a renderer awaiting a partner's piece is not the culprit.
