@@ -37,7 +37,9 @@ struct Classified {
 // kEarlyOutEmpty: return early for an all-empty packet. That branch pays where it is predictable
 // (long runs without skipping: most packets are empty) and costs where it is a coin flip
 // (short runs between leaps).
-template <bool kEarlyOutEmpty>
+// kOcc: first test the samples' sub-blocks (c.occ, one gather) and return before fetching any
+// voxel if none can be non-empty; lanes in empty sub-blocks are not listed.
+template <bool kEarlyOutEmpty, bool kOcc>
 inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off, Classified& out, int n) {
   const __m256 kf = _mm256_add_ps(_mm256_set1_ps((float)k0), _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7));
   __m256 f[3];
@@ -60,6 +62,19 @@ inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off,
       _mm256_add_epi32(_mm256_mullo_epi32(_mm256_and_si256(i[1], seven), _mm256_set1_epi32(VolumeAccel::kEdge)),
                        _mm256_mullo_epi32(_mm256_and_si256(i[2], seven),
                                           _mm256_set1_epi32(VolumeAccel::kEdge * VolumeAccel::kEdge))));
+  int occupied = (1 << lanes) - 1;
+  if constexpr (kOcc) {
+    // Bit sx + 4 sy + 16 sz (subBlockBit) of the brick's 64-bit mask, read as two 32-bit words.
+    const __m256i three = _mm256_set1_epi32(3);
+    auto sub = [&](int a) { return _mm256_and_si256(_mm256_srli_epi32(i[a], 1), three); };
+    const __m256i bit = _mm256_or_si256(sub(0), _mm256_or_si256(_mm256_slli_epi32(sub(1), 2), _mm256_slli_epi32(sub(2), 4)));
+    const __m256i word = _mm256_add_epi32(_mm256_add_epi32(brick, brick), _mm256_srli_epi32(bit, 5));
+    const __m256i w = _mm256_i32gather_epi32(reinterpret_cast<const int*>(c.occ), word, 4);
+    const __m256i on = _mm256_and_si256(_mm256_srlv_epi32(w, _mm256_and_si256(bit, _mm256_set1_epi32(31))),
+                                        _mm256_set1_epi32(1));
+    occupied &= _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(on, _mm256_set1_epi32(1))));
+    if (occupied == 0) return 0;
+  }
   const __m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(brick, _mm256_set1_epi32(VolumeAccel::kBrickSize)), local);
   // Four 32-bit gathers (scale 2 on uint16 data) fetch the eight corners as x pairs.
   constexpr int oy = VolumeAccel::kEdge, oz = VolumeAccel::kEdge * VolumeAccel::kEdge;
@@ -85,7 +100,7 @@ inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off,
   const __m256i out_of_range = _mm256_or_si256(_mm256_cmpgt_epi32(_mm256_set1_epi32(c.first_nz), ti),
                                                _mm256_cmpgt_epi32(ti, _mm256_set1_epi32(c.last_nz)));
   int mask = ~_mm256_movemask_ps(_mm256_castsi256_ps(out_of_range));
-  mask &= (1 << lanes) - 1;
+  mask &= occupied;
   if (kEarlyOutEmpty && mask == 0) return 0;
   const __m256i perm = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(kCompress.lanes[mask])));
   const __m256i off = _mm256_add_epi32(_mm256_set1_epi32(first_off), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
@@ -100,8 +115,8 @@ inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off,
 // operations, in the same order, as one sample at a time). Returns true if the alpha
 // reached et; `stop` is the sample after the last one used.
 // kShade: c.grad is set (a loop of its own: the unlit loop stays short).
-template <bool kEarlyOutEmpty, bool kShade>
-inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, Accum& out, int64_t& stop) {
+template <bool kEarlyOutEmpty, bool kOcc, bool kShade>
+[[gnu::always_inline]] inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, Accum& out, int64_t& stop) {
   // Locals: `out` may alias the table's floats as far as the compiler knows, so compositing
   // into it stored and reloaded it for every sample (a longer dependency chain).
   __m128 acc = out.c, trans = out.t;
@@ -111,7 +126,7 @@ inline bool runPackets(const Consts& c, int64_t begin, int64_t end, float et, Ac
     const int64_t chunk_end = std::min(end, j + Classified::kChunk);
     int n = 0;
     for (int64_t p = j; p < chunk_end; p += kLanes)
-      n += classifyPacket<kEarlyOutEmpty>(c, p, (int)std::min<int64_t>(kLanes, chunk_end - p), (int)(p - j), cl, n);
+      n += classifyPacket<kEarlyOutEmpty, kOcc>(c, p, (int)std::min<int64_t>(kLanes, chunk_end - p), (int)(p - j), cl, n);
     if constexpr (kShade) {
       // Lit kLanes samples at a time (shadePacket), then composited one by one. A ray that ends
       // early wastes the lighting of at most kLanes - 1 samples.
@@ -182,6 +197,9 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, Accum& acc, 
     samplePosition(c, k0 + l, i, f);
     constexpr int B = MinMaxHierarchy::kBlock;
     const size_t brick = (size_t)(i[0] / B) + (size_t)(i[1] / B) * c.nb_x + (size_t)(i[2] / B) * c.nb_xy;
+    // An empty sub-block (subBlockBit; not called: an inline function shared between the ISAs' copies).
+    const int bit = ((i[0] >> 1) & 3) | ((i[1] >> 1) & 3) << 2 | ((i[2] >> 1) & 3) << 4;
+    if (c.occ && !((c.occ[brick] >> bit) & 1)) continue;
     const uint16_t* p = c.vol + brick * VolumeAccel::kBrickSize + (i[0] % B) +
                         VolumeAccel::kEdge * ((i[1] % B) + VolumeAccel::kEdge * (i[2] % B));
     constexpr int oy = VolumeAccel::kEdge, oz = VolumeAccel::kEdge * VolumeAccel::kEdge;

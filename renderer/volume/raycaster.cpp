@@ -19,6 +19,7 @@
 
 #include "renderer/volume/kernels.h"
 #include "renderer/volume/minmax.h"
+#include "renderer/volume/occupancy.h"
 #include "renderer/volume/ray_setup.h"
 #include "renderer/volume/tf_table.h"
 #include "renderer/volume/volume_accel.h"
@@ -30,6 +31,7 @@ struct Raycaster::Impl {
   TransferFunction tf;
   std::shared_ptr<const VolumeAccel> accel;
   MinMaxHierarchy::Emptiness emptiness;
+  std::vector<uint64_t> occupancy;  // subBlockOccupancy of emptiness
   Brick nonempty;  // voxel box holding every sample that can be non-empty (lo == hi: none)
   Shading shading;
   Vec3 light;
@@ -69,6 +71,7 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, 
   // Block b holds the samples at voxel coordinates [8b, 8b+8) (clamped at the border); the
   // cell box [8b, 8b+9) holds them with half a voxel to spare, far above the kernel's float
   // error (< 1e-3 voxel), so samples outside it have exactly zero opacity.
+  impl_->occupancy = subBlockOccupancy(*impl_->accel, impl_->emptiness, f);
   const auto& e = impl_->emptiness;
   Brick& box = impl_->nonempty;
   box = Brick{{0, 0, 0}, {0, 0, 0}};
@@ -322,6 +325,7 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
     fast.accel = impl_->accel.get();
     fast.table = &*table;
     fast.emptiness = &impl_->emptiness;
+    fast.occupancy = impl_->occupancy.data();
     fast.skip = q.skip_empty;
     fast.early_termination = (float)std::min(q.early_termination, 2.0);
   }

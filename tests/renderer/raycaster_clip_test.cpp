@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "renderer/volume/kernels.h"
+#include "renderer/volume/occupancy.h"
 #include "renderer/volume/minmax.h"
 #include "renderer/volume/ray_setup.h"
 #include "renderer/volume/raycaster.h"
@@ -179,6 +180,7 @@ TEST(CastFastBatch, BitIdenticalToSingleRays) {
   const VolumeAccel accel(*vol);
   const TransferFunction tf = ballTf();
   const auto emptiness = accel.hierarchy.classify([&](float lo, float hi) { return TfTable::rangeIsEmpty(tf, lo, hi); });
+  const auto occupancy = subBlockOccupancy(accel, emptiness, tf);
   const TfTable table(tf, 1.0 / 40);
   const VolumeGeometry g(*vol);
   uint32_t seed = 9;
@@ -186,6 +188,7 @@ TEST(CastFastBatch, BitIdenticalToSingleRays) {
   int terminated_rays = 0;
   for (int i = 0; i < 400; ++i) {
     FastContext c{vol.get(), &accel, &table, &emptiness, i % 3 != 0, i % 2 ? 0.9f : 2.0f};
+    c.occupancy = occupancy.data();
     RaySpan spans[3];
     int found = 0;
     while (found < 3) {
@@ -208,6 +211,59 @@ TEST(CastFastBatch, BitIdenticalToSingleRays) {
     ASSERT_EQ(cp.terminated, cs.terminated);
   }
   EXPECT_GT(terminated_rays, 20);  // early termination was exercised
+}
+
+TEST(SubBlockOccupancy, EverySampleWithOpacityLiesInAnOccupiedSubBlock) {
+  // Random sample positions: a sample the table gives alpha > 0 must have its sub-block's bit
+  // set (the kernel would pass over it otherwise), and the ball's rim must leave some
+  // sub-blocks of non-empty blocks unset (else the test of the kernel spares nothing).
+  const auto vol = ball({41, 35, 44}, {20, 17, 22}, 11);
+  const VolumeAccel accel(*vol);
+  const TransferFunction tf = ballTf();
+  const auto emptiness = accel.hierarchy.classify([&](float lo, float hi) { return TfTable::rangeIsEmpty(tf, lo, hi); });
+  const auto occ = subBlockOccupancy(accel, emptiness, tf);
+  ASSERT_EQ(occ.size(), (size_t)accel.nb[0] * accel.nb[1] * accel.nb[2]);
+  const TfTable table(tf, 1.0 / 40);
+  uint32_t seed = 3;
+  auto rnd = [&] { return (seed = seed * 1664525u + 1013904223u) / 4294967296.0; };
+  int lit = 0;
+  for (int n = 0; n < 200000; ++n) {
+    const double u[3] = {rnd() * 40, rnd() * 34, rnd() * 43};
+    int i[3];
+    for (int a = 0; a < 3; ++a) i[a] = std::min((int)u[a], vol->dims[a] - 2);
+    float rgba[4];
+    table.lookup((float)sampleTrilinear(*vol, u[0], u[1], u[2]), rgba);
+    if (rgba[3] <= 0) continue;
+    ++lit;
+    const size_t b = (size_t)(i[0] / 8) + accel.nb[0] * ((size_t)(i[1] / 8) + accel.nb[1] * (size_t)(i[2] / 8));
+    ASSERT_TRUE((occ[b] >> subBlockBit(i[0], i[1], i[2])) & 1)
+        << "sample at " << u[0] << "," << u[1] << "," << u[2] << " has alpha " << rgba[3] << " in an empty sub-block";
+  }
+  EXPECT_GT(lit, 10000);
+  int partial = 0, full = 0;
+  for (size_t b = 0; b < occ.size(); ++b) {
+    if (emptiness.empty[0][b]) {
+      EXPECT_EQ(occ[b], 0u) << "brick " << b << " is empty";
+      continue;
+    }
+    (occ[b] == ~uint64_t{0} ? full : partial)++;
+  }
+  EXPECT_GT(partial, 10);
+  EXPECT_GT(full, 0);
+}
+
+TEST(SubBlockOccupancy, SkippingNeedsIt) {
+  const auto vol = generatedBall();
+  const VolumeAccel accel(*vol);
+  const TransferFunction tf = ballTf();
+  const auto emptiness = accel.hierarchy.classify([&](float lo, float hi) { return TfTable::rangeIsEmpty(tf, lo, hi); });
+  const TfTable table(tf, 1.0 / 40);
+  FastContext c{vol.get(), &accel, &table, &emptiness, true, 2.0f};
+  RaySpan span;
+  ASSERT_TRUE(raySpan(VolumeGeometry(*vol), Ray{{0, 0, 2}, {0, 0, -1}}, wholeVolume(*vol), 1.0 / 40, span));
+  float out[4];
+  SampleCounts counts;
+  EXPECT_THROW(castFast(c, span, out, counts), std::invalid_argument);
 }
 
 }  // namespace
