@@ -166,8 +166,8 @@ struct RayState {
       return;
     }
     // Whole packets up to the block exit, at least kMinRun samples: extra samples are
-    // harmless (just not skipped) and cheaper than another leaper decision (measured on
-    // the 256^3 hollow shell: 16..32 ~10% faster than 8).
+    // harmless (just not skipped, or passed over by the sub-block test) and cheaper than another
+    // leaper decision (see kMinRun).
     run_end = std::min(k_end, k + (std::max<int64_t>(kMinRun, run_end - k) + kLanes - 1) / kLanes * kLanes);
     if (n > 0 && runs[n - 1].end == k) {
       runs[n - 1].end = run_end;
