@@ -54,6 +54,15 @@
         canvas.width = header.fw;
         canvas.height = header.fh;
       }
+      // Shown at the full frame's size in device pixels (smaller only if the view is): the
+      // lossless frame's pixels reach the screen unscaled, and a reduced frame is scaled up to it.
+      if (!header.moving || !canvas.style.width) {
+        const w = `${header.fw / devicePixelRatio}px`, h = `${header.fh / devicePixelRatio}px`;
+        if (canvas.style.width !== w || canvas.style.height !== h) {
+          canvas.style.width = w;
+          canvas.style.height = h;
+        }
+      }
       ctx.fillStyle = `rgb(${header.bg[0]}, ${header.bg[1]}, ${header.bg[2]})`;
       ctx.fillRect(0, 0, canvas.width, canvas.height);
       if (bitmap) ctx.drawImage(bitmap, header.x, header.y);
