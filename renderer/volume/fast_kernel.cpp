@@ -41,7 +41,7 @@ struct Consts {
   int imax[3];
   int nb_x, nb_xy;         // bricks per row / per slice
   const uint16_t* vol;     // bricked (VolumeAccel); a 32-bit read at i holds voxels i and i+1
-  const uint64_t* occ;     // subBlockOccupancy, while skipping (null: no sub-block test)
+  const uint64_t* occ;     // cellOccupancy, while skipping (null: no cell test)
   const float* rgba;
   const int32_t* nonzero;
   int first_nz, last_nz;  // TfTable::firstNonzero/lastNonzero
@@ -166,7 +166,7 @@ struct RayState {
       return;
     }
     // Whole packets up to the block exit, at least kMinRun samples: extra samples are
-    // harmless (just not skipped, or passed over by the sub-block test) and cheaper than another
+    // harmless (just not skipped, or passed over by the cell test) and cheaper than another
     // leaper decision (see kMinRun).
     run_end = std::min(k_end, k + (std::max<int64_t>(kMinRun, run_end - k) + kLanes - 1) / kLanes * kLanes);
     if (n > 0 && runs[n - 1].end == k) {
@@ -187,7 +187,7 @@ struct RayState {
 #ifdef TESSERA_AVX2
       int64_t j;
       const int64_t b = runs[r].begin, e = runs[r].end;
-      // Skipping: packets are tested against the sub-blocks first (c.occ); without: the early
+      // Skipping: packets are tested against the cells first (c.occ); without: the early
       // out for an all-empty packet (see classifyPacket).
       if (c.occ)
         done = c.grad ? runPackets<false, true, true>(c, b, e, et, acc, j) : runPackets<false, true, false>(c, b, e, et, acc, j);
@@ -266,7 +266,7 @@ bool castOne(const FastContext& ctx, const Consts& base, const RaySpan& span, co
 namespace {
 void checkContext(const FastContext& ctx) {
   if (ctx.skip && ctx.emptiness && !ctx.occupancy)
-    throw std::invalid_argument("castFast: skipping needs the sub-block occupancy of the emptiness");
+    throw std::invalid_argument("castFast: skipping needs the cell occupancy of the emptiness");
 }
 }  // namespace
 

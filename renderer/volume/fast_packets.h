@@ -37,8 +37,8 @@ struct Classified {
 // kEarlyOutEmpty: return early for an all-empty packet. That branch pays where it is predictable
 // (long runs without skipping: most packets are empty) and costs where it is a coin flip
 // (short runs between leaps).
-// kOcc: first test the samples' sub-blocks (c.occ, one gather) and return before fetching any
-// voxel if none can be non-empty; lanes in empty sub-blocks are not listed.
+// kOcc: first test the samples' cells (c.occ, one gather) and return before fetching any
+// voxel if none can be non-empty; lanes in empty cells are not listed.
 template <bool kEarlyOutEmpty, bool kOcc>
 inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off, Classified& out, int n) {
   const __m256 kf = _mm256_add_ps(_mm256_set1_ps((float)k0), _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7));
@@ -64,13 +64,14 @@ inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off,
                                           _mm256_set1_epi32(VolumeAccel::kEdge * VolumeAccel::kEdge))));
   int occupied = (1 << lanes) - 1;
   if constexpr (kOcc) {
-    // Bit sx + 4 sy + 16 sz (subBlockBit) of the brick's 64-bit mask, read as two 32-bit words.
-    const __m256i three = _mm256_set1_epi32(3);
-    auto sub = [&](int a) { return _mm256_and_si256(_mm256_srli_epi32(i[a], 1), three); };
-    const __m256i bit = _mm256_or_si256(sub(0), _mm256_or_si256(_mm256_slli_epi32(sub(1), 2), _mm256_slli_epi32(sub(2), 4)));
-    const __m256i word = _mm256_add_epi32(_mm256_add_epi32(brick, brick), _mm256_srli_epi32(bit, 5));
+    // Bit x + 8 y + 64 z (cellBit, the cell's place in its brick) of the brick's 512, read as
+    // sixteen 32-bit words.
+    const __m256i cell = _mm256_or_si256(
+        _mm256_and_si256(i[0], seven),
+        _mm256_or_si256(_mm256_slli_epi32(_mm256_and_si256(i[1], seven), 3), _mm256_slli_epi32(_mm256_and_si256(i[2], seven), 6)));
+    const __m256i word = _mm256_add_epi32(_mm256_slli_epi32(brick, 4), _mm256_srli_epi32(cell, 5));
     const __m256i w = _mm256_i32gather_epi32(reinterpret_cast<const int*>(c.occ), word, 4);
-    const __m256i on = _mm256_and_si256(_mm256_srlv_epi32(w, _mm256_and_si256(bit, _mm256_set1_epi32(31))),
+    const __m256i on = _mm256_and_si256(_mm256_srlv_epi32(w, _mm256_and_si256(cell, _mm256_set1_epi32(31))),
                                         _mm256_set1_epi32(1));
     occupied &= _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(on, _mm256_set1_epi32(1))));
     if (occupied == 0) return 0;
@@ -197,9 +198,9 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, Accum& acc, 
     samplePosition(c, k0 + l, i, f);
     constexpr int B = MinMaxHierarchy::kBlock;
     const size_t brick = (size_t)(i[0] / B) + (size_t)(i[1] / B) * c.nb_x + (size_t)(i[2] / B) * c.nb_xy;
-    // An empty sub-block (subBlockBit; not called: an inline function shared between the ISAs' copies).
-    const int bit = ((i[0] >> 1) & 3) | ((i[1] >> 1) & 3) << 2 | ((i[2] >> 1) & 3) << 4;
-    if (c.occ && !((c.occ[brick] >> bit) & 1)) continue;
+    // An empty cell (cellBit; not called: an inline function shared between the ISAs' copies).
+    const int cell = (i[0] & 7) | (i[1] & 7) << 3 | (i[2] & 7) << 6;
+    if (c.occ && !((c.occ[brick * 8 + cell / 64] >> (cell % 64)) & 1)) continue;
     const uint16_t* p = c.vol + brick * VolumeAccel::kBrickSize + (i[0] % B) +
                         VolumeAccel::kEdge * ((i[1] % B) + VolumeAccel::kEdge * (i[2] % B));
     constexpr int oy = VolumeAccel::kEdge, oz = VolumeAccel::kEdge * VolumeAccel::kEdge;

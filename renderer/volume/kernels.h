@@ -28,7 +28,7 @@ struct FastContext {
   const ShadeParams* shade = nullptr;                     // null: unlit
   const GradientVolume* gradients = nullptr;              // of `volume`, with `shade`
   const HighlightTable* highlight = nullptr;              // of shade->shininess, with `shade`
-  const uint64_t* occupancy = nullptr;                    // subBlockOccupancy of `emptiness` (null: none)
+  const uint64_t* occupancy = nullptr;                    // cellOccupancy of `emptiness` (null: none)
 };
 
 // Samples span.k_first..k_end-1; out receives premultiplied RGBA. Returns true if the ray

@@ -21,9 +21,10 @@ namespace tessera::renderer::TESSERA_KERNEL_ISA::fast {
 // from the exact ones by < 1e-3 voxel for volumes up to 2048^3, so they stay inside.
 inline constexpr double kSkipMargin = 1.0 / 64;
 // The fewest samples the kernel takes between two leap decisions. Since the kernel passes over
-// packets in empty sub-blocks at the cost of one gather, 32 beat 16 (hollow shell 0.96x, head
-// and Marschner-Lobb unlit 0.97x and 0.95x the time; 48 and 64 no better; AMD EPYC, AVX-512).
-inline constexpr int64_t kMinRun = 32;
+// packets in empty cells at the cost of one gather, longer runs pay: 32 against 16, hollow
+// shell 0.96x, head and Marschner-Lobb unlit 0.97x and 0.95x the time; 48 against 32, 0.97x,
+// 0.95x and 0.97x; 64 and 96 no better than 48 (AMD EPYC, AVX-512).
+inline constexpr int64_t kMinRun = 48;
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Three axes at once (lane 3 idle): GCC's vector types, so each instruction set's build gets

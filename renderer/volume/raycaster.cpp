@@ -31,7 +31,7 @@ struct Raycaster::Impl {
   TransferFunction tf;
   std::shared_ptr<const VolumeAccel> accel;
   MinMaxHierarchy::Emptiness emptiness;
-  std::vector<uint64_t> occupancy;  // subBlockOccupancy of emptiness
+  std::vector<uint64_t> occupancy;  // cellOccupancy of emptiness
   Brick nonempty;  // voxel box holding every sample that can be non-empty (lo == hi: none)
   Shading shading;
   Vec3 light;
@@ -71,7 +71,7 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, 
   // Block b holds the samples at voxel coordinates [8b, 8b+8) (clamped at the border); the
   // cell box [8b, 8b+9) holds them with half a voxel to spare, far above the kernel's float
   // error (< 1e-3 voxel), so samples outside it have exactly zero opacity.
-  impl_->occupancy = subBlockOccupancy(*impl_->accel, impl_->emptiness, f);
+  impl_->occupancy = cellOccupancy(*impl_->accel, impl_->emptiness, f);
   const auto& e = impl_->emptiness;
   Brick& box = impl_->nonempty;
   box = Brick{{0, 0, 0}, {0, 0, 0}};

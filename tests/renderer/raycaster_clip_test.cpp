@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "renderer/volume/kernels.h"
@@ -180,7 +181,7 @@ TEST(CastFastBatch, BitIdenticalToSingleRays) {
   const VolumeAccel accel(*vol);
   const TransferFunction tf = ballTf();
   const auto emptiness = accel.hierarchy.classify([&](float lo, float hi) { return TfTable::rangeIsEmpty(tf, lo, hi); });
-  const auto occupancy = subBlockOccupancy(accel, emptiness, tf);
+  const auto occupancy = cellOccupancy(accel, emptiness, tf);
   const TfTable table(tf, 1.0 / 40);
   const VolumeGeometry g(*vol);
   uint32_t seed = 9;
@@ -213,16 +214,16 @@ TEST(CastFastBatch, BitIdenticalToSingleRays) {
   EXPECT_GT(terminated_rays, 20);  // early termination was exercised
 }
 
-TEST(SubBlockOccupancy, EverySampleWithOpacityLiesInAnOccupiedSubBlock) {
-  // Random sample positions: a sample the table gives alpha > 0 must have its sub-block's bit
-  // set (the kernel would pass over it otherwise), and the ball's rim must leave some
-  // sub-blocks of non-empty blocks unset (else the test of the kernel spares nothing).
+TEST(CellOccupancy, EverySampleWithOpacityLiesInAnOccupiedCell) {
+  // Random sample positions: a sample the table gives alpha > 0 must have its cell's bit set
+  // (the kernel would pass over it otherwise), and the ball's rim must leave some cells of
+  // non-empty blocks unset (else the kernel's test spares nothing).
   const auto vol = ball({41, 35, 44}, {20, 17, 22}, 11);
   const VolumeAccel accel(*vol);
   const TransferFunction tf = ballTf();
   const auto emptiness = accel.hierarchy.classify([&](float lo, float hi) { return TfTable::rangeIsEmpty(tf, lo, hi); });
-  const auto occ = subBlockOccupancy(accel, emptiness, tf);
-  ASSERT_EQ(occ.size(), (size_t)accel.nb[0] * accel.nb[1] * accel.nb[2]);
+  const auto occ = cellOccupancy(accel, emptiness, tf);
+  ASSERT_EQ(occ.size(), (size_t)accel.nb[0] * accel.nb[1] * accel.nb[2] * kOccupancyWords);
   const TfTable table(tf, 1.0 / 40);
   uint32_t seed = 3;
   auto rnd = [&] { return (seed = seed * 1664525u + 1013904223u) / 4294967296.0; };
@@ -236,23 +237,26 @@ TEST(SubBlockOccupancy, EverySampleWithOpacityLiesInAnOccupiedSubBlock) {
     if (rgba[3] <= 0) continue;
     ++lit;
     const size_t b = (size_t)(i[0] / 8) + accel.nb[0] * ((size_t)(i[1] / 8) + accel.nb[1] * (size_t)(i[2] / 8));
-    ASSERT_TRUE((occ[b] >> subBlockBit(i[0], i[1], i[2])) & 1)
-        << "sample at " << u[0] << "," << u[1] << "," << u[2] << " has alpha " << rgba[3] << " in an empty sub-block";
+    const int bit = cellBit(i[0], i[1], i[2]);
+    ASSERT_TRUE((occ[b * kOccupancyWords + bit / 64] >> (bit % 64)) & 1)
+        << "sample at " << u[0] << "," << u[1] << "," << u[2] << " has alpha " << rgba[3] << " in an empty cell";
   }
   EXPECT_GT(lit, 10000);
   int partial = 0, full = 0;
-  for (size_t b = 0; b < occ.size(); ++b) {
+  for (size_t b = 0; b < occ.size() / kOccupancyWords; ++b) {
+    int set = 0;
+    for (int w = 0; w < kOccupancyWords; ++w) set += std::popcount(occ[b * kOccupancyWords + w]);
     if (emptiness.empty[0][b]) {
-      EXPECT_EQ(occ[b], 0u) << "brick " << b << " is empty";
+      EXPECT_EQ(set, 0) << "brick " << b << " is empty";
       continue;
     }
-    (occ[b] == ~uint64_t{0} ? full : partial)++;
+    (set == 64 * kOccupancyWords ? full : partial)++;
   }
   EXPECT_GT(partial, 10);
   EXPECT_GT(full, 0);
 }
 
-TEST(SubBlockOccupancy, SkippingNeedsIt) {
+TEST(CellOccupancy, SkippingNeedsIt) {
   const auto vol = generatedBall();
   const VolumeAccel accel(*vol);
   const TransferFunction tf = ballTf();
