@@ -40,6 +40,7 @@ struct Shown {
   uint64_t id = 0;
   std::string status;   // the fps/latency/per-stage line drawn on screen
   bool moving = false;  // a reduced frame while the camera moves (the web view sends it lossy)
+  int full_width = 0, full_height = 0;  // the last full-quality frame's size (0: none yet)
   // The first input this frame answers, if it came from a web page (InputEvent::page, page_input).
   uint32_t page = 0;
   uint64_t page_input = 0;

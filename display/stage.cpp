@@ -131,7 +131,8 @@ class Stage {
     const auto input = inputShown(params);
     if (input) status += fmt::format("  input {:.0f} ms", msSince(input->at));  // up to now, before presenting
     if (sink_->interactive()) status += "  h: help";
-    Shown shown{params.frame, status, params.interactive};
+    if (!params.interactive) full_size_ = {params.width, params.height};
+    Shown shown{params.frame, status, params.interactive, full_size_[0], full_size_[1]};
     if (input) {
       shown.page = input->page;
       shown.page_input = input->page_input;
@@ -230,6 +231,7 @@ class Stage {
   std::map<uint64_t, InputEvent> inputs_;  // inputs not shown yet (when they arrived, from which page)
   bool shutdown_ = false;
   Image8 image_;
+  std::array<int, 2> full_size_{0, 0};  // the last full-quality frame's (a reduced frame is shown at it)
   std::deque<Clock::time_point> fps_times_;
   Clock::time_point last_status_{};
   double last_display_ms_ = 0;

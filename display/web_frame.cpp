@@ -60,6 +60,7 @@ WebFrame encodeWebFrame(const Image8& frame, const Shown& shown, const std::arra
                                  {"fw", frame.width}, {"fh", frame.height},
                                  {"bg", {outside[0], outside[1], outside[2]}},
                                  {"status", shown.status}};
+  if (shown.full_width > 0) header["full"] = {shown.full_width, shown.full_height};
   if (shown.page) header["input"] = {{"page", shown.page}, {"n", shown.page_input}, {"ms", shown.input_ms}};
   const std::string text = header.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   WebFrame f;

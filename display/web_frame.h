@@ -2,8 +2,9 @@
 // of the header][header: JSON][image bytes]. The header says the frame's id, its kind
 // ("png": lossless, the PNG sink's pixels; "jpeg": a lossy frame while the camera moves;
 // "empty": nothing but background), the active region (x, y, w, h) inside the full frame
-// (fw, fh), the colour of the pixels outside it (bg: the background the frame is shown over,
-// as the PNG sink composites it), the status line, and, if the first input the frame answers
+// (fw, fh), the size of the last full-quality frame the page shows it at (full: [w, h], once
+// there was one), the colour of the pixels outside it (bg: the background the frame is shown
+// over, as the PNG sink composites it), the status line, and, if the first input the frame answers
 // came from a page, that page's numbers for it (input: {page, n}: the page times its input to
 // the frame's presentation). Only the active region travels.
 #pragma once

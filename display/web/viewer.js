@@ -22,6 +22,17 @@
   let retry = 250;
   let failures = 0;  // connection attempts in a row that never opened
 
+  // The canvas is shown at the full frame's size in device pixels (smaller only if the view
+  // is): a lossless frame's pixels reach the screen unscaled, a reduced frame is scaled up to
+  // it. A browser zoom or a move to another screen changes devicePixelRatio (and fires resize).
+  let shownSize = null;
+  function fitCanvas() {
+    if (!shownSize) return;
+    canvas.style.width = `${shownSize[0] / devicePixelRatio}px`;
+    canvas.style.height = `${shownSize[1] / devicePixelRatio}px`;
+  }
+  window.addEventListener('resize', fitCanvas);
+
   function setKind(text, cls) {
     kindEl.textContent = text;
     kindEl.className = cls;
@@ -54,14 +65,10 @@
         canvas.width = header.fw;
         canvas.height = header.fh;
       }
-      // Shown at the full frame's size in device pixels (smaller only if the view is): the
-      // lossless frame's pixels reach the screen unscaled, and a reduced frame is scaled up to it.
-      if (!header.moving || !canvas.style.width) {
-        const w = `${header.fw / devicePixelRatio}px`, h = `${header.fh / devicePixelRatio}px`;
-        if (canvas.style.width !== w || canvas.style.height !== h) {
-          canvas.style.width = w;
-          canvas.style.height = h;
-        }
+      const full = header.full || (shownSize ? shownSize : [header.fw, header.fh]);
+      if (!shownSize || full[0] !== shownSize[0] || full[1] !== shownSize[1]) {
+        shownSize = full;
+        fitCanvas();
       }
       ctx.fillStyle = `rgb(${header.bg[0]}, ${header.bg[1]}, ${header.bg[2]})`;
       ctx.fillRect(0, 0, canvas.width, canvas.height);

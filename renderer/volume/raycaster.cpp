@@ -68,10 +68,10 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, 
   if (shading.on) impl_->gradients = std::make_unique<const GradientVolume>(v);
   const TransferFunction& f = impl_->tf;
   impl_->emptiness = impl_->accel->hierarchy.classify([&f](float lo, float hi) { return TfTable::rangeIsEmpty(f, lo, hi); });
+  impl_->occupancy = cellOccupancy(*impl_->accel, impl_->emptiness, f);
   // Block b holds the samples at voxel coordinates [8b, 8b+8) (clamped at the border); the
   // cell box [8b, 8b+9) holds them with half a voxel to spare, far above the kernel's float
   // error (< 1e-3 voxel), so samples outside it have exactly zero opacity.
-  impl_->occupancy = cellOccupancy(*impl_->accel, impl_->emptiness, f);
   const auto& e = impl_->emptiness;
   Brick& box = impl_->nonempty;
   box = Brick{{0, 0, 0}, {0, 0, 0}};

@@ -1,6 +1,8 @@
 // The web view's server alone (no farm, no browser): where it listens, what it refuses to
-// start on, and what it serves to a plain HTTP request.
+// start on, and what it serves to a plain HTTP request; and the header of its frames.
 #include "display/web_server.h"
+
+#include <nlohmann/json.hpp>
 
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
@@ -10,6 +12,8 @@
 
 #include <stdexcept>
 #include <string>
+
+#include "display/web_frame.h"
 
 namespace tessera::display {
 namespace {
@@ -88,6 +92,31 @@ TEST(WebServer, BytesThatAreNotARequestAreCountedAndTheServerGoesOn) {
   close(fd);
   EXPECT_NE(get(s.port(), "/").find(" 200 "), std::string::npos) << "the server still serves";
   EXPECT_EQ(s.counters().bad_requests, 1u) << "the garbage, counted once";
+}
+
+nlohmann::json headerOf(const WebFrame& f) {
+  const uint32_t n = f.message[0] | f.message[1] << 8 | f.message[2] << 16 | (uint32_t)f.message[3] << 24;
+  return nlohmann::json::parse(f.message.begin() + 4, f.message.begin() + 4 + n);
+}
+
+TEST(WebFrame, AReducedFrameNamesTheFullFrameThePageShowsItAt) {
+  Image8 frame(40, 30);  // a reduced frame: one opaque pixel at (5, 7)
+  uint8_t* p = frame.at(5, 7);
+  p[0] = 200, p[1] = 100, p[2] = 50, p[3] = 255;
+  Shown moving{12, "status", true, 80, 60};
+  const nlohmann::json h = headerOf(encodeWebFrame(frame, moving, {0, 0, 0}, 90));
+  EXPECT_EQ(h["kind"], "jpeg");
+  EXPECT_EQ(h["moving"], true);
+  EXPECT_EQ(h["x"], 5);
+  EXPECT_EQ(h["y"], 7);
+  EXPECT_EQ(h["w"], 1);
+  EXPECT_EQ(h["h"], 1);
+  EXPECT_EQ(h["fw"], 40);
+  EXPECT_EQ(h["fh"], 30);
+  EXPECT_EQ(h["full"], nlohmann::json::array({80, 60}));
+  // Before any full-quality frame the display knows no size to name: the page uses fw, fh.
+  const nlohmann::json first = headerOf(encodeWebFrame(frame, Shown{0, "", true}, {0, 0, 0}, 90));
+  EXPECT_FALSE(first.contains("full"));
 }
 
 }  // namespace

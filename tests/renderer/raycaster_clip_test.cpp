@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 
+#include "common/cpu.h"
 #include "renderer/volume/kernels.h"
 #include "renderer/volume/occupancy.h"
 #include "renderer/volume/minmax.h"
@@ -17,6 +19,15 @@
 #include "tests/renderer/render_test_util.h"
 
 namespace tessera::renderer {
+#define TESSERA_DECLARE_CAST(isa)                                                                  \
+  namespace isa {                                                                                  \
+  bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);    \
+  }
+TESSERA_DECLARE_CAST(scalar)
+#if defined(__x86_64__)
+TESSERA_DECLARE_CAST(avx2)
+TESSERA_DECLARE_CAST(avx512)
+#endif
 namespace {
 
 // Zero everywhere but a ball of radius r around c (values 0.6 inside, fading out).
@@ -268,6 +279,65 @@ TEST(CellOccupancy, SkippingNeedsIt) {
   float out[4];
   SampleCounts counts;
   EXPECT_THROW(castFast(c, span, out, counts), std::invalid_argument);
+}
+
+TEST(CellOccupancy, EveryKernelPassesOverOnlyExactlyTransparentSamples) {
+  // Values scattered around the transfer function's zero-opacity edge (0.05), where a cell
+  // range a hair too tight would drop a sample that shows; random rays, each instruction set's
+  // kernel with the cell test against the same kernel testing nothing (every bit set): the same
+  // colours bit for bit, and the same samples ended by early termination.
+  auto v = std::make_shared<Volume>();
+  v->dims = {37, 29, 33};
+  v->spacing = {1, 1, 1};
+  v->values.assign(v->voxelCount(), 0.0f);
+  uint32_t seed = 11;
+  auto rnd = [&] { return (seed = seed * 1664525u + 1013904223u) / 4294967296.0; };
+  for (float& x : v->values) {
+    const double r = rnd();
+    x = r < 0.5 ? 0.0f : (float)(0.05 + (r - 0.75) * 0.004);  // half empty, half within 0.001 of the edge
+  }
+  for (int z = 20; z < 26; ++z)  // and a little solid matter for early termination
+    for (int y = 10; y < 15; ++y)
+      for (int x = 5; x < 30; ++x) v->values[v->index(x, y, z)] = 0.9f;
+  const std::shared_ptr<const Volume> vol = v;
+  const VolumeAccel accel(*vol);
+  const TransferFunction tf = ballTf();
+  const auto emptiness = accel.hierarchy.classify([&](float lo, float hi) { return TfTable::rangeIsEmpty(tf, lo, hi); });
+  const auto occ = cellOccupancy(accel, emptiness, tf);
+  const std::vector<uint64_t> all(occ.size(), ~uint64_t{0});
+  int unset = 0;
+  for (size_t b = 0; b < occ.size() / kOccupancyWords; ++b)
+    if (!emptiness.empty[0][b])
+      for (int w = 0; w < kOccupancyWords; ++w) unset += 64 - std::popcount(occ[b * kOccupancyWords + w]);
+  ASSERT_GT(unset, 1000) << "the cell test would pass over nothing here";
+  const TfTable table(tf, 1.0 / 40);
+  const VolumeGeometry g(*vol);
+  using CastFn = bool (*)(const FastContext&, const RaySpan&, float*, SampleCounts&);
+  std::vector<std::pair<const char*, CastFn>> kernels{{"scalar", scalar::castFast}};
+#if defined(__x86_64__)
+  if (cpuIsa() >= Isa::Avx2) kernels.push_back({"avx2", avx2::castFast});
+  if (cpuIsa() >= Isa::Avx512) kernels.push_back({"avx512", avx512::castFast});
+#endif
+  int lit = 0;
+  for (int i = 0; i < 300; ++i) {
+    const Vec3 o{rnd() * 3 - 1.5, rnd() * 3 - 1.5, 1.6}, p{0.4 * rnd() - 0.2, 0.4 * rnd() - 0.2, rnd() * 0.4 - 0.2};
+    RaySpan span;
+    if (!raySpan(g, Ray{o, normalize(p - o)}, wholeVolume(*vol), 1.0 / 40, span)) continue;
+    for (const auto& [name, cast] : kernels) {
+      FastContext tested{vol.get(), &accel, &table, &emptiness, true, i % 2 ? 0.9f : 2.0f};
+      FastContext untested = tested;
+      tested.occupancy = occ.data();
+      untested.occupancy = all.data();
+      float a[4], b[4];
+      SampleCounts ca, cb;
+      const bool ta = cast(tested, span, a, ca), tb = cast(untested, span, b, cb);
+      ASSERT_EQ(std::memcmp(a, b, sizeof a), 0) << name << " kernel, ray " << i << ": the cell test changed the colour";
+      EXPECT_EQ(ta, tb) << name << " kernel, ray " << i;
+      EXPECT_EQ(ca.terminated, cb.terminated) << name << " kernel, ray " << i;
+      lit += a[3] > 0;
+    }
+  }
+  EXPECT_GT(lit, 100);
 }
 
 }  // namespace
