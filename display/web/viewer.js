@@ -65,7 +65,7 @@
         canvas.width = header.fw;
         canvas.height = header.fh;
       }
-      const full = header.full || (shownSize ? shownSize : [header.fw, header.fh]);
+      const full = header.full || shownSize || [header.fw, header.fh];
       if (!shownSize || full[0] !== shownSize[0] || full[1] !== shownSize[1]) {
         shownSize = full;
         fitCanvas();

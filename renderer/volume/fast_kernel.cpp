@@ -142,8 +142,10 @@ struct RayState {
     if (lights)
       for (int a = 0; a < 3; ++a) c.light[a] = lights->l[li][a], c.half[a] = lights->h[li][a];
     skip = ctx.skip && ctx.emptiness;
-    if (skip) leaper = Leaper(span, *ctx.volume, ctx.accel->hierarchy, *ctx.emptiness);
-    if (skip) c.occ = ctx.occupancy;
+    if (skip) {
+      leaper = Leaper(span, *ctx.volume, ctx.accel->hierarchy, *ctx.emptiness);
+      c.occ = ctx.occupancy;
+    }
     k = span.k_first;
     k_end = span.k_end;
   }

@@ -3,21 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include "common/cpu.h"
-#include "renderer/volume/kernels.h"
-
-#define TESSERA_DECLARE_KERNEL(isa)                                                                   \
-  namespace tessera::renderer::isa {                                                                  \
-  bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);       \
-  void castFastBatch(const FastContext& c, const RaySpan* spans, float* const* out, int n,           \
-                     SampleCounts& counts, bool* terminated);                                         \
-  unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo, const double* t_hi,     \
-                    RaySpan* spans);                                                                  \
-  }
-TESSERA_DECLARE_KERNEL(scalar)
-#if TESSERA_X86_KERNELS
-TESSERA_DECLARE_KERNEL(avx2)
-TESSERA_DECLARE_KERNEL(avx512)
-#endif
+#include "renderer/volume/kernel_isas.h"
 
 namespace tessera::renderer {
 namespace {

@@ -7,20 +7,10 @@
 #include <random>
 
 #include "common/cpu.h"
+#include "renderer/volume/kernel_isas.h"
 #include "renderer/volume/ray_setup.h"
 
 namespace tessera::renderer {
-#define TESSERA_DECLARE_SPANS(isa)                                                                           \
-  namespace isa {                                                                                            \
-  unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo, const double* t_hi,     \
-                    RaySpan* spans);                                                                         \
-  }
-TESSERA_DECLARE_SPANS(scalar)
-#if defined(__x86_64__)
-TESSERA_DECLARE_SPANS(avx2)
-TESSERA_DECLARE_SPANS(avx512)
-#endif
-
 namespace {
 
 using SpansFn = unsigned (*)(const SpanRow&, int, int, int, const double*, const double*, RaySpan*);

@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "common/cpu.h"
+#include "renderer/volume/kernel_isas.h"
 #include "renderer/volume/kernels.h"
 #include "renderer/volume/occupancy.h"
 #include "renderer/volume/minmax.h"
@@ -19,15 +20,6 @@
 #include "tests/renderer/render_test_util.h"
 
 namespace tessera::renderer {
-#define TESSERA_DECLARE_CAST(isa)                                                                  \
-  namespace isa {                                                                                  \
-  bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);    \
-  }
-TESSERA_DECLARE_CAST(scalar)
-#if defined(__x86_64__)
-TESSERA_DECLARE_CAST(avx2)
-TESSERA_DECLARE_CAST(avx512)
-#endif
 namespace {
 
 // Zero everywhere but a ball of radius r around c (values 0.6 inside, fading out).
