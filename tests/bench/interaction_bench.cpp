@@ -53,11 +53,14 @@ std::string webHost() {
 
 // The same drag in the web view (tests/web/bench.mjs in chromium), on the same farm; or, with
 // `watch`, a page that only watches until dir/stop-watching appears.
+// g_idle_page: the page neither decodes nor draws the frames it takes (bench.mjs idle).
+bool g_idle_page = false;
 nlohmann::json dragInPage(int port, double drag_s, const fs::path& dir, bool watch = false) {
   const char* ns = std::getenv("TESSERA_VIEWER_NETNS");
-  const std::string cmd = fmt::format("{}node {}/tests/web/bench.mjs 'http://{}:{}/#bench-token' {} {} {} 2>&1",
+  const std::string cmd = fmt::format("{}node {}/tests/web/bench.mjs 'http://{}:{}/#bench-token' {} {} {} {} 2>&1",
                                       ns && *ns ? fmt::format("ip netns exec {} ", ns) : "", TESSERA_SOURCE_DIR,
-                                      webHost(), port, drag_s, dir.string(), watch ? "watch" : "drag");
+                                      webHost(), port, drag_s, dir.string(), watch ? "watch" : "drag",
+                                      g_idle_page ? "idle" : "shows");
   std::string out;
   if (FILE* p = popen(cmd.c_str(), "r")) {
     char buf[4096];
@@ -66,6 +69,7 @@ nlohmann::json dragInPage(int port, double drag_s, const fs::path& dir, bool wat
   }
   auto j = nlohmann::json::parse(out.substr(0, out.find('\n')), nullptr, false);
   if (j.is_discarded() || j.contains("error")) throw std::runtime_error("the page's drag failed: " + out);
+  if (!(j.value("browser_cores", 0.0) > 0)) throw std::runtime_error("the page's drag measured no browser CPU: " + out);
   return j;
 }
 
@@ -256,27 +260,32 @@ void webTable(const std::vector<Result>& results, const fs::path& path) {
           "farm_fps_page_drag,window_input_ms,page_input_ms,"
           "page_input_ms_p95,page_input_ms_first_quarter,page_input_ms_last_quarter,moving_bytes,lossless_bytes,"
           "window_release_to_sharp_ms,page_release_to_lossless_ms,lossless_on_page_after_display_ms,"
-          "page_input_display_share_ms,page_input_page_and_link_ms\n";
+          "page_input_display_share_ms,page_input_page_and_link_ms,browser_cores_watching,browser_cores_steering,"
+          "driver_cores_steering,page\n";
   std::printf("\n| image | in flight | round | fps window / window with a page watching / page steering (farm) | "
               "input-to-present median ms, "
               "window / page (p95; first / last quarter) | bytes per moving frame | bytes per lossless frame | release "
-              "to sharp ms, window / page |\n|---|---:|---:|---|---|---:|---:|---|\n");
+              "to sharp ms, window / page | browser CPU, cores: watching / steering (+ driver) |\n"
+              "|---|---:|---:|---|---|---:|---:|---|---|\n");
   for (const Result& r : results) {
     const auto& w = r.web;
     auto num = [&](const char* k) { return w.value(k, 0.0); };
     wcsv << fmt::format("{},{},{},{},{:.2f},{:.2f},{:.2f},{:.2f},{:.2f},{:.1f},{:.1f},{:.1f},{:.1f},{:.1f},{},{},{:.1f},"
-                        "{:.1f},\"{}\",{:.1f},{:.1f}\n",
+                        "{:.1f},\"{}\",{:.1f},{:.1f},{:.3f},{:.3f},{:.3f},{}\n",
                         r.image, r.in_flight, r.round, rate, r.fps, r.fps_watched, r.watch.value("fps", 0.0), num("fps"),
                         r.farm_fps_web, r.input_median,
                         num("input_ms_median"), num("input_ms_p95"), num("input_ms_first_quarter"),
                         num("input_ms_last_quarter"), num("moving_bytes_median"), num("lossless_bytes"), r.sharp_ms,
                         num("release_to_lossless_ms"), r.lossless_on_page, num("display_share_ms_median"),
-                        num("page_and_link_ms_median"));
-    std::printf("| %d² | %d | %d | %.1f / %.1f / %.1f (%.1f) | %.0f / %.0f (%.0f; %.0f / %.0f) | %.0f | %.0f | %.0f / %.0f |\n",
+                        num("page_and_link_ms_median"), r.watch.value("browser_cores", 0.0), num("browser_cores"),
+                        num("driver_cores"), g_idle_page ? "idle" : "shows");
+    std::printf("| %d² | %d | %d | %.1f / %.1f / %.1f (%.1f) | %.0f / %.0f (%.0f; %.0f / %.0f) | %.0f | %.0f | %.0f / %.0f "
+                "| %.2f / %.2f (+ %.2f) |\n",
                 r.image, r.in_flight, r.round, r.fps, r.fps_watched, num("fps"), r.farm_fps_web, r.input_median,
                 num("input_ms_median"),
                 num("input_ms_p95"), num("input_ms_first_quarter"), num("input_ms_last_quarter"),
-                num("moving_bytes_median"), num("lossless_bytes"), r.sharp_ms, num("release_to_lossless_ms"));
+                num("moving_bytes_median"), num("lossless_bytes"), r.sharp_ms, num("release_to_lossless_ms"),
+                r.watch.value("browser_cores", 0.0), num("browser_cores"), num("driver_cores"));
   }
   for (const Result& r : results)
     if (r.round == 0)
@@ -305,6 +314,8 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "folder for the runs and interaction.csv")->capture_default_str();
   app.add_option("--web", web_port, "also serve the web view on this port and drag in it after the window "
                                     "(chromium, tests/web/bench.mjs)");
+  app.add_flag("--idle-page", g_idle_page, "with --web: the page takes and acknowledges every frame but neither decodes "
+                                          "nor draws it (what the browser costs for a page that shows nothing)");
   CLI11_PARSE(app, argc, argv);
   if (!tessera::display::testing::onPath("Xvfb")) {
     std::fprintf(stderr, "tessera-interaction-bench: Xvfb not installed (apt-get install xvfb)\n");
