@@ -51,10 +51,12 @@ std::string webHost() {
   return s && *s ? s : "127.0.0.1";
 }
 
-// The same drag in the web view (tests/web/bench.mjs in chromium), on the same farm; or, with
-// `watch`, a page that only watches until dir/stop-watching appears.
-// g_idle_page: the page neither decodes nor draws the frames it takes (bench.mjs idle).
+// --idle-page: the page neither decodes nor draws the frames it takes (bench.mjs idle).
 bool g_idle_page = false;
+
+// The same drag in the web view (tests/web/bench.mjs in chromium), on the same farm; or, with
+// `watch`, a page that only watches until dir/stop-watching appears. Either reports the
+// browser's CPU over it (browser_cores).
 nlohmann::json dragInPage(int port, double drag_s, const fs::path& dir, bool watch = false) {
   const char* ns = std::getenv("TESSERA_VIEWER_NETNS");
   const std::string cmd = fmt::format("{}node {}/tests/web/bench.mjs 'http://{}:{}/#bench-token' {} {} {} {} 2>&1",
