@@ -29,6 +29,8 @@ namespace {
 // Sort-last compositing of every run (--compositing): auto (across these emulated hosts:
 // binary swap), direct-send or binary-swap.
 std::string g_compositing = "auto";
+// Bytes per packet on the emulated links (--mtu).
+int g_mtu = 1500;
 
 struct Config {
   std::string rate, codec;
@@ -44,6 +46,7 @@ struct Result {
   Config c;
   double fps = 0, latency_ms = 0, render_ms = 0, composite_ms = 0, display_ms = 0;
   double busiest_bytes = 0;  // per frame, the host link that carried the most
+  double busiest_packets = 0;  // per frame, on that link in the same direction
   std::string busiest_host;
 };
 
@@ -79,10 +82,11 @@ Result measure(const Config& c, const fs::path& dir, int frames) {
   r.display_ms = median(display);
   std::ifstream links(dir / "links.tsv");
   std::string host;
-  double sent = 0, received = 0;
-  while (links >> host >> sent >> received) {
+  double sent = 0, received = 0, packets_sent = 0, packets_received = 0;
+  while (links >> host >> sent >> received >> packets_sent >> packets_received) {
     const double most = std::max(sent, received) / frames;
-    if (most > r.busiest_bytes) r.busiest_bytes = most, r.busiest_host = host;
+    if (most > r.busiest_bytes)
+      r.busiest_bytes = most, r.busiest_host = host, r.busiest_packets = (sent >= received ? packets_sent : packets_received) / frames;
   }
   return r;
 }
@@ -169,9 +173,9 @@ bool runFarm(const Config& c, const fs::path& root, int frames, Result& r) {
   const int n = c.size < 512 ? 2 * frames : frames;
   const std::string cmd = fmt::format(
       "env TESSERA_SCENE={} TESSERA_FRAMES={} TESSERA_RENDERERS={} TESSERA_COMPOSITORS={} TESSERA_IN_FLIGHT={} "
-      "TESSERA_CODEC={} TESSERA_COMPOSITING={} TESSERA_LOG=warn timeout -s INT {} {} --rate {} --out {} --bin {} > {}/run.log 2>&1",
-      sceneAt(c.size, root), n, c.renderers, c.compositors, c.in_flight, c.codec, g_compositing, 60 + 5 * n, script, c.rate, dir.string(),
-      bin.string(), dir.string());
+      "TESSERA_CODEC={} TESSERA_COMPOSITING={} TESSERA_LOG=warn timeout -s INT {} {} --rate {} --mtu {} --out {} --bin {} > {}/run.log 2>&1",
+      sceneAt(c.size, root), n, c.renderers, c.compositors, c.in_flight, c.codec, g_compositing, 60 + 5 * n, script, c.rate, g_mtu,
+      dir.string(), bin.string(), dir.string());
   std::cerr << "run " << c.name() << " (" << n << " frames)\n";
   if (std::system(cmd.c_str()) != 0) {
     std::cerr << "farm failed; see " << (dir / "run.log") << "\n";
@@ -187,8 +191,8 @@ bool runFarm(const Config& c, const fs::path& root, int frames, Result& r) {
 // measured right before and right after the unlimited run (their mean; the drift is in the CSV).
 int goals(const fs::path& root, int frames, int rounds) {
   std::ofstream csv(root / "goals.csv");
-  csv << "round,shape,one_process_ms_before,one_process_ms_after,fps_100mbit,fps_unlimited,efficiency,slow_over_fast,"
-         "busiest_bytes_100mbit,busiest_host\n";
+  csv << "round,shape,mtu,one_process_ms_before,one_process_ms_after,fps_100mbit,fps_unlimited,efficiency,slow_over_fast,"
+         "busiest_bytes_100mbit,busiest_packets_100mbit,busiest_host\n";
   std::map<std::string, std::vector<double>> eff, ratio;
   for (int round = 1; round <= rounds; ++round) {
     for (auto [nr, nc] : {std::pair{2, 1}, std::pair{3, 1}, std::pair{4, 2}}) {
@@ -205,8 +209,9 @@ int goals(const fs::path& root, int frames, int rounds) {
       eff[shape].push_back(fast.fps * (before + after) / 2 / 1000);
       ratio[shape].push_back(fast.fps > 0 ? slow.fps / fast.fps : 0);
       const std::string line =
-          fmt::format("{},{},{:.1f},{:.1f},{:.3f},{:.3f},{:.3f},{:.3f},{:.0f},{}", round, shape, before, after, slow.fps,
-                      fast.fps, eff[shape].back(), ratio[shape].back(), slow.busiest_bytes, slow.busiest_host);
+          fmt::format("{},{},{},{:.1f},{:.1f},{:.3f},{:.3f},{:.3f},{:.3f},{:.0f},{:.0f},{}", round, shape, g_mtu, before, after,
+                      slow.fps, fast.fps, eff[shape].back(), ratio[shape].back(), slow.busiest_bytes, slow.busiest_packets,
+                      slow.busiest_host);
       csv << line << "\n" << std::flush;
       std::cout << line << std::endl;
     }
@@ -237,6 +242,10 @@ int main(int argc, char** argv) {
   app.add_option("--goals", rounds, "instead of the sweep: this many rounds of the goals' runs (efficiency, 100 Mbit/s "
                                     "against unlimited), each ratio within a round")
       ->check(CLI::Range(1, 20));
+  app.add_option("--mtu", g_mtu, "bytes per packet on the emulated links: 1500 (Ethernet's) or up to 9000 (jumbo frames: "
+                                 "the same bytes in fewer packets, each of which costs the emulation CPU on the farm's cores)")
+      ->check(CLI::Range(1280, 9000))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   if (geteuid() != 0) {
     std::cerr << "tessera-cluster-bench: needs root (it makes network namespaces)\n";
@@ -254,11 +263,11 @@ int main(int argc, char** argv) {
   }
   std::ofstream csv(root / "results.csv");
   csv << "rate,codec,in_flight,size,renderers,compositors,fps,latency_ms,render_ms,composite_ms,display_ms,"
-         "busiest_link_bytes_per_frame,busiest_host\n";
+         "busiest_link_bytes_per_frame,busiest_link_packets_per_frame,busiest_host\n";
   for (const auto& r : results)
-    csv << fmt::format("{},{},{},{},{},{},{:.3f},{:.1f},{:.1f},{:.1f},{:.1f},{:.0f},{}\n", r.c.rate, r.c.codec,
+    csv << fmt::format("{},{},{},{},{},{},{:.3f},{:.1f},{:.1f},{:.1f},{:.1f},{:.0f},{:.0f},{}\n", r.c.rate, r.c.codec,
                        r.c.in_flight, r.c.size, r.c.renderers, r.c.compositors, r.fps, r.latency_ms, r.render_ms,
-                       r.composite_ms, r.display_ms, r.busiest_bytes, r.busiest_host);
+                       r.composite_ms, r.display_ms, r.busiest_bytes, r.busiest_packets, r.busiest_host);
   std::cout << "| link | codec | in flight | image | farm | fps | latency ms (median) | render / composite / display ms "
                "| busiest link, bytes per frame |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& r : results)

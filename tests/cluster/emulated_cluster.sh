@@ -8,27 +8,34 @@
 #     --rate   link rate per host, tc syntax (100mbit, 1gbit) or "unlimited" (default)
 #     --out    folder for frames, metrics.jsonl, farm.log and links.tsv (default out/cluster)
 #     --bin    folder of the tessera binaries (default build/bin)
+#     --mtu    bytes per packet on every link (default 1500, Ethernet's; 9000: jumbo frames,
+#              the same bytes in 6x fewer packets, each of which costs the emulation's
+#              queues, timers and bridge CPU on this machine's cores)
 #     --cut A,B,K  once K frames are done, host A loses its route to host B (a blackhole
 #              route: what A sends to B vanishes, as behind a failed link, and so B's TCP to A
 #              stalls too, its acknowledgements lost; both still reach the other hosts)
 # The farm's settings come from the environment as for tessera-up (TESSERA_RENDERERS,
 # TESSERA_COMPOSITORS, TESSERA_FRAMES, TESSERA_CODEC, TESSERA_SCENE...). links.tsv has one
-# line per host: host, bytes it sent, bytes it received (counted on the switch side).
+# line per host: host, bytes it sent, bytes it received, packets it sent, packets it received
+# (counted on the switch side).
 # Every namespace is removed at exit, also on failure or Ctrl-C; namespaces left by a run
 # that was killed with SIGKILL are removed by the next run.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
-rate=unlimited out=out/cluster bin="$root/build/bin" cut=
+rate=unlimited out=out/cluster bin="$root/build/bin" cut= mtu=1500
 while [ $# -gt 0 ]; do
   case "$1" in
     --rate) rate=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --bin) bin=$2; shift 2 ;;
     --cut) cut=$2; shift 2 ;;
+    --mtu) mtu=$2; shift 2 ;;
     --) shift; break ;;
     *) echo "emulated_cluster.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
+[[ "$mtu" =~ ^[0-9]+$ ]] && [ "$mtu" -ge 1280 ] && [ "$mtu" -le 9000 ] ||
+  { echo "emulated_cluster.sh: --mtu $mtu: expected bytes from 1280 to 9000" >&2; exit 2; }
 [ "$(id -u)" -eq 0 ] || { echo "emulated_cluster.sh: needs root (network namespaces)" >&2; exit 2; }
 command -v ip >/dev/null && command -v tc >/dev/null || { echo "emulated_cluster.sh: needs iproute2 (ip, tc)" >&2; exit 2; }
 mkdir -p "$out"; out=$(cd "$out" && pwd); bin=$(cd "$bin" && pwd)
@@ -76,7 +83,8 @@ for h in "${hosts[@]}"; do
   ip link set "${tag}s$n" netns "$sw"
   ip -n "$sw" link set "${tag}s$n" master br0 up
   ip -n "$ns" addr add "$addr/24" dev eth0
-  ip -n "$ns" link set eth0 up
+  ip -n "$ns" link set eth0 mtu "$mtu" up
+  ip -n "$sw" link set "${tag}s$n" mtu "$mtu"
   ip -n "$ns" link set lo up
   tbf_limit "$rate" "$ns" eth0          # what the host sends
   tbf_limit "$rate" "$sw" "${tag}s$n"   # what the host receives
@@ -90,7 +98,7 @@ export TESSERA_ENDPOINTS="tcp://$(cat "$state/hosts/master.ip"):5550"
 export TESSERA_DISPLAY_HOST=$(cat "$state/hosts/display.ip")
 export TESSERA_KEYS="$state/keys" TESSERA_CURVE=on TESSERA_WINDOW=off TESSERA_OUT="$out"
 export EMULATED_CLUSTER_STATE="$state"
-echo "emulated cluster: ${#hosts[@]} hosts, links $rate, endpoints $TESSERA_ENDPOINTS, output $out"
+echo "emulated cluster: ${#hosts[@]} hosts, links $rate (MTU $mtu), endpoints $TESSERA_ENDPOINTS, output $out"
 if [ -n "$cut" ]; then
   rm -f "$out/metrics.jsonl"
   (  # polls the master's metrics (one line per frame done) for at most 10 minutes
@@ -115,7 +123,9 @@ for h in "${hosts[@]}"; do
   # The switch side sends what the host receives and receives what the host sends.
   tx=$(ip netns exec "$sw" cat "/sys/class/net/$link/statistics/rx_bytes")
   rx=$(ip netns exec "$sw" cat "/sys/class/net/$link/statistics/tx_bytes")
-  printf '%s\t%s\t%s\n' "$h" "$tx" "$rx" >> "$out/links.tsv"
+  txp=$(ip netns exec "$sw" cat "/sys/class/net/$link/statistics/rx_packets")
+  rxp=$(ip netns exec "$sw" cat "/sys/class/net/$link/statistics/tx_packets")
+  printf '%s\t%s\t%s\t%s\t%s\n' "$h" "$tx" "$rx" "$txp" "$rxp" >> "$out/links.tsv"
   { echo "== $h"; ip netns exec "$tag-$h" tc -s qdisc show dev eth0; ip netns exec "$sw" tc -s qdisc show dev "$link"
     ip netns exec "$tag-$h" nstat -az TcpRetransSegs TcpExtTCPTimeouts TcpExtTCPLossProbes 2>/dev/null | tail -n +2; } >> "$out/qdisc.txt"
 done

@@ -43,8 +43,12 @@ void expectOrbitAcrossHosts(int renderers, bool swap) {
   std::map<std::string, std::pair<long, long>> links;  // host -> bytes sent, received
   std::ifstream in(dir.path() / "out" / "links.tsv");
   std::string host;
-  long sent = 0, received = 0;
-  while (in >> host >> sent >> received) links[host] = {sent, received};
+  long sent = 0, received = 0, packets_sent = 0, packets_received = 0;
+  while (in >> host >> sent >> received >> packets_sent >> packets_received) {
+    links[host] = {sent, received};
+    EXPECT_GT(packets_sent, 0) << host;
+    EXPECT_LE(packets_sent, sent / 40) << host << ": a packet carries at least its 40 bytes of headers";
+  }
   ASSERT_EQ(links.size(), 3u + renderers) << "master, display, the renderers, 1 compositor";
   // Each renderer sends its pieces of 3 frames (97x83 rgba, compressed, some kB at least);
   // the display receives the composited frames. With binary swap the renderers also receive
