@@ -262,10 +262,10 @@ int main(int argc, char** argv) {
     results.push_back(r);
   }
   std::ofstream csv(root / "results.csv");
-  csv << "rate,codec,in_flight,size,renderers,compositors,fps,latency_ms,render_ms,composite_ms,display_ms,"
+  csv << "rate,mtu,codec,in_flight,size,renderers,compositors,fps,latency_ms,render_ms,composite_ms,display_ms,"
          "busiest_link_bytes_per_frame,busiest_link_packets_per_frame,busiest_host\n";
   for (const auto& r : results)
-    csv << fmt::format("{},{},{},{},{},{},{:.3f},{:.1f},{:.1f},{:.1f},{:.1f},{:.0f},{:.0f},{}\n", r.c.rate, r.c.codec,
+    csv << fmt::format("{},{},{},{},{},{},{},{:.3f},{:.1f},{:.1f},{:.1f},{:.1f},{:.0f},{:.0f},{}\n", r.c.rate, g_mtu, r.c.codec,
                        r.c.in_flight, r.c.size, r.c.renderers, r.c.compositors, r.fps, r.latency_ms, r.render_ms,
                        r.composite_ms, r.display_ms, r.busiest_bytes, r.busiest_packets, r.busiest_host);
   std::cout << "| link | codec | in flight | image | farm | fps | latency ms (median) | render / composite / display ms "

@@ -4,13 +4,14 @@
 # rate-limited with tc's tbf qdisc in both directions, the farm over TCP between the hosts'
 # addresses with CURVE on (as across real machines). Needs root and iproute2.
 #
-#   tests/cluster/emulated_cluster.sh [--rate RATE] [--out DIR] [--bin DIR] [-- tessera-up args]
+#   tests/cluster/emulated_cluster.sh [--rate RATE] [--mtu BYTES] [--out DIR] [--bin DIR]
+#                                     [--cut A,B,K] [-- tessera-up args]
 #     --rate   link rate per host, tc syntax (100mbit, 1gbit) or "unlimited" (default)
 #     --out    folder for frames, metrics.jsonl, farm.log and links.tsv (default out/cluster)
 #     --bin    folder of the tessera binaries (default build/bin)
 #     --mtu    bytes per packet on every link (default 1500, Ethernet's; 9000: jumbo frames,
-#              the same bytes in 6x fewer packets, each of which costs the emulation's
-#              queues, timers and bridge CPU on this machine's cores)
+#              about the same bytes in fewer packets, 10-17x fewer as counted here, each of
+#              which costs the emulation's queues, timers and bridge CPU on this machine's cores)
 #     --cut A,B,K  once K frames are done, host A loses its route to host B (a blackhole
 #              route: what A sends to B vanishes, as behind a failed link, and so B's TCP to A
 #              stalls too, its acknowledgements lost; both still reach the other hosts)
@@ -81,10 +82,9 @@ for h in "${hosts[@]}"; do
   ip link add "${tag}h$n" type veth peer name "${tag}s$n"
   ip link set "${tag}h$n" netns "$ns" name eth0
   ip link set "${tag}s$n" netns "$sw"
-  ip -n "$sw" link set "${tag}s$n" master br0 up
+  ip -n "$sw" link set "${tag}s$n" mtu "$mtu" master br0 up
   ip -n "$ns" addr add "$addr/24" dev eth0
   ip -n "$ns" link set eth0 mtu "$mtu" up
-  ip -n "$sw" link set "${tag}s$n" mtu "$mtu"
   ip -n "$ns" link set lo up
   tbf_limit "$rate" "$ns" eth0          # what the host sends
   tbf_limit "$rate" "$sw" "${tag}s$n"   # what the host receives
