@@ -283,7 +283,7 @@ def summary(xs):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--build-dir", default=os.path.join(REPO, "build-h7"))
+    p.add_argument("--build-dir", default=os.path.join(REPO, "build"), help="where ./setup.sh builds (default)")
     p.add_argument("--rounds", type=int, default=5)
     p.add_argument("--frames", type=int, default=5, help="timed frames per process (VTK: after a warm-up)")
     p.add_argument("--threads", type=int, default=2)
