@@ -121,10 +121,8 @@ set -e
 for h in "${hosts[@]}"; do
   link=$(cat "$state/hosts/$h.link")
   # The switch side sends what the host receives and receives what the host sends.
-  tx=$(ip netns exec "$sw" cat "/sys/class/net/$link/statistics/rx_bytes")
-  rx=$(ip netns exec "$sw" cat "/sys/class/net/$link/statistics/tx_bytes")
-  txp=$(ip netns exec "$sw" cat "/sys/class/net/$link/statistics/rx_packets")
-  rxp=$(ip netns exec "$sw" cat "/sys/class/net/$link/statistics/tx_packets")
+  st="/sys/class/net/$link/statistics"
+  read -r tx rx txp rxp <<< "$(ip netns exec "$sw" cat "$st/rx_bytes" "$st/tx_bytes" "$st/rx_packets" "$st/tx_packets" | tr '\n' ' ')"
   printf '%s\t%s\t%s\t%s\t%s\n' "$h" "$tx" "$rx" "$txp" "$rxp" >> "$out/links.tsv"
   { echo "== $h"; ip netns exec "$tag-$h" tc -s qdisc show dev eth0; ip netns exec "$sw" tc -s qdisc show dev "$link"
     ip netns exec "$tag-$h" nstat -az TcpRetransSegs TcpExtTCPTimeouts TcpExtTCPLossProbes 2>/dev/null | tail -n +2; } >> "$out/qdisc.txt"

@@ -115,7 +115,7 @@ try {
       const nothing = (proto, name) => { proto[name] = () => {}; };
       nothing(CanvasRenderingContext2D.prototype, 'drawImage');
       nothing(CanvasRenderingContext2D.prototype, 'fillRect');
-      // The bar's text and class, and the canvas's size and style: keep them as they are.
+      // The bar's text and class, and the canvas's size: keep them as they are.
       const keep = (proto, name) => Object.defineProperty(proto, name, { set() {}, get: Object.getOwnPropertyDescriptor(proto, name).get });
       keep(Node.prototype, 'textContent');
       keep(Element.prototype, 'className');
