@@ -292,7 +292,8 @@ def main():
     p.add_argument("--no-shading", action="store_true", help="leave out the scene's shading")
     p.add_argument("--generator", default="hollow-shell", help="without --scene: hollow-shell | marschner-lobb | noise-cloud | head")
     p.add_argument("--volume-size", dest="volume_size_given", type=int, help="volume edge (default: the scene's, 256)")
-    p.add_argument("--out-dir", default=os.path.join(REPO, "docs"), help="where the two PNGs go")
+    p.add_argument("--out-dir", default=os.path.join("bench-out", "vtk-compare"),
+                   help="where the two PNGs go (default bench-out/vtk-compare; --out-dir docs refreshes the README's)")
     p.add_argument("--prefix", default="vtk-compare", help="PNG names: <prefix>-vtk.png, <prefix>-tessera.png")
     p.add_argument("--vtk-worker", action="store_true", help=argparse.SUPPRESS)
     p.add_argument("--raw", help=argparse.SUPPRESS)
@@ -315,6 +316,7 @@ def main():
     if not (os.access(render, os.X_OK) and os.access(dump, os.X_OK)):
         sys.exit(f"vtk_compare: build them first: cmake --build {args.build_dir} "
                  "--target tessera-render tessera-dump-volume -j2")
+    args.out_dir = os.path.abspath(args.out_dir)
     os.makedirs(args.out_dir, exist_ok=True)
     vtk_png = os.path.join(args.out_dir, f"{args.prefix}-vtk.png")
     tes_png = os.path.join(args.out_dir, f"{args.prefix}-tessera.png")
