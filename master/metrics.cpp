@@ -116,11 +116,12 @@ nlohmann::json Metrics::summarize(const std::vector<proto::StageStats>& renderer
   const bool rerendered = made > 0 || reused == 0;
   j["rerendered"] = rerendered;
   if (!rerendered) j.erase("render_ms_max"), j.erase("render_imbalance_time");
-  double decode = 0, swap = 0;  // compositors decode what they receive; renderers, binary-swap pieces
+  double decode = 0, swap = 0, wait = 0;  // compositors decode what they receive; renderers, binary-swap pieces
   for (const auto& s : compositors) decode = std::max(decode, s.decode_ms);
-  for (const auto& s : renderers) swap = std::max(swap, s.decode_ms);
+  for (const auto& s : renderers) swap = std::max(swap, s.decode_ms), wait = std::max(wait, s.wait_ms);
   j["composite_decode_ms_max"] = decode;
   if (swap > 0) j["render_swap_ms_max"] = swap;  // only frames composited by binary swap
+  if (swap > 0) j["render_swap_wait_ms_max"] = wait;
   // Sort-first: chunk-tile pairs drawn per chunk (WireGL's overlap factor) and triangles.
   double drawn = 0, chunks = 0, triangles = 0;
   for (const auto& s : renderers) {

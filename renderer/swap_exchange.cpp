@@ -126,12 +126,14 @@ std::optional<Layer> SwapExchange::run(const proto::FrameParams& p, uint32_t me,
     if (r.keep.empty()) continue;  // a folding renderer only sends
 
     std::optional<Held> in;
+    const auto waiting = Clock::now();
     for (;;) {
       in = take(p, r.partner, r.keep);
       if (in && in->piece.format == format) break;
       if (in) drops.drop(r.partner, "swap piece in another pixel format than the frame's");
       if (!idle(50, r.partner)) return std::nullopt;
     }
+    st.wait_ms += msSince(waiting);
     auto t1 = Clock::now();
     Layer blended = blendLayer(partOf(r.keep), in->piece.pixels, in->piece.active, format, r.partner_in_front, takeSpare());
     recycle(std::move(mine));

@@ -300,6 +300,7 @@ std::vector<std::byte> encode(const StageStats& m, uint32_t sender) {
     w.u32(m.step_misses);
     w.u64(m.bytes_read);
     w.f64(m.prefetch_ms);
+    w.f64(m.wait_ms);
   });
 }
 Result<StageStats> decodeStageStats(std::span<const std::byte> msg) {
@@ -330,6 +331,7 @@ Result<StageStats> decodeStageStats(std::span<const std::byte> msg) {
     m.step_misses = r.u32("step_misses");
     m.bytes_read = r.u64("bytes_read");
     m.prefetch_ms = detail::readFinite(r, "prefetch_ms");
+    m.wait_ms = detail::readFinite(r, "wait_ms");
   });
 }
 

@@ -42,10 +42,11 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 10;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
+inline constexpr uint16_t kVersion = 11;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
   // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms); 5: time steps; 6: Stats
   // carry their FrameParams' epoch; 7: Piece pixels Up-filtered; 8: binary-swap plans in FrameParams; 9: swap
-  // bands go to the display as Strips; 10: Strips strip-filtered, Heartbeats name the awaited swap partner
+  // bands go to the display as Strips; 10: Strips strip-filtered, Heartbeats name the awaited swap partner;
+  // 11: Stats' wait_ms
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -304,6 +305,7 @@ struct Framebuffer {                           // renderer -> compositor (router
 //   step, step_hits, step_misses                 u32 x3  12
 //   bytes_read                                   u64     8
 //   prefetch_ms                                  f64     8   finite
+//   wait_ms                                      f64     8   finite
 struct StageStats {                            // renderer/compositor -> master, per frame
   Role role = Role::Renderer; uint32_t rank = 0; uint64_t frame = 0;
   uint32_t epoch = 0;  // of the FrameParams answered: a frame issued again waits for the new issue's
@@ -327,6 +329,9 @@ struct StageStats {                            // renderer/compositor -> master,
   uint32_t step = 0, step_hits = 0, step_misses = 0;
   uint64_t bytes_read = 0;
   double prefetch_ms = 0;
+  // Binary-swap renderers: time spent waiting for partners' pieces (neither rendering nor
+  // blending): a slow link or a slower partner, which the renderer's core sits out.
+  double wait_ms = 0;
   bool operator==(const StageStats&) const = default;
 };
 

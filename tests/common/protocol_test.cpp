@@ -55,7 +55,7 @@ TEST(Protocol, EveryStructuredMessageRoundTrips) {
     expectRoundTrip(fp, encode(fp, 11), decodeFrameParams, Type::FrameParams);
     EXPECT_EQ(decodeFrameParams(encode(fp, 11))->mode(), fp.mode());
   }
-  StageStats st{Role::Compositor, 2, 99, 8, 4.5, 1.25, 0.75, 4000000, 700000, 12345, {1, 2, 300, 400}, 6, {1.5, 0.25}, 7, 3, 99, 5, 4, 812.5, 17, 40, 3, 1ull << 33, 12.25};
+  StageStats st{Role::Compositor, 2, 99, 8, 4.5, 1.25, 0.75, 4000000, 700000, 12345, {1, 2, 300, 400}, 6, {1.5, 0.25}, 7, 3, 99, 5, 4, 812.5, 17, 40, 3, 1ull << 33, 12.25, 6.5};
   expectRoundTrip(st, encode(st, 11), decodeStageStats, Type::Stats);
   FrameDone fd{1000, 16.5, 2.25, 33.5, 888888, 3, 1};
   expectRoundTrip(fd, encode(fd, 11), decodeFrameDone, Type::FrameDone);

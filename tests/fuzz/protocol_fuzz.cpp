@@ -86,7 +86,7 @@ void writeSeeds(const std::string& dir) {
   StageStats st;  // fields by name: a partial brace list warns (-Wmissing-field-initializers)
   st.rank = 1, st.frame = 3, st.work_ms = 1, st.encode_ms = 2, st.decode_ms = 0.5;
   st.bytes_raw = 3, st.bytes_encoded = 4, st.active_pixels = 5, st.active = {0, 0, 4, 4};
-  st.step = 7, st.step_hits = 6, st.step_misses = 1, st.bytes_read = 4096, st.prefetch_ms = 2;
+  st.step = 7, st.step_hits = 6, st.step_misses = 1, st.bytes_read = 4096, st.prefetch_ms = 2, st.wait_ms = 3;
   writeSeed(dir, n, encode(st, 1));
   writeSeed(dir, n, encode(FrameDone{3, 1, 2, 3, 4, 5}, 1));
   writeSeed(dir, n, encode(Input{3, 1, 2, 1.5, QualityName::Fast, true, 640, 480, TimeKey::Forward}, 1));

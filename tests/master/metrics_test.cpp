@@ -52,6 +52,18 @@ TEST(Metrics, AFrameOfReusedImagesHasNoRenderTime) {
   EXPECT_EQ(j["render_images_made"], 1);
 }
 
+TEST(Metrics, ABinarySwapFrameShowsTheLongestWaitForAPartner) {
+  proto::FrameDone d;
+  auto r0 = stats(proto::Role::Renderer, 0, 0, 10), r1 = stats(proto::Role::Renderer, 1, 0, 30);
+  r0.decode_ms = 2, r0.wait_ms = 21;  // r0 finished first and waited for r1's half
+  r1.decode_ms = 3, r1.wait_ms = 0.5;
+  auto j = Metrics::summarize({r0, r1}, {}, d, 5);
+  EXPECT_DOUBLE_EQ(j["render_swap_ms_max"].get<double>(), 3);
+  EXPECT_DOUBLE_EQ(j["render_swap_wait_ms_max"].get<double>(), 21);
+  EXPECT_FALSE(Metrics::summarize({stats(proto::Role::Renderer, 0, 0, 10)}, {}, d, 5).contains("render_swap_wait_ms_max"))
+      << "direct send has no swap";
+}
+
 TEST(Metrics, ATimeSeriesFrameShowsEachRenderersStepCacheByRank) {
   proto::FrameDone d;
   auto r1 = stats(proto::Role::Renderer, 1, 0, 10), r0 = stats(proto::Role::Renderer, 0, 0, 10);
