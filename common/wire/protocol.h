@@ -35,6 +35,7 @@
 #include "common/bricks.h"
 #include "common/camera.h"
 #include "common/wire/codec.h"
+#include "common/wire/frame_work.h"
 #include "common/image.h"
 #include "common/result.h"
 #include "common/quality.h"
@@ -130,20 +131,6 @@ struct Shutdown {                                                          // ma
   bool operator==(const Shutdown&) const = default;
 };
 
-struct BrickAssignment {
-  uint32_t renderer = 0; BrickBox brick;
-  bool operator==(const BrickAssignment&) const = default;
-};
-// Sort-first: one screen tile drawn by `renderer`, routed by `compositor`.
-struct TileAssignment {
-  uint32_t renderer = 0, compositor = 0;
-  Rect tile;
-  bool operator==(const TileAssignment&) const = default;
-};
-struct CompositorRegion {
-  uint32_t compositor = 0; Rect region; std::string endpoint;
-  bool operator==(const CompositorRegion&) const = default;
-};
 // FrameParams (header frame = frame):
 //   epoch                      u32      4
 //   camera.eye/target/up       3x3 f64  72    finite
@@ -183,28 +170,6 @@ struct CompositorRegion {
 //   tiles                      u32      4     count <= 2^20, then per tile (24 bytes):
 //   tiles.renderer, compositor u32 x2   8
 //   tiles.tile                 rect     16    w, h > 0; 0 <= x, y; inside width x height
-enum class FrameMode : uint8_t { SortLast = 1, SortFirst = 2, Last = SortFirst };
-// Binary swap (swap_plan.h): where one renderer takes the pieces its partners send it.
-struct SwapPeer {
-  uint32_t renderer = 0; std::string endpoint;
-  bool operator==(const SwapPeer&) const = default;
-};
-// Sort-last: renderers draw bricks of the volume over the whole image; compositors blend
-// every brick's piece of their region in `order`. With a swap plan the renderers composite
-// among themselves by binary swap, each ending with its band of the whole image, finished,
-// which it sends the display as Strips (as a compositor would): the frame has no regions and
-// no compositor takes part in it.
-struct SortLastWork {
-  std::vector<BrickAssignment> bricks;       // one per renderer that has work
-  std::vector<int> order;                    // brick indices (into `bricks`) front to back
-  std::vector<SwapPeer> swap;                // empty: direct send
-  bool operator==(const SortLastWork&) const = default;
-};
-// Sort-first: renderers draw whole scenes into screen tiles; compositors only route them.
-struct SortFirstWork {
-  std::vector<TileAssignment> tiles;
-  bool operator==(const SortFirstWork&) const = default;
-};
 struct FrameParams {                                                       // master -> all (PUB)
   uint64_t frame = 0;
   uint32_t epoch = 0;                        // bumped when membership changes; stale work is dropped
