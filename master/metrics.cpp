@@ -120,8 +120,10 @@ nlohmann::json Metrics::summarize(const std::vector<proto::StageStats>& renderer
   for (const auto& s : compositors) decode = std::max(decode, s.decode_ms);
   for (const auto& s : renderers) swap = std::max(swap, s.decode_ms), wait = std::max(wait, s.wait_ms);
   j["composite_decode_ms_max"] = decode;
-  if (swap > 0) j["render_swap_ms_max"] = swap;  // only frames composited by binary swap
-  if (swap > 0) j["render_swap_wait_ms_max"] = wait;
+  if (swap > 0) {  // only frames composited by binary swap
+    j["render_swap_ms_max"] = swap;
+    j["render_swap_wait_ms_max"] = wait;
+  }
   // Sort-first: chunk-tile pairs drawn per chunk (WireGL's overlap factor) and triangles.
   double drawn = 0, chunks = 0, triangles = 0;
   for (const auto& s : renderers) {
