@@ -13,7 +13,8 @@
 #include "common/wire/protocol.h"
 #include "common/net/stage_link.h"
 #include "common/net/transport.h"
-#include "renderer/step_cache.h"
+#include "renderer/brick_images.h"
+#include "renderer/render_worker.h"
 #include "renderer/swap_exchange.h"
 #include "renderer/tile_render.h"
 
@@ -22,16 +23,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
-
-// What determines a brick's image: a frame with the same key is not rendered again.
-struct RenderKey {
-  Camera camera;
-  Quality quality;
-  int width = 0, height = 0;
-  BrickBox brick;
-  int step = 0;
-  bool operator==(const RenderKey&) const = default;
-};
 
 class Stage {
  public:
@@ -43,7 +34,7 @@ class Stage {
       // Before joining, so a bad file is said at once; every window loaded later is
       // normalised with the whole file's range (a series: step 0's) without scanning it again.
       fixVolumeRange(scene_);
-      steps_ = std::make_unique<StepCache>(scene_, opt.backend, (uint64_t)opt.cache_mb << 20);
+      images_ = std::make_unique<BrickImages>(scene_, opt.backend, opt.cache_mb, opt.threads);
       swap_ = std::make_unique<SwapExchange>(ctx, maxPixelMessageBytes(scene_.width, scene_.height),
                                              2 * 16 * size_t(scene_.width) * size_t(scene_.height));
       bindSwap();
@@ -68,12 +59,8 @@ class Stage {
     }
   }
 
-  // A time series: what the step cache did over the run.
   void logSteps() {
-    if (!steps_ || scene_.series.steps <= 1) return;
-    const StepCacheStats s = steps_->take();
-    spdlog::info("step cache: budget {} MiB, held at most {:.1f} MiB besides the shown step; {} hits, {} misses, {} bad steps",
-                 opt_.cache_mb, (double)s.peak_bytes / (1 << 20), s.hits, s.misses, s.bad_steps);
+    if (images_) images_->logSteps();
   }
 
   int run(const std::atomic<bool>* stop) {
@@ -87,12 +74,20 @@ class Stage {
                  scene_.mesh ? "osmesa-mesh" : backendName(opt_.backend), isaName(cpuIsa()),
                  swap_ ? " swap pieces at " + swap_endpoint_ : "");
     while (!stopped()) {
-      pump(queued_.empty() ? 100 : 0);
+      const bool ready = !queued_.empty() && canStart(queued_.front());
+      // Nothing to render while a frame's rounds await a partner's piece: that idle time is
+      // the frame's wait (the metrics' render_swap_wait_ms_max).
+      const bool idle_in_rounds = swapping_ && !worker_.busy() && !ready;
+      const auto before = Clock::now();
+      pump(ready ? 0 : worker_.busy() || swapping_ ? 50 : 100);
+      if (idle_in_rounds) swapping_->st.wait_ms += msSince(before);
       if (shutdown_) return 0;
       if (link_.masterLost()) return 1;
       std::erase_if(queued_, [&](const auto& p) { return !wanted(p); });
-      if (queued_.empty()) continue;
-      if (steps_) steps_->prefetch(stepsAfter(queued_));
+      collectRender();
+      advanceRounds();
+      if (queued_.empty() || !canStart(queued_.front())) continue;
+      if (images_) images_->prefetch(queued_);
       const proto::FrameParams p = std::move(queued_.front());
       queued_.pop_front();
       renderFrameOrLog(p);
@@ -105,14 +100,25 @@ class Stage {
   // Frames superseded by a newer epoch or cancelled by an interaction are skipped, not rendered.
   bool wanted(const proto::FrameParams& p) const { return p.epoch == epoch_ && p.frame >= first_wanted_; }
 
+  // A binary-swap frame renders on the worker while the rounds of the one before it advance
+  // here; every other frame renders on this thread once both are over (they are rare beside
+  // swapping: direct send, a lost renderer's extra bricks, sort-first).
+  bool canStart(const proto::FrameParams& p) const {
+    if (worker_.busy() || rendering_) return false;
+    const proto::SortLastWork* work = p.sortLast();
+    const bool swapping = swap_ && !tiles_ && work && planSwap(p, link_.rank());
+    return swapping || !swapping_;
+  }
+
   // Waits up to `ms` for the master's messages and swap pieces, and takes what came: new
   // FrameParams are queued (drained before every frame, and while a swap waits), a Roster
   // admits peers, Shutdown ends the run.
   void pump(int ms) {
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0},
                                {link_.control().handle(), 0, ZMQ_POLLIN, 0},
+                               {nullptr, worker_.fd(), ZMQ_POLLIN, 0},  // a render ended
                                {swap_ ? swap_->socket().handle() : nullptr, 0, ZMQ_POLLIN, 0}};
-    pollFor(items, swap_ ? 3 : 2, std::chrono::milliseconds(ms));
+    pollFor(items, swap_ ? 4 : 3, std::chrono::milliseconds(ms));
     auto published = link_.receive(drops_);
     shutdown_ = shutdown_ || published.shutdown;
     for (auto& p : published.params) {
@@ -123,7 +129,7 @@ class Stage {
     if (swap_) swap_->setWanted(epoch_, first_wanted_);
     if (items[1].revents & ZMQ_POLLIN)
       if (auto roster = link_.receiveRoster(drops_); roster && swap_) swap_->setRoster(*roster, drops_);
-    if (swap_ && (items[2].revents & ZMQ_POLLIN)) swap_->receive(drops_);
+    if (swap_ && (items[3].revents & ZMQ_POLLIN)) swap_->receive(drops_);
   }
 
   // A frame whose parameters make rendering throw (the master's checks should prevent it)
@@ -145,29 +151,19 @@ class Stage {
     renderBricks(p, *p.sortLast(), st);
   }
 
-  // The steps the frames after the first will show, soonest first, then the one the master
-  // expects after the last: what to prefetch.
-  static std::vector<int> stepsAfter(const std::deque<proto::FrameParams>& queued) {
-    std::vector<int> steps;
-    for (const auto& p : queued)
-      for (int s : {(int)p.step, (int)p.next_step})
-        if (s != (int)queued.front().step && std::find(steps.begin(), steps.end(), s) == steps.end()) steps.push_back(s);
-    return steps;
-  }
-
   void renderBricks(const proto::FrameParams& p, const proto::SortLastWork& work, proto::StageStats& st) {
     if (tiles_) return drops_.drop(~0u, "sort-last FrameParams for a geometry scene");
-    if (!holdBricks(p, work, st)) return;
+    images_->hold(p, work, link_.rank(), st);
     closeSocketsNotIn(p, work);
     if (auto plan = planSwap(p, link_.rank())) {
       if (!swap_) return drops_.drop(~0u, "binary-swap FrameParams for a renderer without a swap socket");
-      return swapBrick(p, *plan, st);
+      return renderForSwap(p, *plan, st);
     }
     swap_rounds_logged_ = 0;  // direct send: say it when swapping starts again
     for (uint32_t b = 0; b < work.bricks.size(); ++b) {
       if (work.bricks[b].renderer != link_.rank()) continue;
       auto t0 = Clock::now();
-      const Cached& c = render(p, work.bricks[b].brick, st);
+      const BrickImages::Image& c = images_->render(p, work.bricks[b].brick, st, nullptr);
       st.work_ms += msSince(t0);
       st.active = unite(st.active, c.active);
       st.active_pixels += c.active.area();
@@ -179,36 +175,78 @@ class Stage {
     link_.report(proto::encode(st, link_.rank()));
   }
 
-  // Binary swap: this renderer's one brick, composited with the others' by swapping halves;
-  // the finished band goes straight to the display as strips, as a compositor's region
-  // would. A frame given up (a new epoch, a lost partner) reports nothing: the master issues
-  // it again.
-  void swapBrick(const proto::FrameParams& p, const SwapPlan& plan, proto::StageStats& st) {
-    auto t0 = Clock::now();
-    const Cached& c = render(p, p.sortLast()->bricks[plan.brick].brick, st);
-    st.work_ms += msSince(t0);
-    st.active = c.active, st.active_pixels = c.active.area();
-    auto send = [&](const std::string& endpoint, std::vector<std::byte>&& bytes) { sendBytes(socketFor(endpoint), std::move(bytes)); };
-    auto idle = [&](int ms, uint32_t partner) {
-      link_.setWaiting(p.frame, partner);  // said in the heartbeats, for the master's blame
-      pump(ms);
-      return !stopped() && !link_.masterLost() && wanted(p);
-    };
-    if (plan.rounds.size() != swap_rounds_logged_) {  // said when the farm's shape changes
-      swap_rounds_logged_ = plan.rounds.size();
-      spdlog::info("frame={} binary swap among {} renderers: {} rounds, {}", p.frame, p.sortLast()->swap.size(),
-                   plan.rounds.size(), plan.folded ? fmt::format("image folded into renderer {}'s", plan.rounds[0].partner)
-                                                         : fmt::format("band rows [{}, {})", plan.band.y, plan.band.y + plan.band.h));
+  // Binary swap: this renderer's one brick, rendered on the worker, then composited with the
+  // others' by swapping halves (advanceRounds); the finished band goes straight to the display
+  // as strips, as a compositor's region would.
+  void renderForSwap(const proto::FrameParams& p, const SwapPlan& plan, const proto::StageStats& st) {
+    rendering_ = SwapFrame{p, st, plan, nullptr, {}};
+    const BrickBox brick = p.sortLast()->bricks[plan.brick].brick;
+    const BrickImages::Image* in_rounds = swapping_ ? swapping_->c : nullptr;  // its image must outlive this render
+    worker_.start([this, brick, in_rounds] {
+      SwapFrame& f = *rendering_;  // this thread's alone until takeDone()
+      try {
+        auto t0 = Clock::now();
+        f.c = &images_->render(f.p, brick, f.st, in_rounds);
+        f.st.work_ms += msSince(t0);
+      } catch (const std::exception& e) {
+        f.error = e.what();
+      }
+    });
+  }
+
+  // A render the worker ended: its frame's rounds start as soon as the previous frame's end.
+  void collectRender() {
+    if (!worker_.takeDone()) return;
+    if (!rendering_->error.empty()) {
+      ++frames_failed_;
+      spdlog::error("frame={} render failed: {} frames_failed={}", rendering_->p.frame, rendering_->error, frames_failed_);
+      rendering_.reset();
     }
-    auto band = swap_->run(p, link_.rank(), plan, c.image, c.active, send, idle, st, drops_);
-    link_.clearWaiting();
-    if (!band) return spdlog::info("frame={} epoch={}: binary swap given up", p.frame, p.epoch);
-    auto t1 = Clock::now();
-    if (!plan.band.empty()) sendBand(p, *band, st);  // folded, or no rows: the display expects none (proto::swapBand)
-    swap_->recycle(std::move(*band));
-    st.encode_ms += msSince(t1);
-    st.dropped = drops_.total();
-    link_.report(proto::encode(st, link_.rank()));
+  }
+
+  void startRounds() {
+    if (swapping_ || !rendering_ || worker_.busy()) return;
+    swapping_ = std::move(rendering_);
+    rendering_.reset();
+    SwapFrame& f = *swapping_;
+    f.st.active = f.c->active, f.st.active_pixels = f.c->active.area();
+    if (f.plan.rounds.size() != swap_rounds_logged_) {  // said when the farm's shape changes
+      swap_rounds_logged_ = f.plan.rounds.size();
+      spdlog::info("frame={} binary swap among {} renderers: {} rounds, {}", f.p.frame, f.p.sortLast()->swap.size(),
+                   f.plan.rounds.size(),
+                   f.plan.folded ? fmt::format("image folded into renderer {}'s", f.plan.rounds[0].partner)
+                                 : fmt::format("band rows [{}, {})", f.plan.band.y, f.plan.band.y + f.plan.band.h));
+    }
+    swap_->start(f.p, link_.rank(), f.plan, f.c->image, f.c->active);
+  }
+
+  // Plays the rounds the partners' pieces allow, never waiting. A frame given up (a new
+  // epoch, a lost partner, a cancel) reports nothing: the master issues it again.
+  void advanceRounds() {
+    for (startRounds(); swapping_; startRounds()) {
+      SwapFrame& f = *swapping_;
+      if (stopped() || link_.masterLost() || !wanted(f.p)) {
+        swap_->abandon();
+        link_.clearWaiting();
+        spdlog::info("frame={} epoch={}: binary swap given up", f.p.frame, f.p.epoch);
+        swapping_.reset();
+        continue;
+      }
+      auto send = [&](const std::string& endpoint, std::vector<std::byte>&& bytes) { sendBytes(socketFor(endpoint), std::move(bytes)); };
+      if (const auto partner = swap_->advance(send, f.st, drops_)) {
+        link_.setWaiting(f.p.frame, *partner);  // said in the heartbeats, for the master's blame
+        return;
+      }
+      link_.clearWaiting();
+      Layer band = swap_->finish();
+      auto t1 = Clock::now();
+      if (!f.plan.band.empty()) sendBand(f.p, band, f.st);  // folded, or no rows: the display expects none (proto::swapBand)
+      swap_->recycle(std::move(band));
+      f.st.encode_ms += msSince(t1);
+      f.st.dropped = drops_.total();
+      link_.report(proto::encode(f.st, link_.rank()));
+      swapping_.reset();
+    }
   }
 
   void renderTiles(const proto::FrameParams& p, const proto::SortFirstWork& work, proto::StageStats& st) {
@@ -229,80 +267,6 @@ class Stage {
     st.encode_ms = msSince(t0);
     st.dropped = drops_.total();
     link_.report(proto::encode(st, link_.rank()));
-  }
-
-  // Holds the voxels of this renderer's bricks and their ghost layer for the frame's step:
-  // from the step cache, or loaded now. Memory follows the bricks, not the volume; a move
-  // of bricks or a step not prefetched costs a load, in the stats. False: nothing to render
-  // with (the step could not be read and no earlier step is held).
-  bool holdBricks(const proto::FrameParams& p, const proto::SortLastWork& work, proto::StageStats& st) {
-    const auto whole = volumeDims(scene_);
-    // Trilinear sampling near a brick face reads one voxel beyond it; its gradient, one more.
-    const int ghost = scene_.shading.on ? 2 : 1;
-    VoxelBox need{whole, {0, 0, 0}};
-    for (const auto& b : work.bricks) {
-      if (b.renderer != link_.rank()) continue;
-      for (int a = 0; a < 3; ++a) {
-        need.lo[a] = std::min(need.lo[a], std::max(0, b.brick.lo[a] - ghost));
-        need.hi[a] = std::max(need.hi[a], std::min(whole[a], b.brick.hi[a] + ghost));
-      }
-    }
-    if (need.lo[0] >= need.hi[0]) return true;  // no brick of ours this frame
-    // Same window as before: keep the window held for it (bricks within the held window
-    // after a neighbour's loss are rendered from it).
-    if (held_.volume) {
-      bool inside = true;
-      for (int a = 0; a < 3; ++a)
-        inside = inside && need.lo[a] >= held_.volume->origin[a] && need.hi[a] <= held_.volume->origin[a] + held_.volume->dims[a];
-      if (inside) need = VoxelBox{held_.volume->origin, {held_.volume->origin[0] + held_.volume->dims[0],
-                                                         held_.volume->origin[1] + held_.volume->dims[1],
-                                                         held_.volume->origin[2] + held_.volume->dims[2]}};
-      else held_ = {};  // before loading the next: peak memory is one window
-    }
-    held_ = steps_->get(need, (int)p.step);
-    const StepCacheStats cs = steps_->take();
-    st.load_ms = cs.load_ms;
-    if (scene_.series.steps > 1) {
-      st.step = (uint32_t)held_.step;
-      st.step_hits = cs.hits;
-      st.step_misses = cs.misses;
-      st.bytes_read = cs.bytes_read;
-      st.prefetch_ms = cs.prefetch_ms;
-    }
-    if (!held_.volume) throw std::runtime_error("step " + std::to_string(p.step) + " could not be read and no other step is held");
-    if (cs.load_ms > 0)
-      spdlog::info("frame={} step={} loaded voxels [{}, {}, {}] .. [{}, {}, {}) ({:.1f} MiB) in {:.0f} ms", p.frame, p.step,
-                   need.lo[0], need.lo[1], need.lo[2], need.hi[0], need.hi[1], need.hi[2],
-                   (double)held_.volume->voxelCount() * sizeof(float) / (1 << 20), cs.load_ms);
-    return true;
-  }
-
-  struct Cached {
-    RenderKey key;
-    ImageF image;
-    Rect active;
-  };
-
-  const Cached& render(const proto::FrameParams& p, const BrickBox& brick, proto::StageStats& st) {
-    RenderKey key{p.camera, p.quality, p.width, p.height, brick, held_.step};
-    for (auto& c : cache_)
-      if (c.key == key) return ++st.images_reused, c;  // unchanged inputs: reuse, do not render again
-    ++st.images_made;
-    RenderOptions ro;
-    ro.quality = p.quality;
-    ro.threads = opt_.threads;
-    Cached c{key, {}, {}};
-    Brick local = brick;  // in the held window's voxel indices
-    for (int a = 0; a < 3; ++a) local.lo[a] -= held_.volume->origin[a], local.hi[a] -= held_.volume->origin[a];
-    // No RenderStats: the farm needs no sample counts, and counting skipped samples costs.
-    ImageF spare;  // the oldest image's memory, so that a frame does not fault in fresh pages
-    if (cache_.size() >= 2) {  // a renderer may own two bricks after a failure
-      spare = std::move(cache_.front().image);
-      cache_.pop_front();
-    }
-    c.image = held_.caster->render(p.camera, p.width, p.height, local, ro, nullptr, &c.active, std::move(spare));
-    cache_.push_back(std::move(c));
-    return cache_.back();
   }
 
   // `part`: the pixels of a brick image in the region, in the frame's format.
@@ -368,10 +332,8 @@ class Stage {
   zmq::context_t& ctx_;
   StageLink link_;
   Scene scene_;                      // the scene, with the data's range fixed once
-  std::unique_ptr<StepCache> steps_;  // volume scenes (sort-last): the windows of this renderer's bricks, per step
-  HeldStep held_;                     // the window and caster of the frame being rendered
+  std::unique_ptr<BrickImages> images_;  // volume scenes (sort-last)
   std::unique_ptr<TileRenderer> tiles_;   // geometry scenes (sort-first)
-  std::deque<Cached> cache_;
   std::vector<std::byte> packed_;  // a piece's pixels before encoding, kept (see packPixels)
   Image8 band8_;                   // a binary swap's band, quantized (the frame's size: strips name screen rows)
   std::map<std::string, zmq::socket_t> pushes_;  // to compositors, swap partners and the display
@@ -385,6 +347,17 @@ class Stage {
   uint64_t first_wanted_ = 0;  // frames below it were cancelled
   uint64_t frames_failed_ = 0;
   DropCounter drops_;
+  // A binary-swap frame: rendered (on the worker), then its rounds played.
+  struct SwapFrame {
+    proto::FrameParams p;
+    proto::StageStats st;
+    SwapPlan plan;
+    const BrickImages::Image* c = nullptr;  // in images_
+    std::string error;          // the render threw
+  };
+  std::optional<SwapFrame> rendering_;  // on the worker, or rendered and waiting for the rounds before it
+  std::optional<SwapFrame> swapping_;   // its rounds in progress (swap_)
+  RenderWorker worker_;  // last: destroyed first, after its job, while what the job uses lives
 };
 
 }  // namespace

@@ -85,30 +85,38 @@ void SwapExchange::recycle(Layer&& l) {
   if (spares_.size() < 2 && l.img.px.capacity() > 0) spares_.push_back(std::move(l.img.px));
 }
 
-std::optional<Layer> SwapExchange::run(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan,
-                                       const ImageF& img, const Rect& active, const Send& send, const Idle& idle,
-                                       proto::StageStats& st, DropCounter& drops) {
+void SwapExchange::start(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan, const ImageF& img,
+                         const Rect& active) {
   // Pieces of this frame's older issues, and of older frames of this issue, will never be used.
   std::erase_if(held_, [&](const Held& h) {
     const bool old = h.piece.epoch < p.epoch || (h.piece.epoch == p.epoch && h.piece.frame < p.frame);
     if (old) held_bytes_ -= h.piece.pixels.size();
     return old;
   });
-  const proto::PixelFormat format = swapFormat(p.format);
-  Layer mine;
+  run_.emplace();
+  Run& r = *run_;
+  r.p = p, r.me = me, r.plan = plan, r.img = &img, r.active = active;
   if (plan.rounds.empty())  // a swap of one: the image is the band
-    mine = blendLayer(viewOf(img, active, plan.band), {}, Rect{}, format, false, takeSpare());
-  for (size_t j = 0; j < plan.rounds.size(); ++j) {
-    const SwapRound& r = plan.rounds[j];
+    r.mine = blendLayer(viewOf(img, active, plan.band), {}, Rect{}, swapFormat(p.format), false, takeSpare());
+}
+
+std::optional<uint32_t> SwapExchange::advance(const Send& send, proto::StageStats& st, DropCounter& drops) {
+  Run& run = *run_;
+  const proto::FrameParams& p = run.p;
+  const proto::PixelFormat format = swapFormat(p.format);
+  for (; run.round < run.plan.rounds.size(); ++run.round, run.sent = false) {
+    const SwapRound& r = run.plan.rounds[run.round];
     // Round 0 reads the brick image itself; later rounds, the layer blended last round.
-    auto partOf = [&](const Rect& part) { return j == 0 ? viewOf(img, active, part) : viewOf(mine, part); };
-    if (!r.send.empty()) {  // a fold's receiver only receives
+    auto partOf = [&](const Rect& part) {
+      return run.round == 0 ? viewOf(*run.img, run.active, part) : viewOf(run.mine, part);
+    };
+    if (!run.sent && !r.send.empty()) {  // a fold's receiver only receives
       auto t0 = Clock::now();
       proto::Piece out;
       out.frame = p.frame;
       out.epoch = p.epoch;
-      out.renderer = me;
-      out.brick = plan.brick;
+      out.renderer = run.me;
+      out.brick = run.plan.brick;
       out.region = r.send;
       out.format = format;
       out.render_ms = st.work_ms;
@@ -116,31 +124,57 @@ std::optional<Layer> SwapExchange::run(const proto::FrameParams& p, uint32_t me,
       out.active = sent.rect;
       packView(sent, format, packed_);
       out.pixels = std::move(packed_);
-      auto bytes = proto::encode(out, me, p.codec);
+      auto bytes = proto::encode(out, run.me, p.codec);
       st.bytes_raw += out.pixels.size();
       st.bytes_encoded += bytes.size();
       packed_ = std::move(out.pixels);
       send(r.endpoint, std::move(bytes));
       st.encode_ms += msSince(t0);
     }
+    run.sent = true;
     if (r.keep.empty()) continue;  // a folding renderer only sends
 
     std::optional<Held> in;
-    const auto waiting = Clock::now();
     for (;;) {
       in = take(p, r.partner, r.keep);
-      if (in && in->piece.format == format) break;
-      if (in) drops.drop(r.partner, "swap piece in another pixel format than the frame's");
-      if (!idle(50, r.partner)) return std::nullopt;
+      if (!in) return r.partner;
+      if (in->piece.format == format) break;
+      drops.drop(r.partner, "swap piece in another pixel format than the frame's");
     }
-    st.wait_ms += msSince(waiting);
     auto t1 = Clock::now();
     Layer blended = blendLayer(partOf(r.keep), in->piece.pixels, in->piece.active, format, r.partner_in_front, takeSpare());
-    recycle(std::move(mine));
-    mine = std::move(blended);
+    recycle(std::move(run.mine));
+    run.mine = std::move(blended);
     st.decode_ms += in->decode_ms + msSince(t1);
   }
-  return mine;
+  return std::nullopt;
+}
+
+Layer SwapExchange::finish() {
+  Layer band = std::move(run_->mine);
+  run_.reset();
+  return band;
+}
+
+void SwapExchange::abandon() {
+  if (run_) recycle(std::move(run_->mine));
+  run_.reset();
+}
+
+std::optional<Layer> SwapExchange::run(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan,
+                                       const ImageF& img, const Rect& active, const Send& send, const Idle& idle,
+                                       proto::StageStats& st, DropCounter& drops) {
+  start(p, me, plan, img, active);
+  while (const auto partner = advance(send, st, drops)) {
+    const auto t0 = Clock::now();
+    const bool go_on = idle(50, *partner);
+    st.wait_ms += msSince(t0);
+    if (!go_on) {
+      abandon();
+      return std::nullopt;
+    }
+  }
+  return finish();
 }
 
 }  // namespace tessera::renderer

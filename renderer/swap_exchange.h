@@ -3,7 +3,9 @@
 // one frame. A partner may run ahead into its next frame, so pieces wait here until their
 // round comes, bounded in count and bytes (the farthest frames go first); pieces of frames
 // left behind (cancelled, or issued again under a new epoch) are discarded quietly, as they
-// arrive or when a frame starts; malformed ones are dropped and counted. Single-threaded.
+// arrive or when a frame starts; malformed ones are dropped and counted. The rounds advance
+// as pieces come and never block, so the renderer's next frame renders while a partner's
+// piece is on the wire. Single-threaded (the stage's socket thread).
 #pragma once
 #include <functional>
 #include <optional>
@@ -34,13 +36,27 @@ class SwapExchange {
 
   // Sends `bytes` to a partner's endpoint.
   using Send = std::function<void(const std::string& endpoint, std::vector<std::byte>&& bytes)>;
+
+  // One frame's rounds, advanced as partners' pieces come, so that the renderer renders its
+  // next frame meanwhile (at most one frame's rounds at a time). start() takes brick image
+  // `img` (active within `active`), which must stay alive and unchanged until the rounds end.
+  void start(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan, const ImageF& img, const Rect& active);
+  bool running() const { return run_.has_value(); }
+  const proto::FrameParams& frame() const { return run_->p; }
+  // Plays every round whose partner's piece is held; never waits. Returns the partner whose
+  // piece the next round awaits, or nullopt when the rounds are over (then finish()).
+  // st gets the bytes sent, the encode and the decode-and-blend times.
+  std::optional<uint32_t> advance(const Send& send, proto::StageStats& st, DropCounter& drops);
+  // The finished band (empty when this renderer folded its image into a partner's).
+  Layer finish();
+  void abandon();  // the frame was given up: a new epoch, a cancel, Shutdown, the master's loss
+
   // Waits up to `ms` for any socket of the stage (this one included, then receive()) while
   // renderer `partner`'s piece is awaited, and says whether frame p is still wanted.
   using Idle = std::function<bool(int ms, uint32_t partner)>;
-  // The rounds of frame p for brick image `img` (active within `active`): the finished band
-  // (empty when this renderer folded its image into a partner's), or nullopt when the frame was given up (no longer wanted: a new epoch, a cancel, Shutdown
-  // or the master's loss; a lost partner ends in a new epoch, a silent one at the master's
-  // frame deadline). st gets the bytes sent, encode and decode-and-blend times.
+  // start() and advance() until the rounds end, or nullopt when `idle` gives the frame up (a
+  // lost partner ends in a new epoch, a silent one at the master's frame deadline); the time
+  // in `idle` is st.wait_ms.
   std::optional<Layer> run(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan, const ImageF& img,
                            const Rect& active, const Send& send, const Idle& idle, proto::StageStats& st,
                            DropCounter& drops);
@@ -51,6 +67,16 @@ class SwapExchange {
   struct Held {
     proto::Piece piece;
     double decode_ms = 0;
+  };
+  struct Run {
+    proto::FrameParams p;
+    uint32_t me = 0;
+    SwapPlan plan;
+    const ImageF* img = nullptr;
+    Rect active;
+    size_t round = 0;     // the round being played
+    bool sent = false;    // its piece has left
+    Layer mine;           // blended so far (rounds > 0 read it)
   };
   bool stale(const proto::Piece& p) const {
     return p.epoch < epoch_ || (p.epoch == epoch_ && p.frame < first_wanted_);
@@ -68,6 +94,7 @@ class SwapExchange {
   size_t held_bytes_ = 0;
   std::vector<std::byte> packed_;
   std::vector<std::vector<float>> spares_;
+  std::optional<Run> run_;
 };
 
 // Pieces between renderers carry at least rgba16f: each round's blend is rounded once more,

@@ -2,7 +2,7 @@
 // a partner's pieces wait for their round; malformed pieces and pieces that claim another
 // renderer are dropped and counted, pieces of given-up frames are discarded quietly, the
 // held pieces stay bounded (the farthest frames go first), and a round whose frame is no
-// longer wanted ends at once.
+// longer wanted ends at once; rounds advance as pieces come, never waiting.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -117,6 +117,44 @@ TEST(SwapExchange, HeldPiecesAreBoundedAndTheFarthestFramesGoFirst) {
   auto give_up = [](int, uint32_t) { return false; };
   EXPECT_TRUE(rig.ex.run(frameOf(11, 1, 8, 8), 9, plan, img, {0, 0, 8, 8}, none, give_up, st, rig.drops));
   EXPECT_FALSE(rig.ex.run(frameOf(200, 1, 8, 8), 9, plan, img, {0, 0, 8, 8}, none, give_up, st, rig.drops));
+}
+
+// The rounds as the renderer plays them while its next frame renders: advance() never waits,
+// sends each round's piece once however often it is called, says whose piece is awaited, and
+// finishes the round when that piece comes; a frame given up leaves nothing running.
+TEST(SwapExchange, RoundsAdvanceAsPiecesComeAndNeverWait) {
+  Rig rig;
+  const Rect keep{0, 0, 8, 4};
+  SwapPlan plan;
+  plan.brick = 1;
+  plan.rounds.push_back({7, "inproc://nowhere", keep, {0, 4, 8, 4}, true});
+  plan.band = keep;
+  ImageF img(8, 8);
+  int sent = 0;
+  auto send = [&](const std::string&, std::vector<std::byte>&&) { ++sent; };
+  proto::StageStats st;
+  rig.ex.setWanted(2, 8);
+  rig.ex.start(frameOf(8, 2, 8, 8), 9, plan, img, {0, 0, 8, 8});
+  ASSERT_TRUE(rig.ex.running());
+  for (int i = 0; i < 3; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    EXPECT_EQ(rig.ex.advance(send, st, rig.drops), std::optional<uint32_t>(7));
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(1)) << "advance() must not wait";
+  }
+  EXPECT_EQ(sent, 1) << "a round's piece leaves once";
+  rig.send(proto::encode(piece(8, 2, 7, keep), 7, Codec::None));
+  rig.settle();
+  EXPECT_EQ(rig.ex.advance(send, st, rig.drops), std::nullopt);
+  const Layer band = rig.ex.finish();
+  EXPECT_FALSE(rig.ex.running());
+  EXPECT_EQ(band.rect, keep);
+  EXPECT_EQ(sent, 1);
+
+  rig.ex.start(frameOf(9, 2, 8, 8), 9, plan, img, {0, 0, 8, 8});
+  EXPECT_EQ(rig.ex.advance(send, st, rig.drops), std::optional<uint32_t>(7));
+  rig.ex.abandon();
+  EXPECT_FALSE(rig.ex.running());
+  EXPECT_EQ(rig.drops.total(), 0u);
 }
 
 }  // namespace
