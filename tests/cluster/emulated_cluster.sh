@@ -5,7 +5,7 @@
 # addresses with CURVE on (as across real machines). Needs root and iproute2.
 #
 #   tests/cluster/emulated_cluster.sh [--rate RATE] [--mtu BYTES] [--out DIR] [--bin DIR]
-#                                     [--cut A,B,K] [-- tessera-up args]
+#                                     [--cut A,B,K] [--pin-renderers] [-- tessera-up args]
 #     --rate   link rate per host, tc syntax (100mbit, 1gbit) or "unlimited" (default)
 #     --out    folder for frames, metrics.jsonl, farm.log and links.tsv (default out/cluster)
 #     --bin    folder of the tessera binaries (default build/bin)
@@ -15,6 +15,9 @@
 #     --cut A,B,K  once K frames are done, host A loses its route to host B (a blackhole
 #              route: what A sends to B vanishes, as behind a failed link, and so B's TCP to A
 #              stalls too, its acknowledgements lost; both still reach the other hosts)
+#     --pin-renderers  renderer i runs on core (i-1) mod (cores) alone among the renderers, as
+#              on hosts of their own (set TESSERA_THREADS=1 too); the other stages float. With
+#              as many renderers as cores, a renderer's idle time is idle, not lent to another.
 # The farm's settings come from the environment as for tessera-up (TESSERA_RENDERERS,
 # TESSERA_COMPOSITORS, TESSERA_FRAMES, TESSERA_CODEC, TESSERA_SCENE...). links.tsv has one
 # line per host: host, bytes it sent, bytes it received, packets it sent, packets it received
@@ -23,7 +26,7 @@
 # that was killed with SIGKILL are removed by the next run.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
-rate=unlimited out=out/cluster bin="$root/build/bin" cut= mtu=1500
+rate=unlimited out=out/cluster bin="$root/build/bin" cut= mtu=1500 pin=
 while [ $# -gt 0 ]; do
   case "$1" in
     --rate) rate=$2; shift 2 ;;
@@ -31,6 +34,7 @@ while [ $# -gt 0 ]; do
     --bin) bin=$2; shift 2 ;;
     --cut) cut=$2; shift 2 ;;
     --mtu) mtu=$2; shift 2 ;;
+    --pin-renderers) pin=1; shift ;;
     --) shift; break ;;
     *) echo "emulated_cluster.sh: unknown option $1" >&2; exit 2 ;;
   esac
@@ -98,6 +102,7 @@ export TESSERA_ENDPOINTS="tcp://$(cat "$state/hosts/master.ip"):5550"
 export TESSERA_DISPLAY_HOST=$(cat "$state/hosts/display.ip")
 export TESSERA_KEYS="$state/keys" TESSERA_CURVE=on TESSERA_WINDOW=off TESSERA_OUT="$out"
 export EMULATED_CLUSTER_STATE="$state"
+[ -n "$pin" ] && nproc > "$state/pin-renderers"
 echo "emulated cluster: ${#hosts[@]} hosts, links $rate (MTU $mtu), endpoints $TESSERA_ENDPOINTS, output $out"
 if [ -n "$cut" ]; then
   rm -f "$out/metrics.jsonl"
