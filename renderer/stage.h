@@ -1,7 +1,8 @@
 // The renderer stage of the farm: renders its bricks for every FrameParams, crops each
 // image to its active region, splits it by the compositors' regions (direct send),
 // compresses and sends one Piece per (brick, compositor) — empty parts as empty pieces.
-// With a binary-swap plan it composites with the other renderers instead (swap_exchange.h)
+// With a binary-swap plan it composites with the other renderers instead (swap_exchange.h),
+// rendering its next frame on a worker thread while the rounds wait for partners' pieces,
 // and sends its finished band straight to the display as strips.
 #pragma once
 #include <atomic>
