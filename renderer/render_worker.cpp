@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cstdint>
+#include <exception>
 #include <stdexcept>
 #include <system_error>
 
@@ -35,6 +36,23 @@ void RenderWorker::start(std::function<void()> job) {
   cv_.notify_one();
 }
 
+void RenderWorker::runAndWait(const std::function<void()>& job) {
+  std::exception_ptr error;
+  start([&] {
+    try {
+      job();
+    } catch (...) {
+      error = std::current_exception();
+    }
+  });
+  {
+    std::unique_lock lock(mu_);
+    done_cv_.wait(lock, [&] { return done_; });
+  }
+  takeDone();
+  if (error) std::rethrow_exception(error);
+}
+
 bool RenderWorker::takeDone() {
   if (!busy_) return false;
   {
@@ -62,6 +80,7 @@ void RenderWorker::loop() {
     const uint64_t one = 1;
     if (write(fd_, &one, sizeof one) != sizeof one) {
     }  // the counter cannot overflow: one write per job
+    done_cv_.notify_all();
   }
 }
 

@@ -78,9 +78,8 @@ class Stage {
       // Nothing to render while a frame's rounds await a partner's piece: that idle time is
       // the frame's wait (the metrics' render_swap_wait_ms_max).
       const bool idle_in_rounds = swapping_ && !worker_.busy() && !ready;
-      const auto before = Clock::now();
-      pump(ready ? 0 : worker_.busy() || swapping_ ? 50 : 100);
-      if (idle_in_rounds) swapping_->st.wait_ms += msSince(before);
+      const double polled_ms = pump(ready ? 0 : worker_.busy() || swapping_ ? 50 : 100);
+      if (idle_in_rounds) swapping_->st.wait_ms += polled_ms;
       if (shutdown_) return 0;
       if (link_.masterLost()) return 1;
       std::erase_if(queued_, [&](const auto& p) { return !wanted(p); });
@@ -96,6 +95,16 @@ class Stage {
   }
 
  private:
+  // A binary-swap frame: rendered (on the worker), then its rounds played.
+  struct SwapFrame {
+    proto::FrameParams p;
+    proto::StageStats st;
+    SwapPlan plan;
+    const BrickImages::Image* c = nullptr;  // in images_
+    std::string error;                      // the render threw
+    bool started = false;                   // its rounds began (swap_)
+  };
+
   bool stopped() const { return shutdown_ || (stop_ && *stop_); }
   // Frames superseded by a newer epoch or cancelled by an interaction are skipped, not rendered.
   bool wanted(const proto::FrameParams& p) const { return p.epoch == epoch_ && p.frame >= first_wanted_; }
@@ -112,13 +121,15 @@ class Stage {
 
   // Waits up to `ms` for the master's messages and swap pieces, and takes what came: new
   // FrameParams are queued (drained before every frame, and while a swap waits), a Roster
-  // admits peers, Shutdown ends the run.
-  void pump(int ms) {
+  // admits peers, Shutdown ends the run. Returns the time it waited for them.
+  double pump(int ms) {
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0},
                                {link_.control().handle(), 0, ZMQ_POLLIN, 0},
                                {nullptr, worker_.fd(), ZMQ_POLLIN, 0},  // a render ended
                                {swap_ ? swap_->socket().handle() : nullptr, 0, ZMQ_POLLIN, 0}};
+    const auto t0 = Clock::now();
     pollFor(items, swap_ ? 4 : 3, std::chrono::milliseconds(ms));
+    const double polled_ms = msSince(t0);
     auto published = link_.receive(drops_);
     shutdown_ = shutdown_ || published.shutdown;
     for (auto& p : published.params) {
@@ -130,6 +141,7 @@ class Stage {
     if (items[1].revents & ZMQ_POLLIN)
       if (auto roster = link_.receiveRoster(drops_); roster && swap_) swap_->setRoster(*roster, drops_);
     if (swap_ && (items[3].revents & ZMQ_POLLIN)) swap_->receive(drops_);
+    return polled_ms;
   }
 
   // A frame whose parameters make rendering throw (the master's checks should prevent it)
@@ -153,17 +165,20 @@ class Stage {
 
   void renderBricks(const proto::FrameParams& p, const proto::SortLastWork& work, proto::StageStats& st) {
     if (tiles_) return drops_.drop(~0u, "sort-last FrameParams for a geometry scene");
-    images_->hold(p, work, link_.rank(), st);
     closeSocketsNotIn(p, work);
-    if (auto plan = planSwap(p, link_.rank())) {
+    const uint32_t rank = link_.rank();
+    if (auto plan = planSwap(p, rank)) {
       if (!swap_) return drops_.drop(~0u, "binary-swap FrameParams for a renderer without a swap socket");
       return renderForSwap(p, *plan, st);
     }
     swap_rounds_logged_ = 0;  // direct send: say it when swapping starts again
+    worker_.runAndWait([&] { images_->hold(p, work, rank, st); });
     for (uint32_t b = 0; b < work.bricks.size(); ++b) {
-      if (work.bricks[b].renderer != link_.rank()) continue;
+      if (work.bricks[b].renderer != rank) continue;
       auto t0 = Clock::now();
-      const BrickImages::Image& c = images_->render(p, work.bricks[b].brick, st, nullptr);
+      const BrickImages::Image* rendered = nullptr;
+      worker_.runAndWait([&] { rendered = &images_->render(p, work.bricks[b].brick, st, nullptr); });
+      const BrickImages::Image& c = *rendered;
       st.work_ms += msSince(t0);
       st.active = unite(st.active, c.active);
       st.active_pixels += c.active.area();
@@ -175,21 +190,24 @@ class Stage {
     link_.report(proto::encode(st, link_.rank()));
   }
 
-  // Binary swap: this renderer's one brick, rendered on the worker, then composited with the
-  // others' by swapping halves (advanceRounds); the finished band goes straight to the display
-  // as strips, as a compositor's region would.
+  // Binary swap: this renderer's one brick, loaded if need be and rendered on the worker,
+  // then composited with the others' by swapping halves (advanceRounds); the finished band
+  // goes straight to the display as strips, as a compositor's region would.
   void renderForSwap(const proto::FrameParams& p, const SwapPlan& plan, const proto::StageStats& st) {
-    rendering_ = SwapFrame{p, st, plan, nullptr, {}};
+    rendering_ = SwapFrame{p, st, plan, nullptr, {}, false};
     const BrickBox brick = p.sortLast()->bricks[plan.brick].brick;
     const BrickImages::Image* in_rounds = swapping_ ? swapping_->c : nullptr;  // its image must outlive this render
-    worker_.start([this, brick, in_rounds] {
+    worker_.start([this, brick, in_rounds, rank = link_.rank()] {
       SwapFrame& f = *rendering_;  // this thread's alone until takeDone()
       try {
+        images_->hold(f.p, *f.p.sortLast(), rank, f.st);
         auto t0 = Clock::now();
         f.c = &images_->render(f.p, brick, f.st, in_rounds);
         f.st.work_ms += msSince(t0);
       } catch (const std::exception& e) {
         f.error = e.what();
+      } catch (...) {
+        f.error = "unknown exception";
       }
     });
   }
@@ -204,49 +222,62 @@ class Stage {
     }
   }
 
-  void startRounds() {
-    if (swapping_ || !rendering_ || worker_.busy()) return;
-    swapping_ = std::move(rendering_);
-    rendering_.reset();
-    SwapFrame& f = *swapping_;
-    f.st.active = f.c->active, f.st.active_pixels = f.c->active.area();
-    if (f.plan.rounds.size() != swap_rounds_logged_) {  // said when the farm's shape changes
-      swap_rounds_logged_ = f.plan.rounds.size();
-      spdlog::info("frame={} binary swap among {} renderers: {} rounds, {}", f.p.frame, f.p.sortLast()->swap.size(),
-                   f.plan.rounds.size(),
-                   f.plan.folded ? fmt::format("image folded into renderer {}'s", f.plan.rounds[0].partner)
-                                 : fmt::format("band rows [{}, {})", f.plan.band.y, f.plan.band.y + f.plan.band.h));
-    }
-    swap_->start(f.p, link_.rank(), f.plan, f.c->image, f.c->active);
-  }
-
-  // Plays the rounds the partners' pieces allow, never waiting. A frame given up (a new
-  // epoch, a lost partner, a cancel) reports nothing: the master issues it again.
+  // Plays the rounds the partners' pieces allow, never waiting, for the frame in its rounds
+  // and then for the rendered one after it. A frame given up (a new epoch, a lost partner, a
+  // cancel) reports nothing: the master issues it again. A frame whose rounds throw costs
+  // that frame, as a render that throws does.
   void advanceRounds() {
-    for (startRounds(); swapping_; startRounds()) {
-      SwapFrame& f = *swapping_;
-      if (stopped() || link_.masterLost() || !wanted(f.p)) {
+    while (swapping_ || (rendering_ && !worker_.busy())) {
+      if (!swapping_) {
+        swapping_ = std::move(rendering_);
+        rendering_.reset();
+      }
+      try {
+        if (!playRounds(*swapping_)) return;  // a partner's piece is awaited
+      } catch (const std::exception& e) {
         swap_->abandon();
         link_.clearWaiting();
-        spdlog::info("frame={} epoch={}: binary swap given up", f.p.frame, f.p.epoch);
-        swapping_.reset();
-        continue;
+        ++frames_failed_;
+        spdlog::error("frame={} binary swap failed: {} frames_failed={}", swapping_->p.frame, e.what(), frames_failed_);
       }
-      auto send = [&](const std::string& endpoint, std::vector<std::byte>&& bytes) { sendBytes(socketFor(endpoint), std::move(bytes)); };
-      if (const auto partner = swap_->advance(send, f.st, drops_)) {
-        link_.setWaiting(f.p.frame, *partner);  // said in the heartbeats, for the master's blame
-        return;
-      }
-      link_.clearWaiting();
-      Layer band = swap_->finish();
-      auto t1 = Clock::now();
-      if (!f.plan.band.empty()) sendBand(f.p, band, f.st);  // folded, or no rows: the display expects none (proto::swapBand)
-      swap_->recycle(std::move(band));
-      f.st.encode_ms += msSince(t1);
-      f.st.dropped = drops_.total();
-      link_.report(proto::encode(f.st, link_.rank()));
       swapping_.reset();
     }
+  }
+
+  // True when the frame is over: its band sent and its stats reported, or given up.
+  bool playRounds(SwapFrame& f) {
+    if (stopped() || link_.masterLost() || !wanted(f.p)) {
+      swap_->abandon();
+      link_.clearWaiting();
+      spdlog::info("frame={} epoch={}: binary swap given up", f.p.frame, f.p.epoch);
+      return true;
+    }
+    if (!f.started) {
+      f.started = true;
+      f.st.active = f.c->active, f.st.active_pixels = f.c->active.area();
+      if (f.plan.rounds.size() != swap_rounds_logged_) {  // said when the farm's shape changes
+        swap_rounds_logged_ = f.plan.rounds.size();
+        spdlog::info("frame={} binary swap among {} renderers: {} rounds, {}", f.p.frame, f.p.sortLast()->swap.size(),
+                     f.plan.rounds.size(),
+                     f.plan.folded ? fmt::format("image folded into renderer {}'s", f.plan.rounds[0].partner)
+                                   : fmt::format("band rows [{}, {})", f.plan.band.y, f.plan.band.y + f.plan.band.h));
+      }
+      swap_->start(f.p, link_.rank(), f.plan, f.c->image, f.c->active);
+    }
+    auto send = [&](const std::string& endpoint, std::vector<std::byte>&& bytes) { sendBytes(socketFor(endpoint), std::move(bytes)); };
+    if (const auto partner = swap_->advance(send, f.st, drops_)) {
+      link_.setWaiting(f.p.frame, *partner);  // said in the heartbeats, for the master's blame
+      return false;
+    }
+    link_.clearWaiting();
+    Layer band = swap_->finish();
+    auto t1 = Clock::now();
+    if (!f.plan.band.empty()) sendBand(f.p, band, f.st);  // folded, or no rows: the display expects none (proto::swapBand)
+    swap_->recycle(std::move(band));
+    f.st.encode_ms += msSince(t1);
+    f.st.dropped = drops_.total();
+    link_.report(proto::encode(f.st, link_.rank()));
+    return true;
   }
 
   void renderTiles(const proto::FrameParams& p, const proto::SortFirstWork& work, proto::StageStats& st) {
@@ -347,14 +378,6 @@ class Stage {
   uint64_t first_wanted_ = 0;  // frames below it were cancelled
   uint64_t frames_failed_ = 0;
   DropCounter drops_;
-  // A binary-swap frame: rendered (on the worker), then its rounds played.
-  struct SwapFrame {
-    proto::FrameParams p;
-    proto::StageStats st;
-    SwapPlan plan;
-    const BrickImages::Image* c = nullptr;  // in images_
-    std::string error;          // the render threw
-  };
   std::optional<SwapFrame> rendering_;  // on the worker, or rendered and waiting for the rounds before it
   std::optional<SwapFrame> swapping_;   // its rounds in progress (swap_)
   RenderWorker worker_;  // last: destroyed first, after its job, while what the job uses lives

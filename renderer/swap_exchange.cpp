@@ -161,20 +161,4 @@ void SwapExchange::abandon() {
   run_.reset();
 }
 
-std::optional<Layer> SwapExchange::run(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan,
-                                       const ImageF& img, const Rect& active, const Send& send, const Idle& idle,
-                                       proto::StageStats& st, DropCounter& drops) {
-  start(p, me, plan, img, active);
-  while (const auto partner = advance(send, st, drops)) {
-    const auto t0 = Clock::now();
-    const bool go_on = idle(50, *partner);
-    st.wait_ms += msSince(t0);
-    if (!go_on) {
-      abandon();
-      return std::nullopt;
-    }
-  }
-  return finish();
-}
-
 }  // namespace tessera::renderer

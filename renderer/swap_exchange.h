@@ -51,16 +51,7 @@ class SwapExchange {
   Layer finish();
   void abandon();  // the frame was given up: a new epoch, a cancel, Shutdown, the master's loss
 
-  // Waits up to `ms` for any socket of the stage (this one included, then receive()) while
-  // renderer `partner`'s piece is awaited, and says whether frame p is still wanted.
-  using Idle = std::function<bool(int ms, uint32_t partner)>;
-  // start() and advance() until the rounds end, or nullopt when `idle` gives the frame up (a
-  // lost partner ends in a new epoch, a silent one at the master's frame deadline); the time
-  // in `idle` is st.wait_ms.
-  std::optional<Layer> run(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan, const ImageF& img,
-                           const Rect& active, const Send& send, const Idle& idle, proto::StageStats& st,
-                           DropCounter& drops);
-  // A band run() returned, once sent: its memory serves the next frame's rounds.
+  // A band finish() returned, once sent: its memory serves the next frame's rounds.
   void recycle(Layer&& l);
 
  private:

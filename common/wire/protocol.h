@@ -294,8 +294,8 @@ struct StageStats {                            // renderer/compositor -> master,
   uint32_t step = 0, step_hits = 0, step_misses = 0;
   uint64_t bytes_read = 0;
   double prefetch_ms = 0;
-  // Binary-swap renderers: time spent waiting for partners' pieces (neither rendering nor
-  // blending): a slow link or a slower partner, which the renderer's core sits out.
+  // Binary-swap renderers: time sat idle in the frame's rounds, a partner's piece awaited
+  // and no next frame to render meanwhile (a slow link, a slower partner, no frame issued).
   double wait_ms = 0;
   bool operator==(const StageStats&) const = default;
 };

@@ -15,9 +15,10 @@
 #     --cut A,B,K  once K frames are done, host A loses its route to host B (a blackhole
 #              route: what A sends to B vanishes, as behind a failed link, and so B's TCP to A
 #              stalls too, its acknowledgements lost; both still reach the other hosts)
-#     --pin-renderers  renderer i runs on core (i-1) mod (cores) alone among the renderers, as
-#              on hosts of their own (set TESSERA_THREADS=1 too); the other stages float. With
-#              as many renderers as cores, a renderer's idle time is idle, not lent to another.
+#     --pin-renderers  renderer i runs on the i-th core this script may use (round robin),
+#              with one ray-casting thread unless TESSERA_THREADS says otherwise, as on hosts
+#              of their own; the other stages float. With as many renderers as cores, a
+#              renderer's idle time is idle, not lent to another renderer.
 # The farm's settings come from the environment as for tessera-up (TESSERA_RENDERERS,
 # TESSERA_COMPOSITORS, TESSERA_FRAMES, TESSERA_CODEC, TESSERA_SCENE...). links.tsv has one
 # line per host: host, bytes it sent, bytes it received, packets it sent, packets it received
@@ -102,7 +103,14 @@ export TESSERA_ENDPOINTS="tcp://$(cat "$state/hosts/master.ip"):5550"
 export TESSERA_DISPLAY_HOST=$(cat "$state/hosts/display.ip")
 export TESSERA_KEYS="$state/keys" TESSERA_CURVE=on TESSERA_WINDOW=off TESSERA_OUT="$out"
 export EMULATED_CLUSTER_STATE="$state"
-[ -n "$pin" ] && nproc > "$state/pin-renderers"
+if [ -n "$pin" ]; then
+  command -v taskset >/dev/null || { echo "emulated_cluster.sh: --pin-renderers needs taskset (util-linux)" >&2; exit 2; }
+  cpus=()  # the cores this process may run on, e.g. "0-1" or "2,5-6"
+  IFS=, read -ra ranges <<<"$(awk '/^Cpus_allowed_list/ {print $2}' /proc/self/status)"
+  for r in "${ranges[@]}"; do for ((c = ${r%-*}; c <= ${r#*-}; c++)); do cpus+=("$c"); done; done
+  echo "${cpus[*]}" > "$state/pin-renderers"
+  export TESSERA_THREADS=${TESSERA_THREADS:-1}
+fi
 echo "emulated cluster: ${#hosts[@]} hosts, links $rate (MTU $mtu), endpoints $TESSERA_ENDPOINTS, output $out"
 if [ -n "$cut" ]; then
   rm -f "$out/metrics.jsonl"

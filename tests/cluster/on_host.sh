@@ -8,8 +8,9 @@ case "$host" in renderer | compositor) host="$host-$TESSERA_REPLICA" ;; esac
 [ -f "$state/hosts/$host.ns" ] || { echo "on_host.sh: no emulated host for $host" >&2; exit 2; }
 export TESSERA_BIND_HOST=$(cat "$state/hosts/$host.ip")
 export TESSERA_ADVERTISE_HOST=ip  # what Swarm tasks use: the address on the route to the master
-pin=()  # --pin-renderers: renderer i on core (i-1) mod cores
+pin=()  # --pin-renderers: renderer i on the i-th allowed core, round robin
 if [ -f "$state/pin-renderers" ] && [ "$TESSERA_SERVICE" = renderer ]; then
-  pin=(taskset -c $(( (TESSERA_REPLICA - 1) % $(cat "$state/pin-renderers") )))
+  read -ra cpus < "$state/pin-renderers"
+  pin=(taskset -c "${cpus[$(( (TESSERA_REPLICA - 1) % ${#cpus[@]} ))]}")
 fi
-exec ip netns exec "$(cat "$state/hosts/$host.ns")" "${pin[@]}" "$@"
+exec ip netns exec "$(cat "$state/hosts/$host.ns")" ${pin[@]+"${pin[@]}"} "$@"

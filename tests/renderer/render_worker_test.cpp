@@ -1,10 +1,11 @@
 // The renderer's worker thread (renderer/render_worker.h): a job runs on another thread, its
-// end makes the descriptor readable for the stage's poll and is taken once, and destroying
-// the worker waits for a job in progress.
+// end makes the descriptor readable for the stage's poll and is taken once, a job the stage
+// waits for rethrows on the stage's thread, and destroying the worker waits for a job in progress.
 #include <gtest/gtest.h>
 #include <poll.h>
 
 #include <atomic>
+#include <stdexcept>
 #include <chrono>
 #include <thread>
 
@@ -52,6 +53,20 @@ TEST(RenderWorker, DestroyingItWaitsForTheJobInProgress) {
     });
   }
   EXPECT_TRUE(finished);
+}
+
+TEST(RenderWorker, RunAndWaitRunsOnItsThreadAndRethrows) {
+  RenderWorker w;
+  std::thread::id ran_on;
+  w.runAndWait([&] { ran_on = std::this_thread::get_id(); });
+  EXPECT_NE(ran_on, std::this_thread::get_id());
+  EXPECT_FALSE(w.busy());
+  EXPECT_FALSE(readable(w.fd(), 0)) << "its end was taken";
+  EXPECT_THROW(w.runAndWait([] { throw std::runtime_error("bad frame"); }), std::runtime_error);
+  EXPECT_FALSE(w.busy()) << "a job that threw leaves the worker idle";
+  int runs = 0;
+  w.runAndWait([&] { ++runs; });
+  EXPECT_EQ(runs, 1);
 }
 
 }  // namespace
