@@ -42,7 +42,6 @@ class SwapExchange {
   // `img` (active within `active`), which must stay alive and unchanged until the rounds end.
   void start(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan, const ImageF& img, const Rect& active);
   bool running() const { return run_.has_value(); }
-  const proto::FrameParams& frame() const { return run_->p; }
   // Plays every round whose partner's piece is held; never waits. Returns the partner whose
   // piece the next round awaits, or nullopt when the rounds are over (then finish()).
   // st gets the bytes sent, the encode and the decode-and-blend times.
