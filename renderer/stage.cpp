@@ -102,7 +102,6 @@ class Stage {
     SwapPlan plan;
     const BrickImages::Image* c = nullptr;  // in images_
     std::string error;                      // the render threw
-    bool started = false;                   // its rounds began (swap_)
   };
 
   bool stopped() const { return shutdown_ || (stop_ && *stop_); }
@@ -120,7 +119,7 @@ class Stage {
   }
 
   // Waits up to `ms` for the master's messages and swap pieces, and takes what came: new
-  // FrameParams are queued (drained before every frame, and while a swap waits), a Roster
+  // FrameParams are queued (between renders and while the worker renders), a Roster
   // admits peers, Shutdown ends the run. Returns the time it waited for them.
   double pump(int ms) {
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0},
@@ -194,7 +193,7 @@ class Stage {
   // then composited with the others' by swapping halves (advanceRounds); the finished band
   // goes straight to the display as strips, as a compositor's region would.
   void renderForSwap(const proto::FrameParams& p, const SwapPlan& plan, const proto::StageStats& st) {
-    rendering_ = SwapFrame{p, st, plan, nullptr, {}, false};
+    rendering_ = SwapFrame{p, st, plan, nullptr, {}};
     const BrickBox brick = p.sortLast()->bricks[plan.brick].brick;
     const BrickImages::Image* in_rounds = swapping_ ? swapping_->c : nullptr;  // its image must outlive this render
     worker_.start([this, brick, in_rounds, rank = link_.rank()] {
@@ -252,8 +251,7 @@ class Stage {
       spdlog::info("frame={} epoch={}: binary swap given up", f.p.frame, f.p.epoch);
       return true;
     }
-    if (!f.started) {
-      f.started = true;
+    if (!swap_->running()) {  // its rounds begin
       f.st.active = f.c->active, f.st.active_pixels = f.c->active.area();
       if (f.plan.rounds.size() != swap_rounds_logged_) {  // said when the farm's shape changes
         swap_rounds_logged_ = f.plan.rounds.size();
