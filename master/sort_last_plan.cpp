@@ -89,9 +89,9 @@ void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
     p.regions.push_back({w.compositors[i].rank, bands[i], w.compositors[i].endpoint});
 }
 
-// One brick per renderer, any count of them (a count that is not a power of two folds:
-// proto::swapSlot); one renderer sends its image straight to the display. Direct send when
-// a renderer has no swap socket.
+// One brick per renderer, any count of them (a count that is not a power of two swaps in
+// groups of its prime factors: proto::swapRadices); one renderer sends its image straight to
+// the display. Direct send when a renderer has no swap socket.
 void SortLastPlan::addSwapPlan(proto::SortLastWork& work, const Workers& w) const {
   if (work.bricks.empty()) return;
   for (const auto& b : work.bricks) {

@@ -170,7 +170,7 @@ class Stage {
       if (!swap_) return drops_.drop(~0u, "binary-swap FrameParams for a renderer without a swap socket");
       return renderForSwap(p, *plan, st);
     }
-    swap_rounds_logged_ = 0;  // direct send: say it when swapping starts again
+    swap_size_logged_ = 0;  // direct send: say it when swapping starts again
     worker_.runAndWait([&] { images_->hold(p, work, rank, st); });
     for (uint32_t b = 0; b < work.bricks.size(); ++b) {
       if (work.bricks[b].renderer != rank) continue;
@@ -253,12 +253,10 @@ class Stage {
     }
     if (!swap_->running()) {  // its rounds begin
       f.st.active = f.c->active, f.st.active_pixels = f.c->active.area();
-      if (f.plan.rounds.size() != swap_rounds_logged_) {  // said when the farm's shape changes
-        swap_rounds_logged_ = f.plan.rounds.size();
-        spdlog::info("frame={} binary swap among {} renderers: {} rounds, {}", f.p.frame, f.p.sortLast()->swap.size(),
-                     f.plan.rounds.size(),
-                     f.plan.folded ? fmt::format("image folded into renderer {}'s", f.plan.rounds[0].partner)
-                                   : fmt::format("band rows [{}, {})", f.plan.band.y, f.plan.band.y + f.plan.band.h));
+      if (f.p.sortLast()->swap.size() != swap_size_logged_) {  // said when the farm's shape changes
+        swap_size_logged_ = f.p.sortLast()->swap.size();
+        spdlog::info("frame={} binary swap among {} renderers: {} rounds, band rows [{}, {})", f.p.frame,
+                     f.p.sortLast()->swap.size(), f.plan.rounds.size(), f.plan.band.y, f.plan.band.y + f.plan.band.h);
       }
       swap_->start(f.p, link_.rank(), f.plan, f.c->image, f.c->active);
     }
@@ -270,7 +268,7 @@ class Stage {
     link_.clearWaiting();
     Layer band = swap_->finish();
     auto t1 = Clock::now();
-    if (!f.plan.band.empty()) sendBand(f.p, band, f.st);  // folded, or no rows: the display expects none (proto::swapBand)
+    if (!f.plan.band.empty()) sendBand(f.p, band, f.st);  // no rows: the display expects none (proto::swapBand)
     swap_->recycle(std::move(band));
     f.st.encode_ms += msSince(t1);
     f.st.dropped = drops_.total();
@@ -367,7 +365,7 @@ class Stage {
   Image8 band8_;                   // a binary swap's band, quantized (the frame's size: strips name screen rows)
   std::map<std::string, zmq::socket_t> pushes_;  // to compositors, swap partners and the display
   std::unique_ptr<SwapExchange> swap_;  // volume scenes
-  size_t swap_rounds_logged_ = 0;
+  size_t swap_size_logged_ = 0;  // renderers in the swap, when last said
   std::string swap_endpoint_;  // what Hello tells the master
   std::deque<proto::FrameParams> queued_;
   const std::atomic<bool>* stop_ = nullptr;

@@ -104,50 +104,75 @@ std::optional<uint32_t> SwapExchange::advance(const Send& send, proto::StageStat
   Run& run = *run_;
   const proto::FrameParams& p = run.p;
   const proto::PixelFormat format = swapFormat(p.format);
-  for (; run.round < run.plan.rounds.size(); ++run.round, run.sent = false) {
+  for (; run.round < run.plan.rounds.size(); ++run.round, run.sent = false, run.front = run.back = 0) {
     const SwapRound& r = run.plan.rounds[run.round];
-    // Round 0 reads the brick image itself; later rounds, the layer blended last round.
+    // Round 0 reads the brick image itself until its first blend; later, the layer blended last.
     auto partOf = [&](const Rect& part) {
-      return run.round == 0 ? viewOf(*run.img, run.active, part) : viewOf(run.mine, part);
+      return run.round == 0 && run.front + run.back == 0 ? viewOf(*run.img, run.active, part) : viewOf(run.mine, part);
     };
-    if (!run.sent && !r.send.empty()) {  // a fold's receiver only receives
+    if (!run.sent) {
       auto t0 = Clock::now();
-      proto::Piece out;
-      out.frame = p.frame;
-      out.epoch = p.epoch;
-      out.renderer = run.me;
-      out.brick = run.plan.brick;
-      out.region = r.send;
-      out.format = format;
-      out.render_ms = st.work_ms;
-      const LayerView sent = partOf(r.send);
-      out.active = sent.rect;
-      packView(sent, format, packed_);
-      out.pixels = std::move(packed_);
-      auto bytes = proto::encode(out, run.me, p.codec);
-      st.bytes_raw += out.pixels.size();
-      st.bytes_encoded += bytes.size();
-      packed_ = std::move(out.pixels);
-      send(r.endpoint, std::move(bytes));
+      for (const SwapPartner& to : r.partners) {
+        if (to.send.empty()) continue;  // fewer rows than bands: it keeps none
+        proto::Piece out;
+        out.frame = p.frame;
+        out.epoch = p.epoch;
+        out.renderer = run.me;
+        out.brick = run.plan.brick;
+        out.region = to.send;
+        out.format = format;
+        out.render_ms = st.work_ms;
+        const LayerView sent = partOf(to.send);
+        out.active = sent.rect;
+        packView(sent, format, packed_);
+        out.pixels = std::move(packed_);
+        auto bytes = proto::encode(out, run.me, p.codec);
+        st.bytes_raw += out.pixels.size();
+        st.bytes_encoded += bytes.size();
+        packed_ = std::move(out.pixels);
+        send(to.endpoint, std::move(bytes));
+      }
       st.encode_ms += msSince(t0);
+      run.sent = true;
     }
-    run.sent = true;
-    if (r.keep.empty()) continue;  // a folding renderer only sends
+    if (r.keep.empty()) continue;  // fewer rows than bands: nothing to receive
 
-    std::optional<Held> in;
-    for (;;) {
-      in = take(p, r.partner, r.keep);
-      if (!in) return r.partner;
-      if (in->piece.format == format) break;
-      drops.drop(r.partner, "swap piece in another pixel format than the frame's");
+    // Partners' pieces are blended as they come, each next to the run blended so far: the
+    // partner just in front of it or just behind it (partners are by digit, front to back).
+    const size_t n_front = (size_t)std::count_if(r.partners.begin(), r.partners.end(),
+                                                 [](const SwapPartner& q) { return q.offset < 0; });
+    const size_t n_back = r.partners.size() - n_front;
+    while (run.front < n_front || run.back < n_back) {
+      const SwapPartner* front = run.front < n_front ? &r.partners[n_front - 1 - run.front] : nullptr;
+      const SwapPartner* back = run.back < n_back ? &r.partners[n_front + run.back] : nullptr;
+      std::optional<Held> in;
+      const SwapPartner* from = nullptr;
+      for (const SwapPartner* q : {front, back}) {
+        if (q && (in = takeIn(p, q->rank, r.keep, format, drops))) {
+          from = q;
+          break;
+        }
+      }
+      if (!in) return (front ? front : back)->rank;
+      auto t1 = Clock::now();
+      Layer blended = blendLayer(partOf(r.keep), in->piece.pixels, in->piece.active, format, from->offset < 0, takeSpare());
+      recycle(std::move(run.mine));
+      run.mine = std::move(blended);
+      ++(from->offset < 0 ? run.front : run.back);
+      st.decode_ms += in->decode_ms + msSince(t1);
     }
-    auto t1 = Clock::now();
-    Layer blended = blendLayer(partOf(r.keep), in->piece.pixels, in->piece.active, format, r.partner_in_front, takeSpare());
-    recycle(std::move(run.mine));
-    run.mine = std::move(blended);
-    st.decode_ms += in->decode_ms + msSince(t1);
   }
   return std::nullopt;
+}
+
+// The held piece of `from` for `region`, in the frame's pixel format (others are dropped).
+std::optional<SwapExchange::Held> SwapExchange::takeIn(const proto::FrameParams& p, uint32_t from, const Rect& region,
+                                                      proto::PixelFormat format, DropCounter& drops) {
+  for (;;) {
+    auto in = take(p, from, region);
+    if (!in || in->piece.format == format) return in;
+    drops.drop(from, "swap piece in another pixel format than the frame's");
+  }
 }
 
 Layer SwapExchange::finish() {

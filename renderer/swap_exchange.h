@@ -46,7 +46,7 @@ class SwapExchange {
   // piece the next round awaits, or nullopt when the rounds are over (then finish()).
   // st gets the bytes sent, the encode and the decode-and-blend times.
   std::optional<uint32_t> advance(const Send& send, proto::StageStats& st, DropCounter& drops);
-  // The finished band (empty when this renderer folded its image into a partner's).
+  // The finished band (empty when it has no rows: proto::swapBand).
   Layer finish();
   void abandon();  // the frame was given up: a new epoch, a cancel, Shutdown, the master's loss
 
@@ -65,7 +65,8 @@ class SwapExchange {
     const ImageF* img = nullptr;
     Rect active;
     size_t round = 0;     // the round being played
-    bool sent = false;    // its piece has left
+    bool sent = false;    // its pieces have left
+    size_t front = 0, back = 0;  // partners in front and behind blended in so far
     Layer mine;           // blended so far (rounds > 0 read it)
   };
   bool stale(const proto::Piece& p) const {
@@ -75,6 +76,8 @@ class SwapExchange {
   void evictFor(size_t bytes, DropCounter& drops);
   std::vector<float> takeSpare();
   std::optional<Held> take(const proto::FrameParams& p, uint32_t from, const Rect& region);
+  std::optional<Held> takeIn(const proto::FrameParams& p, uint32_t from, const Rect& region, proto::PixelFormat format,
+                             DropCounter& drops);
 
   DataInbox inbox_;
   size_t max_held_bytes_;

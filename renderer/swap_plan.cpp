@@ -1,7 +1,5 @@
 #include "renderer/swap_plan.h"
 
-#include <algorithm>
-
 #include "common/wire/swap_rule.h"
 
 namespace tessera::renderer {
@@ -24,30 +22,20 @@ std::optional<SwapPlan> planSwap(const proto::FrameParams& p, uint32_t me) {
   };
   SwapPlan plan;
   plan.brick = (uint32_t)work->order[mine];
-  const size_t places = rank_at.size();
-  const Rect whole{0, 0, p.width, p.height};
-  const auto slot = proto::swapSlot((size_t)mine, places);
-  // Folding (proto::swapSlot): an odd place among the first 2e sends its whole image to the
-  // place before it (which is in front) and is done; that place blends it in first.
-  if (!slot) {
-    plan.rounds.push_back({rank_at[mine - 1], endpointOf(rank_at[mine - 1]), Rect{}, whole, true});
-    plan.folded = true;
-    return plan;
-  }
-  if (mine + 1 < (int)places && !proto::swapSlot(mine + 1, places))
-    plan.rounds.push_back({rank_at[mine + 1], endpointOf(rank_at[mine + 1]), whole, Rect{}, false});
-  Rect part = whole;
-  for (size_t bit = 1; bit < proto::swapSlots(places); bit <<= 1) {
-    const size_t other = proto::swapPlaceOf(*slot ^ bit, places);
-    const bool lower = (*slot & bit) == 0;
+  Rect part{0, 0, p.width, p.height};
+  size_t stride = 1;  // the place value of this round's digit
+  for (size_t k : proto::swapRadices(rank_at.size())) {
+    const size_t digit = ((size_t)mine / stride) % k;
     SwapRound r;
-    r.partner = rank_at[other];
-    r.endpoint = endpointOf(r.partner);
-    r.keep = proto::swapHalf(part, lower);
-    r.send = proto::swapHalf(part, !lower);
-    r.partner_in_front = other < (size_t)mine;
+    r.keep = proto::swapPart(part, k, digit);
+    for (size_t i = 0; i < k; ++i) {
+      if (i == digit) continue;
+      const uint32_t rank = rank_at[(size_t)mine + (i * stride) - (digit * stride)];
+      r.partners.push_back({rank, endpointOf(rank), proto::swapPart(part, k, i), (int)i - (int)digit});
+    }
+    part = r.keep;
     plan.rounds.push_back(std::move(r));
-    part = plan.rounds.back().keep;
+    stride *= k;
   }
   plan.band = part;
   return plan;

@@ -1,12 +1,28 @@
 #include "common/wire/swap_rule.h"
 
-#include <bit>
-
 namespace tessera::proto {
 
-Rect swapHalf(const Rect& part, bool upper) {
-  const int top = part.h / 2;
-  return upper ? Rect{part.x, part.y, part.w, top} : Rect{part.x, part.y + top, part.w, part.h - top};
+std::vector<size_t> swapRadices(size_t places) {
+  std::vector<size_t> radices;
+  for (size_t f = 2; f * f <= places; ++f)
+    while (places % f == 0) radices.push_back(f), places /= f;
+  if (places > 1) radices.push_back(places);
+  return radices;
+}
+
+Rect swapPart(const Rect& part, size_t k, size_t i) {
+  const int y0 = (int)((int64_t)part.h * (int64_t)i / (int64_t)k);
+  const int y1 = (int)((int64_t)part.h * (int64_t)(i + 1) / (int64_t)k);
+  return Rect{part.x, part.y + y0, part.w, y1 - y0};
+}
+
+Rect swapFinal(size_t place, size_t places, int width, int height) {
+  Rect part{0, 0, width, height};
+  for (size_t k : swapRadices(places)) {
+    part = swapPart(part, k, place % k);
+    place /= k;
+  }
+  return part;
 }
 
 std::optional<Rect> swapBand(const FrameParams& p, uint32_t me) {
@@ -16,25 +32,9 @@ std::optional<Rect> swapBand(const FrameParams& p, uint32_t me) {
   for (size_t i = 0; i < work->order.size(); ++i)
     if (work->bricks[work->order[i]].renderer == me) place = i;
   if (place == work->order.size()) return std::nullopt;
-  const auto slot = swapSlot(place, work->order.size());
-  if (!slot) return std::nullopt;
-  Rect part{0, 0, p.width, p.height};
-  for (size_t bit = 1; bit < swapSlots(work->order.size()); bit <<= 1) part = swapHalf(part, (*slot & bit) == 0);
+  const Rect part = swapFinal(place, work->order.size(), p.width, p.height);
   if (part.empty()) return std::nullopt;  // fewer rows than bands: this renderer finishes none
   return part;
-}
-
-size_t swapSlots(size_t places) { return places ? std::bit_floor(places) : 0; }
-
-std::optional<size_t> swapSlot(size_t place, size_t places) {
-  const size_t extra = places - swapSlots(places);
-  if (place < 2 * extra) return place % 2 ? std::nullopt : std::optional<size_t>(place / 2);
-  return place - extra;
-}
-
-size_t swapPlaceOf(size_t slot, size_t places) {
-  const size_t extra = places - swapSlots(places);
-  return slot < extra ? 2 * slot : slot + extra;
 }
 
 }  // namespace tessera::proto

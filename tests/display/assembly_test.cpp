@@ -192,10 +192,11 @@ TEST(Assembly, ABinarySwapFrameWaitsForItsRenderersBands) {
   ASSERT_TRUE(a.popNext());
 }
 
-// Three renderers fold (proto::swapSlot): the second in the visibility order sends its image to
-// the first and has no band, so the frame is complete with two bands; strips from the folded
-// one are refused. An image of fewer rows than bands: a renderer without rows is not waited for.
-TEST(Assembly, AFoldedRendererHasNoBandAndIsNotWaitedFor) {
+// Three renderers swap in one round of three (proto::swapRadices): each finishes a third of
+// the rows, by its place in the visibility order, and the frame is complete with the three
+// bands. An image of fewer rows than bands: a renderer without rows is not waited for, and
+// its strips are refused.
+TEST(Assembly, ThreeRenderersFinishAThirdEachAndOneWithoutRowsIsNotWaitedFor) {
   using proto::Role;
   auto swapFrame = [](uint64_t frame, int height) {
     FrameParams p = params(frame, 0);
@@ -209,24 +210,27 @@ TEST(Assembly, AFoldedRendererHasNoBandAndIsNotWaitedFor) {
     return p;
   };
   Assembly a(1 << 20);
-  const FrameParams p = swapFrame(0, 4);
+  const FrameParams p = swapFrame(0, 6);
   a.addParams(p);
-  EXPECT_EQ(Assembly::areaOf(p, {Role::Renderer, 2}), (Rect{0, 0, 8, 2})) << "slot 0: renderer 2 with 0 folded in";
-  EXPECT_TRUE(Assembly::areaOf(p, {Role::Renderer, 0}).empty()) << "renderer 0 folds";
-  EXPECT_EQ(Assembly::areaOf(p, {Role::Renderer, 1}), (Rect{0, 2, 8, 2}));
-  EXPECT_NE(add(a, strips(0, 0), 16, Role::Renderer), "") << "the folded renderer sends no band";
+  EXPECT_EQ(Assembly::areaOf(p, {Role::Renderer, 2}), (Rect{0, 0, 8, 2})) << "place 0: the top third";
+  EXPECT_EQ(Assembly::areaOf(p, {Role::Renderer, 0}), (Rect{0, 2, 8, 2}));
+  EXPECT_EQ(Assembly::areaOf(p, {Role::Renderer, 1}), (Rect{0, 4, 8, 2}));
   EXPECT_EQ(add(a, strips(0, 2), 16, Role::Renderer), "");
-  EXPECT_FALSE(a.popNext());
+  EXPECT_EQ(add(a, strips(0, 0), 16, Role::Renderer), "");
+  EXPECT_FALSE(a.popNext()) << "renderer 1's band is missing";
   EXPECT_EQ(add(a, strips(0, 1), 16, Role::Renderer), "");
   auto f = a.popNext();
   ASSERT_TRUE(f);
-  EXPECT_EQ(f->strips.size(), 2u);
+  EXPECT_EQ(f->strips.size(), 3u);
 
-  a.addParams(swapFrame(1, 1));  // one row, two bands: slot 0 keeps no row (swapHalf gives it h/2)
+  a.addParams(swapFrame(1, 2));  // two rows, three bands: place 0 keeps none (rows 0 * 2 / 3 to 1 * 2 / 3)
+  EXPECT_TRUE(Assembly::areaOf(swapFrame(1, 2), {Role::Renderer, 2}).empty());
+  EXPECT_NE(add(a, strips(1, 2), 16, Role::Renderer), "") << "a renderer without rows sends no band";
+  EXPECT_EQ(add(a, strips(1, 0), 16, Role::Renderer), "");
   EXPECT_EQ(add(a, strips(1, 1), 16, Role::Renderer), "");
-  auto one = a.popNext();
-  ASSERT_TRUE(one) << "complete with the one band that has rows";
-  EXPECT_EQ(one->strips.size(), 1u);
+  auto two = a.popNext();
+  ASSERT_TRUE(two) << "complete with the two bands that have rows";
+  EXPECT_EQ(two->strips.size(), 2u);
 }
 
 // Frame 0 is complete under epoch 1 (direct send) while renderers' bands of its next issue

@@ -72,7 +72,7 @@ void expectOrbitAcrossHosts(int renderers, bool swap) {
 }
 
 TEST(EmulatedCluster, OrbitAcrossHostsMatchesOneProcessRender) { expectOrbitAcrossHosts(2, false); }
-// Three renderers: binary swap with folding (proto::swapSlot) across hosts.
+// Three renderers: binary swap as one round of three (proto::swapRadices) across hosts.
 TEST(EmulatedCluster, BinarySwapAcrossHostsMatchesOneProcessRender) { expectOrbitAcrossHosts(3, true); }
 
 // A link fails during an orbit of 200 frames by 2 renderers while both ends still reach the

@@ -10,12 +10,14 @@
 #include <thread>
 
 #include "common/net/transport.h"
+#include "common/wire/pixels.h"
 #include "renderer/swap_exchange.h"
 
 namespace tessera::renderer {
 namespace {
 
 const std::string kPartner = std::string(16, 'p') + "d";  // a data routing id, as StageLink makes them
+const std::string kPartner8 = std::string(16, 'q') + "d";
 
 proto::Piece piece(uint64_t frame, uint32_t epoch, uint32_t renderer, const Rect& region) {
   proto::Piece p;
@@ -33,14 +35,17 @@ struct Rig {
   zmq::context_t ctx;
   DropCounter drops;
   SwapExchange ex{ctx, 1 << 20, 4096};
-  zmq::socket_t partner{ctx, zmq::socket_type::dealer};
+  zmq::socket_t partner{ctx, zmq::socket_type::dealer}, partner8{ctx, zmq::socket_type::dealer};
   Rig() {
     ex.bind("inproc://swap-exchange-test");
-    ex.setRoster(proto::Roster{1, {{proto::Role::Renderer, 7, kPartner}}}, drops);
+    ex.setRoster(proto::Roster{1, {{proto::Role::Renderer, 7, kPartner}, {proto::Role::Renderer, 8, kPartner8}}}, drops);
     partner.set(zmq::sockopt::routing_id, kPartner);
     partner.connect("inproc://swap-exchange-test");
+    partner8.set(zmq::sockopt::routing_id, kPartner8);
+    partner8.connect("inproc://swap-exchange-test");
   }
   void send(std::vector<std::byte> bytes) { partner.send(zmq::buffer(bytes.data(), bytes.size()), zmq::send_flags::none); }
+  void send8(std::vector<std::byte> bytes) { partner8.send(zmq::buffer(bytes.data(), bytes.size()), zmq::send_flags::none); }
   // Receives until `n` messages were taken in (inproc delivers at once; bounded anyway).
   void settle() {
     for (int i = 0; i < 20; ++i) {
@@ -95,7 +100,7 @@ TEST(SwapExchange, BadPiecesAreCountedStaleOnesDiscardedAndTheRightOneTaken) {
   // A 2-renderer plan: this renderer (rank 9) is behind renderer 7, keeps the lower half.
   SwapPlan plan;
   plan.brick = 1;
-  plan.rounds.push_back({7, "inproc://nowhere", keep, {0, 4, 8, 4}, true});
+  plan.rounds.push_back({keep, {{7, "inproc://nowhere", {0, 4, 8, 4}, -1}}});
   plan.band = keep;
   ImageF img(8, 8);
   std::vector<std::string> sent_to;
@@ -127,7 +132,7 @@ TEST(SwapExchange, HeldPiecesAreBoundedAndTheFarthestFramesGoFirst) {
   EXPECT_GT(rig.drops.total(), 0u) << "evictions are counted";
   // The nearest frame survived the evictions.
   SwapPlan plan;
-  plan.rounds.push_back({7, "x", keep, {0, 4, 8, 4}, false});
+  plan.rounds.push_back({keep, {{7, "x", {0, 4, 8, 4}, 1}}});
   plan.band = keep;
   ImageF img(8, 8);
   proto::StageStats st;
@@ -146,8 +151,8 @@ TEST(SwapExchange, RoundsResumeWhereTheyStoppedAndSendEachPieceOnce) {
   SwapPlan plan;
   plan.brick = 1;
   // Two rounds with renderer 7: keep the upper half, then the upper quarter (in front of 7).
-  plan.rounds.push_back({7, "inproc://round0", {0, 0, 8, 4}, {0, 4, 8, 4}, true});
-  plan.rounds.push_back({7, "inproc://round1", {0, 0, 8, 2}, {0, 2, 8, 2}, true});
+  plan.rounds.push_back({{0, 0, 8, 4}, {{7, "inproc://round0", {0, 4, 8, 4}, -1}}});
+  plan.rounds.push_back({{0, 0, 8, 2}, {{7, "inproc://round1", {0, 2, 8, 2}, -1}}});
   plan.band = {0, 0, 8, 2};
   ImageF img(8, 8);
   for (int y = 0; y < 8; ++y)
@@ -181,6 +186,49 @@ TEST(SwapExchange, RoundsResumeWhereTheyStoppedAndSendEachPieceOnce) {
   EXPECT_EQ(rig.ex.advance(send, st, rig.drops), std::optional<uint32_t>(7));
   rig.ex.abandon();
   EXPECT_FALSE(rig.ex.running());
+  EXPECT_EQ(rig.drops.total(), 0u);
+}
+
+// A round of three (radix-k): this renderer is in front of renderers 7 and 8, in that order.
+// 8's piece comes first and waits, since "over" may only join runs of bricks that are
+// consecutive front to back; the round awaits 7, then blends 7's piece behind its own and
+// 8's behind both. Blending 8's first would show it in front of 7.
+TEST(SwapExchange, ARoundOfThreeBlendsEachPieceNextToTheRunBlendedSoFar) {
+  Rig rig;
+  SwapPlan plan;
+  plan.brick = 0;
+  const Rect keep{0, 0, 2, 1};
+  plan.rounds.push_back({keep, {{7, "inproc://seven", {0, 1, 2, 1}, 1}, {8, "inproc://eight", {0, 2, 2, 1}, 2}}});
+  plan.band = keep;
+  ImageF img(2, 3);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 2; ++x) img.at(x, y)[0] = 0.25f, img.at(x, y)[3] = 0.5f;  // red, half transparent
+  auto uniform = [&](uint32_t from, float r, float g, float a) {
+    ImageF px(2, 1);
+    for (int x = 0; x < 2; ++x) px.at(x, 0)[0] = r, px.at(x, 0)[1] = g, px.at(x, 0)[3] = a;
+    proto::Piece q = piece(3, 1, from, keep);
+    q.active = keep;
+    q.pixels = packPixels(px, {0, 0, 2, 1}, proto::PixelFormat::RGBA16F);
+    return proto::encode(q, from, Codec::None);
+  };
+  std::vector<std::string> sent_to;
+  auto send = [&](const std::string& endpoint, std::vector<std::byte>&&) { sent_to.push_back(endpoint); };
+  proto::StageStats st;
+  rig.ex.setWanted(1, 3);
+  rig.ex.start(frameOf(3, 1, 2, 3), 9, plan, img, {0, 0, 2, 3});
+  rig.send8(uniform(8, 0.0f, 1.0f, 1.0f));  // opaque green, the back
+  rig.settle();
+  EXPECT_EQ(rig.ex.advance(send, st, rig.drops), std::optional<uint32_t>(7)) << "8's piece waits for 7's";
+  EXPECT_EQ(sent_to, (std::vector<std::string>{"inproc://seven", "inproc://eight"})) << "both pieces leave at once";
+  rig.send(uniform(7, 0.5f, 0.0f, 0.5f));  // red, half transparent
+  rig.settle();
+  EXPECT_EQ(rig.ex.advance(send, st, rig.drops), std::nullopt);
+  const Layer band = rig.ex.finish();
+  ASSERT_EQ(band.rect, keep);
+  // Front to back: own (0.25, 0, 0, 0.5), then 7's under 0.5 of light, then 8's under 0.25.
+  EXPECT_FLOAT_EQ(band.img.at(1, 0)[0], 0.25f + 0.5f * 0.5f);
+  EXPECT_FLOAT_EQ(band.img.at(1, 0)[1], 0.25f);
+  EXPECT_FLOAT_EQ(band.img.at(1, 0)[3], 1.0f);
   EXPECT_EQ(rig.drops.total(), 0u);
 }
 

@@ -1,6 +1,7 @@
-// Binary swap's plan and blend (renderer/swap_plan.h): for any visibility order the rounds
-// pair renderers that hold the same part of the image, the finished bands tile the image,
-// and blending halves round by round gives what compositing every brick front to back does.
+// Binary swap's plan and blend, radix-k for any count (renderer/swap_plan.h): for any
+// visibility order a round's group holds the same part of the image, the finished bands tile
+// the image, and blending bands round by round gives what compositing every brick front to
+// back does.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -33,19 +34,21 @@ proto::FrameParams swapFrame(int renderers, std::vector<int> order, int w, int h
   return p;
 }
 
-// Every round has its mirror in the partner's plan (what one sends the other keeps), the
-// bands tile the image once, and a count that is not a power of two folds first: its
-// folding renderers send once and have no band.
+// Every round has its mirror in each partner's plan (what one sends the other keeps, from
+// the same part), the bands tile the image once, and the rounds are the count's prime factors.
 TEST(SwapPlan, PartnersHoldTheSamePartAndBandsTileTheImage) {
   std::mt19937 rng(7);
-  for (int renderers : {1, 2, 3, 4, 5, 6, 7, 8}) {
+  EXPECT_EQ(proto::swapRadices(1), (std::vector<size_t>{}));
+  EXPECT_EQ(proto::swapRadices(8), (std::vector<size_t>{2, 2, 2}));
+  EXPECT_EQ(proto::swapRadices(12), (std::vector<size_t>{2, 2, 3}));
+  EXPECT_EQ(proto::swapRadices(7), (std::vector<size_t>{7}));
+  for (int renderers : {1, 2, 3, 4, 5, 6, 7, 8, 9, 12}) {
     for (int trial = 0; trial < 5; ++trial) {
       std::vector<int> order(renderers);
       std::iota(order.begin(), order.end(), 0);
       std::shuffle(order.begin(), order.end(), rng);
       const int h = trial == 4 ? 3 : 83;  // fewer rows than bands: some finish none
       const auto p = swapFrame(renderers, order, 97, h);
-      const int slots = (int)std::bit_floor((unsigned)renderers), folding = renderers - slots;
       std::map<uint32_t, SwapPlan> plans;
       for (int r = 0; r < renderers; ++r) {
         auto plan = planSwap(p, 10 + r);
@@ -53,29 +56,45 @@ TEST(SwapPlan, PartnersHoldTheSamePartAndBandsTileTheImage) {
         EXPECT_EQ(p.sortLast()->bricks[plan->brick].renderer, (uint32_t)(10 + r));
         plans[10 + r] = *plan;
       }
-      int folded = 0;
       std::vector<int> covered(97 * h, 0);
       for (const auto& [me, plan] : plans) {
-        if (plan.folded) {
-          ++folded;
-          ASSERT_EQ(plan.rounds.size(), 1u);
-          EXPECT_TRUE(plan.band.empty());
-          EXPECT_EQ(plan.rounds[0].send, (Rect{0, 0, 97, h}));
-        } else {
-          if (h >= slots) {
-            EXPECT_FALSE(plan.band.empty()) << "only an image of fewer rows than bands leaves one without rows";
-          }
-          EXPECT_GE(plan.rounds.size(), (size_t)std::countr_zero((unsigned)slots));
-          EXPECT_LE(plan.rounds.size(), (size_t)std::countr_zero((unsigned)slots) + 1);
+        if (h >= renderers) {
+          EXPECT_FALSE(plan.band.empty()) << "only an image of fewer rows than bands leaves one without rows";
         }
-        for (const SwapRound& mine : plan.rounds) {
-          const auto& theirs = plans.at(mine.partner).rounds;
-          auto it = std::find_if(theirs.begin(), theirs.end(), [&](const SwapRound& t) { return t.partner == me; });
-          ASSERT_NE(it, theirs.end()) << renderers << ": partners pair each other";
-          EXPECT_EQ(it->keep, mine.send);  // each sends what the other keeps
-          EXPECT_EQ(it->send, mine.keep);
-          EXPECT_NE(it->partner_in_front, mine.partner_in_front);
-          EXPECT_EQ(unite(mine.keep, mine.send).area(), mine.keep.area() + mine.send.area());
+        EXPECT_EQ(plan.rounds.size(), proto::swapRadices(renderers).size());
+        for (size_t j = 0; j < plan.rounds.size(); ++j) {
+          const SwapRound& mine = plan.rounds[j];
+          const size_t k = proto::swapRadices(renderers)[j];
+          ASSERT_EQ(mine.partners.size(), k - 1);
+          std::vector<Rect> bands{mine.keep};
+          int offset = -(int)k;
+          for (const SwapPartner& q : mine.partners) {
+            EXPECT_GT(q.offset, offset) << "partners by digit, front to back";
+            offset = q.offset;
+            EXPECT_NE(q.offset, 0);
+            const SwapRound& theirs = plans.at(q.rank).rounds[j];
+            EXPECT_EQ(theirs.keep, q.send) << "it keeps what this one sends it";
+            auto back = std::find_if(theirs.partners.begin(), theirs.partners.end(),
+                                     [&](const SwapPartner& t) { return t.rank == me; });
+            ASSERT_NE(back, theirs.partners.end()) << renderers << ": partners name each other";
+            EXPECT_EQ(back->send, mine.keep);
+            EXPECT_EQ(back->offset, -q.offset);
+            bands.push_back(q.send);
+          }
+          // The k bands are rows of one part, one after another, top to bottom by digit.
+          std::sort(bands.begin(), bands.end(), [](const Rect& a, const Rect& b) { return std::pair(a.y, a.h) < std::pair(b.y, b.h); });
+          Rect part = bands[0];
+          for (size_t i = 1; i < bands.size(); ++i) {
+            EXPECT_EQ(bands[i].y, part.y + part.h) << "bands of one part neither overlap nor leave gaps";
+            EXPECT_EQ(bands[i].x, part.x);
+            EXPECT_EQ(bands[i].w, part.w);
+            part.h += bands[i].h;
+          }
+          if (j > 0) {
+            EXPECT_EQ(part, plan.rounds[j - 1].keep) << "a round splits what the one before kept";
+          } else {
+            EXPECT_EQ(part, (Rect{0, 0, 97, h})) << "round 0 splits the whole image";
+          }
         }
         const auto band = proto::swapBand(p, me);
         EXPECT_EQ(band.has_value(), !plan.band.empty()) << "the display expects a band exactly when one is sent";
@@ -85,7 +104,6 @@ TEST(SwapPlan, PartnersHoldTheSamePartAndBandsTileTheImage) {
         for (int y = plan.band.y; y < plan.band.y + plan.band.h; ++y)
           for (int x = plan.band.x; x < plan.band.x + plan.band.w; ++x) ++covered[y * 97 + x];
       }
-      EXPECT_EQ(folded, folding);
       EXPECT_TRUE(std::all_of(covered.begin(), covered.end(), [](int c) { return c == 1; })) << renderers;
     }
   }
@@ -110,13 +128,13 @@ ImageF brickImage(int w, int h, const Rect& active, std::mt19937& rng) {
   return img;
 }
 
-// The swap's result, driven here without sockets (each renderer sends, then blends once its
-// partner's piece is there), against every brick composited front to back.
+// The swap's result, driven here without sockets (each renderer sends, then blends its
+// partners' pieces as they are there), against every brick composited front to back.
 TEST(SwapPlan, RoundsOfBlendsEqualFrontToBackCompositing) {
   const int w = 61, h = 45;
   const auto f = proto::PixelFormat::RGBA16F;
   std::mt19937 rng(3);
-  for (int renderers : {3, 4, 6}) {
+  for (int renderers : {3, 4, 5, 6, 12}) {
     std::vector<int> order(renderers);
     std::iota(order.begin(), order.end(), 0);
     std::shuffle(order.begin(), order.end(), rng);
@@ -139,6 +157,7 @@ TEST(SwapPlan, RoundsOfBlendsEqualFrontToBackCompositing) {
     std::map<uint32_t, Layer> held;
     std::map<uint32_t, size_t> next_round;
     std::map<uint32_t, bool> sent_this;
+    std::map<uint32_t, int> front, back;  // partners blended this round
     std::map<std::pair<uint32_t, uint32_t>, std::pair<Rect, std::vector<std::byte>>> mail;  // (to, from)
     for (int r = 0; r < renderers; ++r) plans[10 + r] = *planSwap(p, 10 + r);
     for (int step = 0; step < 4 * renderers; ++step) {
@@ -147,22 +166,42 @@ TEST(SwapPlan, RoundsOfBlendsEqualFrontToBackCompositing) {
         if (j == plan.rounds.size()) continue;
         const int b = (int)plan.brick;
         const SwapRound& r = plan.rounds[j];
-        auto partOf = [&](const Rect& part) { return j == 0 ? viewOf(images[b], actives[b], part) : viewOf(held[me], part); };
-        if (!sent_this[me] && !r.send.empty()) {
-          const LayerView out = partOf(r.send);
-          auto& m = mail[{r.partner, me}];
-          ASSERT_TRUE(m.second.empty()) << "one piece at a time between two renderers";
-          packView(out, f, m.second);
-          m.first = out.rect;
+        auto partOf = [&](const Rect& part) {
+          return j == 0 && front[me] + back[me] == 0 ? viewOf(images[b], actives[b], part) : viewOf(held[me], part);
+        };
+        if (!sent_this[me]) {
+          for (const SwapPartner& q : r.partners) {
+            if (q.send.empty()) continue;
+            const LayerView out = partOf(q.send);
+            auto& m = mail[{q.rank, me}];
+            ASSERT_TRUE(m.second.empty()) << "one piece at a time between two renderers";
+            packView(out, f, m.second);
+            m.first = out.rect;
+          }
         }
         sent_this[me] = true;
         if (!r.keep.empty()) {
-          auto it = mail.find({me, r.partner});
-          if (it == mail.end()) continue;  // not there yet
-          held[me] = blendLayer(partOf(r.keep), it->second.second, it->second.first, f, r.partner_in_front);
-          mail.erase(it);
+          // Blend what is there, in the order it came (here: by partner, front or back first
+          // by the step), each adjacent to the run blended so far, as SwapExchange does.
+          const int n_front = (int)std::count_if(r.partners.begin(), r.partners.end(), [](auto& q) { return q.offset < 0; });
+          const int n_back = (int)r.partners.size() - n_front;
+          for (bool progress = true; progress;) {
+            progress = false;
+            for (int side : {step % 2, 1 - step % 2}) {
+              const bool in_front = side == 0;
+              if (in_front ? front[me] == n_front : back[me] == n_back) continue;
+              const SwapPartner& q = r.partners[in_front ? n_front - 1 - front[me] : n_front + back[me]];
+              auto it = mail.find({me, q.rank});
+              if (it == mail.end()) continue;
+              held[me] = blendLayer(partOf(r.keep), it->second.second, it->second.first, f, in_front);
+              mail.erase(it);
+              ++(in_front ? front[me] : back[me]);
+              progress = true;
+            }
+          }
+          if (front[me] < n_front || back[me] < n_back) continue;  // not all there yet
         }
-        ++next_round[me], sent_this[me] = false;
+        ++next_round[me], sent_this[me] = false, front[me] = back[me] = 0;
       }
     }
     float worst = 0;
@@ -181,7 +220,7 @@ TEST(SwapPlan, RoundsOfBlendsEqualFrontToBackCompositing) {
     }
     EXPECT_TRUE(mail.empty());
     EXPECT_EQ(pixels, w * h);
-    // Up to four roundings to half floats (2^-11 relative each), far inside the contract's 1/255.
+    // A rounding to half floats per round (2^-11 relative each), far inside the contract's 1/255.
     EXPECT_LT(worst, 3e-3f) << renderers;
     EXPECT_GT(worst, 0.0f);  // the pieces really were rounded to half floats
   }
