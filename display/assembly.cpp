@@ -30,7 +30,7 @@ Rect Assembly::areaOf(const proto::FrameParams& p, const Source& s) {
 std::vector<Assembly::Source> Assembly::sourcesOf(const proto::FrameParams& p) {
   std::vector<Source> out;
   if (const auto* work = p.sortLast(); work && !work->swap.empty()) {
-    for (const auto& peer : work->swap)  // those that fold their image into a partner's send no band
+    for (const auto& peer : work->swap)  // one whose band has no rows (fewer rows than bands) sends none
       if (proto::swapBand(p, peer.renderer)) out.push_back({proto::Role::Renderer, peer.renderer});
     return out;
   }

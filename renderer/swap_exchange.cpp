@@ -15,6 +15,9 @@ SwapExchange::SwapExchange(zmq::context_t& ctx, int64_t max_message, size_t max_
     : inbox_(ctx, {proto::Role::Renderer}, max_message, max_held_bytes), max_held_bytes_(max_held_bytes) {}
 
 void SwapExchange::setRoster(const proto::Roster& roster, DropCounter& drops) {
+  const auto renderers = (size_t)std::count_if(roster.members.begin(), roster.members.end(),
+                                               [](const auto& m) { return m.role == proto::Role::Renderer; });
+  max_held_ = std::max(kMaxHeld, 4 * renderers);  // two frames of a round of all of them, twice over
   accept(inbox_.setRoster(roster, drops), drops);
 }
 
@@ -51,7 +54,7 @@ void SwapExchange::evictFor(size_t bytes, DropCounter& drops) {
     held_bytes_ -= h.piece.pixels.size();
     return true;
   });
-  while (!held_.empty() && (held_.size() >= kMaxHeld || held_bytes_ + bytes > max_held_bytes_)) {
+  while (!held_.empty() && (held_.size() >= max_held_ || held_bytes_ + bytes > max_held_bytes_)) {
     auto far = std::max_element(held_.begin(), held_.end(), [](const Held& a, const Held& b) {
       return std::pair(a.piece.epoch, a.piece.frame) < std::pair(b.piece.epoch, b.piece.frame);
     });

@@ -23,7 +23,9 @@ namespace tessera::renderer {
 
 class SwapExchange {
  public:
-  static constexpr size_t kMaxHeld = 64;  // pieces held for later rounds or frames
+  // Pieces held for later rounds or frames, at most: kMaxHeld, or more for a round of a large
+  // prime group (k - 1 pieces a round, and a partner's next frame's as well).
+  static constexpr size_t kMaxHeld = 64;
 
   // `max_held_bytes`: pixel bytes held at most (a few frames' worth).
   SwapExchange(zmq::context_t& ctx, int64_t max_message, size_t max_held_bytes);
@@ -42,8 +44,8 @@ class SwapExchange {
   // `img` (active within `active`), which must stay alive and unchanged until the rounds end.
   void start(const proto::FrameParams& p, uint32_t me, const SwapPlan& plan, const ImageF& img, const Rect& active);
   bool running() const { return run_.has_value(); }
-  // Plays every round whose partner's piece is held; never waits. Returns the partner whose
-  // piece the next round awaits, or nullopt when the rounds are over (then finish()).
+  // Plays every round whose partners' pieces are held; never waits. Returns the partner whose
+  // piece the round awaits, or nullopt when the rounds are over (then finish()).
   // st gets the bytes sent, the encode and the decode-and-blend times.
   std::optional<uint32_t> advance(const Send& send, proto::StageStats& st, DropCounter& drops);
   // The finished band (empty when it has no rows: proto::swapBand).
@@ -67,7 +69,7 @@ class SwapExchange {
     size_t round = 0;     // the round being played
     bool sent = false;    // its pieces have left
     size_t front = 0, back = 0;  // partners in front and behind blended in so far
-    Layer mine;           // blended so far (rounds > 0 read it)
+    Layer mine;           // blended so far (read after a round's first blend)
   };
   bool stale(const proto::Piece& p) const {
     return p.epoch < epoch_ || (p.epoch == epoch_ && p.frame < first_wanted_);
@@ -81,6 +83,7 @@ class SwapExchange {
 
   DataInbox inbox_;
   size_t max_held_bytes_;
+  size_t max_held_ = kMaxHeld;
   uint32_t epoch_ = 0;
   uint64_t first_wanted_ = 0;
   std::vector<Held> held_;

@@ -185,7 +185,7 @@ int main(int argc, char** argv) {
   std::string scene_path;
   int renderers = 4, compositors = 2, views = 6, size = 1024;
   app.add_option("scene", scene_path, "scene file (default: the built-in scene)");
-  // The model's binary swap has no folding (the farm's has): a power of two.
+  // The model's binary swap has no radix-k rounds (the farm's has): a power of two.
   app.add_option("--renderers", renderers, "bricks, one per renderer (a power of two)")->check(CLI::Range(2, 64));
   app.add_option("--compositors", compositors, "compositors of the direct send")->check(CLI::Range(1, 64));
   app.add_option("--views", views, "orbit views, evenly spaced")->check(CLI::Range(1, 360));

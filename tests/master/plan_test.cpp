@@ -100,7 +100,7 @@ TEST(SortLastPlan, SwapPlanForOneBrickEachAndEveryRendererWithASwapSocket) {
   EXPECT_TRUE(fill(no_socket).swap.empty());
   EXPECT_TRUE(plan.needsCompositors(no_socket)) << "its frames go by direct send";
   EXPECT_FALSE(plan.needsCompositors(w));
-  w = {{0, 2, 4}, {{9, "ep9"}}, {"r0", "r2", "r4"}};  // renderer 1 lost: a new split of three, swapped (folding)
+  w = {{0, 2, 4}, {{9, "ep9"}}, {"r0", "r2", "r4"}};  // renderer 1 lost: a new split of three, swapped (radix-k)
   plan.reassign(w);
   work = fill(w);
   ASSERT_EQ(work.bricks.size(), 3u);

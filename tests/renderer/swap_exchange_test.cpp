@@ -229,7 +229,43 @@ TEST(SwapExchange, ARoundOfThreeBlendsEachPieceNextToTheRunBlendedSoFar) {
   EXPECT_FLOAT_EQ(band.img.at(1, 0)[0], 0.25f + 0.5f * 0.5f);
   EXPECT_FLOAT_EQ(band.img.at(1, 0)[1], 0.25f);
   EXPECT_FLOAT_EQ(band.img.at(1, 0)[3], 1.0f);
+
+  // Mirrored: this renderer behind both, 8 in front of 7. 8's piece comes first and waits
+  // for 7's; then 7 goes in front of this one's and 8 in front of both, and 8's opaque green
+  // hides the rest. Blending 8's first would leave 7's red in front of it.
+  plan.rounds[0] = {keep, {{8, "inproc://eight", {0, 1, 2, 1}, -2}, {7, "inproc://seven", {0, 2, 2, 1}, -1}}};
+  auto at = [&](uint64_t frame, uint32_t from, float r, float g, float a) {
+    std::vector<std::byte> bytes = uniform(from, r, g, a);
+    auto q = proto::decodePiece(bytes);
+    q->frame = frame;
+    return proto::encode(*q, from, Codec::None);
+  };
+  rig.ex.setWanted(1, 4);
+  rig.ex.start(frameOf(4, 1, 2, 3), 9, plan, img, {0, 0, 2, 3});
+  rig.send8(at(4, 8, 0.0f, 1.0f, 1.0f));
+  rig.settle();
+  EXPECT_EQ(rig.ex.advance(send, st, rig.drops), std::optional<uint32_t>(7)) << "8's piece waits for 7's";
+  rig.send(at(4, 7, 0.5f, 0.0f, 0.5f));
+  rig.settle();
+  EXPECT_EQ(rig.ex.advance(send, st, rig.drops), std::nullopt);
+  const Layer behind = rig.ex.finish();
+  EXPECT_FLOAT_EQ(behind.img.at(0, 0)[0], 0.0f);
+  EXPECT_FLOAT_EQ(behind.img.at(0, 0)[1], 1.0f);
   EXPECT_EQ(rig.drops.total(), 0u);
+}
+
+// A round of many (a large prime count of renderers: k - 1 pieces a round) may hold more
+// pieces than kMaxHeld: the bound grows with the roster's renderers.
+TEST(SwapExchange, ALargeRosterMayHoldMorePieces) {
+  Rig rig;
+  proto::Roster roster{2, {{proto::Role::Renderer, 7, kPartner}, {proto::Role::Renderer, 8, kPartner8}}};
+  for (uint32_t r = 20; r < 50; ++r) roster.members.push_back({proto::Role::Renderer, r, std::string(16, (char)('A' + r - 20)) + "d"});
+  rig.ex.setRoster(roster, rig.drops);
+  const Rect keep{0, 0, 8, 4};
+  for (uint64_t f = 11; f < 111; ++f)  // 100 pieces of 32 bytes: within the byte bound, over kMaxHeld
+    rig.send(proto::encode(piece(f, 1, 7, keep), 7, Codec::None));
+  rig.settle();
+  EXPECT_EQ(rig.drops.total(), 0u) << "nothing evicted";
 }
 
 }  // namespace
