@@ -13,7 +13,7 @@ namespace tessera::proto {
 
 // The rounds' group sizes for `places` renderers: its prime factors, smallest first (a power
 // of two: binary swap, pairs in every round; 3: one round of three; 6: pairs, then threes).
-// Place q's digits in this mixed radix (q = d0 + k0 (d1 + k1 (d2 ...)))) say its groups: in
+// Place q's digits in this mixed radix (q = d0 + k0 (d1 + k1 (d2 ...))) say its groups: in
 // round j it shares the round with the places that differ from it in digit j alone.
 std::vector<size_t> swapRadices(size_t places);
 // Part `i` of `k` row bands of `part` (band 0 on top; sizes differ by one row at most).
