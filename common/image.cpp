@@ -39,6 +39,11 @@ ImageF::ImageF(int w, int h, std::vector<float>&& storage) : width(w), height(h)
   px.assign((size_t)w * h * 4, 0.0f);
 }
 
+void ImageF::clear(const Rect& dirty) {
+  const Rect r = intersect(dirty, Rect{0, 0, width, height});
+  for (int y = r.y; y < r.y + r.h; ++y) std::fill_n(at(r.x, y), 4 * (size_t)r.w, 0.0f);
+}
+
 Image8::Image8(int w, int h) : width(w), height(h) {
   checkSize(w, h);
   px.assign((size_t)w * h * 4, 0);

@@ -27,6 +27,11 @@ struct ImageF {
   // the image it no longer needs, and the new one costs a clear instead of fresh pages (a
   // 1024^2 image is 4096 pages to fault in and zero: ~5 ms of kernel time per frame).
   ImageF(int w, int h, std::vector<float>&& storage);
+  // Transparent black again, clearing only `dirty` (clipped to the image): for an image whose
+  // pixels outside `dirty` are transparent already, e.g. its active region. A renderer's brick
+  // image covers a third of a 1024^2 frame or less, and clearing all 16 MB of it was 2% of a
+  // farm renderer's time.
+  void clear(const Rect& dirty);
   float* at(int x, int y) { return &px[4 * ((size_t)y * width + x)]; }
   const float* at(int x, int y) const { return &px[4 * ((size_t)y * width + x)]; }
   bool operator==(const ImageF&) const = default;

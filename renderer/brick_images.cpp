@@ -69,6 +69,7 @@ const BrickImages::Image& BrickImages::render(const proto::FrameParams& p, const
   if (images_.size() >= 2) {  // a renderer may own two bricks after a failure
     auto oldest = images_.begin();
     if (&*oldest == in_rounds) ++oldest;  // an end of the deque: the other entry stays in place
+    oldest->image.clear(oldest->active);  // all it drew: the rest of it is transparent
     spare = std::move(oldest->image);
     images_.erase(oldest);
   }

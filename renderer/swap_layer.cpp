@@ -10,6 +10,20 @@ namespace {
 
 Rect local(const Rect& r, const Rect& origin) { return {r.x - origin.x, r.y - origin.y, r.w, r.h}; }
 
+// A w x h image in `storage`'s memory, transparent outside `keep`, whose pixels the caller
+// writes next (clearing them too was a third of a layer's blending time).
+ImageF clearedOutside(int w, int h, std::vector<float>&& storage, const Rect& keep) {
+  ImageF img;
+  img.width = w, img.height = h;
+  img.px = std::move(storage);
+  img.px.resize((size_t)w * h * 4);
+  img.clear({0, 0, w, keep.y});
+  img.clear({0, keep.y + keep.h, w, h - keep.y - keep.h});
+  img.clear({0, keep.y, keep.x, keep.h});
+  img.clear({keep.x + keep.w, keep.y, w - keep.x - keep.w, keep.h});
+  return img;
+}
+
 }  // namespace
 
 void packView(const LayerView& v, proto::PixelFormat f, std::vector<std::byte>& out) {
@@ -22,14 +36,15 @@ Layer blendLayer(const LayerView& mine, std::span<const std::byte> pixels, const
   Layer out;
   out.rect = unite(mine.rect, theirs);
   if (out.rect.empty()) return out;
-  out.img = ImageF(out.rect.w, out.rect.h, std::move(storage));
   const Rect at = local(mine.rect, out.rect);
   auto row = [&](int y) { return mine.img->at(mine.rect.x - mine.covers.x, mine.rect.y - mine.covers.y + y); };
   if (!partner_in_front) {  // mine first, theirs under it
+    out.img = clearedOutside(out.rect.w, out.rect.h, std::move(storage), at);
     for (int y = 0; y < at.h; ++y) std::memcpy(out.img.at(at.x, at.y + y), row(y), sizeof(float) * 4 * at.w);
     if (!theirs.empty()) compositeUnder(out.img, out.rect, pixels, theirs, f);
     return out;
   }
+  out.img = ImageF(out.rect.w, out.rect.h, std::move(storage));
   if (!theirs.empty()) compositeUnder(out.img, out.rect, pixels, theirs, f);  // onto transparent black: theirs exactly
   for (int y = 0; y < at.h; ++y) {  // then mine under it, as the compositors blend
     float* d = out.img.at(at.x, at.y + y);

@@ -21,6 +21,12 @@ RenderStats& RenderStats::operator+=(const RenderStats& o) {
 
 Brick wholeVolume(const Volume& v) { return Brick{{0, 0, 0}, v.dims}; }
 
+ImageF takeRecycled(int width, int height, ImageF&& recycled) {
+  if (recycled.width == width && recycled.height == height && recycled.px.size() == (size_t)width * height * 4)
+    return std::move(recycled);
+  return ImageF(width, height, std::move(recycled.px));
+}
+
 void checkRenderArguments(const char* who, const Volume& v, int width, int height, const Brick& brick,
                           const Quality& q) {
   const std::string name(who);

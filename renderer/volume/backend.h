@@ -38,10 +38,15 @@ class VolumeBackend {
   // outside the brick's screen footprint stay transparent; `active` receives the bounding
   // rectangle of pixels with alpha > 0. Counting every skipped sample has a cost: without
   // `stats` a backend may leave it out. `recycled`: an image the caller no longer needs,
-  // whose memory the result takes (ImageF's storage constructor).
+  // whose memory the result takes: as it is when it is transparent and width x height (the
+  // caller cleared what it had drawn, ImageF::clear), cleared when of another size.
   virtual ImageF render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
                         RenderStats* stats = nullptr, Rect* active = nullptr, ImageF recycled = {}) const = 0;
 };
+
+// The image a backend renders into: `recycled` as it is when it has the size, else cleared
+// in its memory (see VolumeBackend::render).
+ImageF takeRecycled(int width, int height, ImageF&& recycled);
 
 // The arguments every backend refuses the same way: a non-positive image size, a brick
 // outside the volume or empty, a step that is not positive and finite. Throws

@@ -286,7 +286,7 @@ ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const 
 
   const RayGenerator gen(cam, width, height);  // validates the camera
   const VolumeGeometry geom(v);
-  ImageF img(width, height, std::move(recycled.px));
+  ImageF img = takeRecycled(width, height, std::move(recycled));
   const Rect fp = brickFootprint(gen, geom, brick, width, height);
   if (active) *active = Rect{};
   if (stats) *stats = RenderStats{};

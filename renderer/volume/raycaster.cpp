@@ -224,11 +224,10 @@ class TileWorker {
           wanted |= 1u << i;
         }
         if (!wanted) continue;
-        RaySpan spans[kSpanLanes];
-        for (unsigned hits = raySpans(f_.rows, px0, py, n, lo, hi, spans) & wanted; hits; hits &= hits - 1) {
+        for (unsigned hits = raySpans(f_.rows, px0, py, n, lo, hi, lanes_) & wanted; hits; hits &= hits - 1) {
           const int i = std::countr_zero(hits);
           pending_[n_pending_] = Pending{px0 + i, py, 0};
-          spans_[n_pending_++] = spans[i];
+          spans_[n_pending_++] = lanes_[i];
           if (n_pending_ == kBatch) flush();
         }
       }
@@ -294,6 +293,7 @@ class TileWorker {
   int ax0_, ay0_, ax1_ = -1, ay1_ = -1;
   Pending pending_[kBatch];
   RaySpan spans_[kBatch];
+  RaySpan lanes_[kSpanLanes];  // raySpans' output, a member: initialized once, not per call
   int n_pending_ = 0;
 };
 
@@ -308,7 +308,7 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
 
   const RayGenerator gen(cam, width, height);  // validates the camera
   const VolumeGeometry geom(v);
-  ImageF img(width, height, std::move(recycled.px));
+  ImageF img = takeRecycled(width, height, std::move(recycled));
   const Rect fp = brickFootprint(gen, geom, brick, width, height);
 
   std::optional<ShadeParams> shade;

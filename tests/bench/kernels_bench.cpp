@@ -4,7 +4,10 @@
 // Counters: items_per_second = samples, blocks or pixels; bytes_per_second = input bytes.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <bit>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <random>
 #include <vector>
@@ -15,6 +18,7 @@
 #include "compositor/over.h"
 #include "renderer/volume/kernels.h"
 #include "renderer/volume/minmax.h"
+#include "renderer/volume/ray_setup.h"
 #include "renderer/volume/raycaster.h"
 #include "renderer/volume/tf_table.h"
 
@@ -96,6 +100,33 @@ BENCHMARK_CAPTURE(BM_RenderTile, default_skip, "default", true)->Unit(benchmark:
 BENCHMARK_CAPTURE(BM_RenderTile, default_noskip, "default", false)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RenderTile, fast_skip, "fast", true)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RenderTile, reference_32px, "reference", false)->Unit(benchmark::kMillisecond);
+
+// Ray set-up of a 1024^2 frame, eight rays at a time (raySpans, the CPU's instruction set):
+// a farm's renderer sets up every ray of its brick's footprint, once per brick it renders.
+// The 256^3 volume whole, and the front upper quarter a renderer of four holds.
+void BM_RaySpans(benchmark::State& state, bool quarter) {
+  const Scene sc = defaultScene();
+  Volume v;
+  v.dims = {256, 256, 256};
+  const renderer::VolumeGeometry g(v);
+  const RayGenerator gen(sc.camera, kSide, kSide);
+  const BrickBox brick = quarter ? BrickBox{{0, 128, 128}, {256, 256, 256}} : BrickBox{{0, 0, 0}, {256, 256, 256}};
+  const renderer::SpanRow row(gen, g, brick, brick, 1.0 / 256);
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  double lo[renderer::kSpanLanes], hi[renderer::kSpanLanes];
+  std::fill_n(lo, renderer::kSpanLanes, -kInf);
+  std::fill_n(hi, renderer::kSpanLanes, kInf);
+  renderer::RaySpan spans[renderer::kSpanLanes];
+  int64_t hits = 0;
+  for (auto _ : state)
+    for (int y = 0; y < kSide; ++y)
+      for (int x = 0; x < kSide; x += renderer::kSpanLanes)
+        hits += std::popcount(renderer::raySpans(row, x, y, renderer::kSpanLanes, lo, hi, spans));
+  state.SetItemsProcessed(int64_t(state.iterations()) * kSide * kSide);
+  state.counters["hits"] = double(hits) / double(state.iterations());
+}
+BENCHMARK_CAPTURE(BM_RaySpans, whole, false)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RaySpans, quarter, true)->Unit(benchmark::kMillisecond);
 
 // Which 8^3 blocks of a 256^3 volume are empty under the default transfer function:
 // exact maxAlpha over each block's value range, and the table-based test the kernels use.
