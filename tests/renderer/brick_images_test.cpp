@@ -11,25 +11,35 @@
 namespace tessera::renderer {
 namespace {
 
-TEST(BrickImages, AnUnchangedFrameIsReusedAndTheImageInTheRoundsIsNeverRecycled) {
-  Scene scene = defaultScene();
-  scene.volume = GeneratorSpec{"hollow-shell", 32, 1, {1, 1, 1}};
-  fixVolumeRange(scene);
-  BrickImages images(scene, BackendKind::Cpu, 64, 1);
+// A 32^3 shell seen by `side` x `side` frames; at(x) pans the camera by x along the x axis.
+struct Shell {
+  Scene scene;
   proto::FrameParams p;
-  p.width = p.height = 24;
-  p.camera = scene.camera;
-  p.quality = scene.quality;
+  explicit Shell(int side) {
+    scene = defaultScene();
+    scene.volume = GeneratorSpec{"hollow-shell", 32, 1, {1, 1, 1}};
+    fixVolumeRange(scene);
+    p.width = p.height = side;
+    p.camera = scene.camera;
+    p.quality = scene.quality;
+  }
+  proto::FrameParams at(double x, bool pan = false) const {
+    proto::FrameParams q = p;
+    q.camera.eye[0] += x;
+    if (pan) q.camera.target[0] += x;
+    return q;
+  }
+};
+
+TEST(BrickImages, AnUnchangedFrameIsReusedAndTheImageInTheRoundsIsNeverRecycled) {
+  const Shell shell(24);
+  BrickImages images(shell.scene, BackendKind::Cpu, 64, 1);
   proto::SortLastWork work;
   const BrickBox brick{{0, 0, 0}, {32, 32, 32}};
   work.bricks.push_back({0, brick});
   proto::StageStats st;
-  images.hold(p, work, 0, st);
-  auto at = [&](double x) {
-    proto::FrameParams q = p;
-    q.camera.eye[0] += x;
-    return q;
-  };
+  images.hold(shell.p, work, 0, st);
+  auto at = [&](double x) { return shell.at(x); };
 
   const BrickImages::Image& a = images.render(at(0), brick, st, nullptr);
   EXPECT_EQ(&images.render(at(0), brick, st, nullptr), &a) << "unchanged inputs: the same image";
@@ -54,25 +64,15 @@ TEST(BrickImages, AnUnchangedFrameIsReusedAndTheImageInTheRoundsIsNeverRecycled)
 // A recycled image is rendered into as it is (clearing all of it was 2% of a farm renderer's
 // time): what it drew before must be gone, and the image equal to one rendered fresh.
 TEST(BrickImages, ARecycledImageEqualsAFreshOne) {
-  Scene scene = defaultScene();
-  scene.volume = GeneratorSpec{"hollow-shell", 32, 1, {1, 1, 1}};
-  fixVolumeRange(scene);
-  proto::FrameParams p;
-  p.width = p.height = 40;
-  p.camera = scene.camera;
-  p.quality = scene.quality;
+  const Shell shell(40);
   proto::SortLastWork work;
   const BrickBox brick{{0, 0, 0}, {32, 32, 16}};
   work.bricks.push_back({0, brick});
-  auto at = [&](double x) {
-    proto::FrameParams q = p;
-    q.camera.eye[0] += x, q.camera.target[0] += x;  // a pan: the brick moves across the image
-    return q;
-  };
+  auto at = [&](double x) { return shell.at(x, true); };  // a pan: the brick moves across the image
   proto::StageStats st;
-  BrickImages fresh(scene, BackendKind::Cpu, 64, 1), reused(scene, BackendKind::Cpu, 64, 1);
-  fresh.hold(p, work, 0, st);
-  reused.hold(p, work, 0, st);
+  BrickImages fresh(shell.scene, BackendKind::Cpu, 64, 1), reused(shell.scene, BackendKind::Cpu, 64, 1);
+  fresh.hold(shell.p, work, 0, st);
+  reused.hold(shell.p, work, 0, st);
   const BrickImages::Image& first = reused.render(at(0.6), brick, st, nullptr);
   const float* memory = first.image.px.data();
   const Rect drawn = first.active;
