@@ -11,7 +11,8 @@ namespace {
 Rect local(const Rect& r, const Rect& origin) { return {r.x - origin.x, r.y - origin.y, r.w, r.h}; }
 
 // A w x h image in `storage`'s memory, transparent outside `keep`, whose pixels the caller
-// writes next (clearing them too was a third of a layer's blending time).
+// writes next (clearing them too was 0.8% of a 4+2 farm renderer's time, about what the
+// blending itself took).
 ImageF clearedOutside(int w, int h, std::vector<float>&& storage, const Rect& keep) {
   ImageF img;
   img.width = w, img.height = h;
