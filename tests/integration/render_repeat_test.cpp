@@ -6,6 +6,7 @@
 
 #include <fstream>
 #include <iterator>
+#include <regex>
 
 #include "tests/integration/farm_util.h"
 
@@ -37,6 +38,29 @@ TEST(RenderRepeat, RepeatedRendersWriteTheImageOfOne) {
     ASSERT_GT(once.size(), 160u * 120 * 16 - 1) << "no float image";
     EXPECT_TRUE(floats(bricks, 3) == once) << bricks << " brick(s): three renders differ from one";
   }
+}
+
+// --stats --repeat N prints the best render's time and the mean of the renders after the first
+// (what the goals' efficiency compares a farm's frames a second with): never below the best.
+TEST(RenderRepeat, StatsGiveTheBestAndTheMeanAfterTheFirst) {
+  FarmDir dir("repeat-stats");
+  auto stats = [&](int repeat) {
+    const auto r = runCommand(bin("tessera-render") + " --image 96x64 --stats --repeat " + std::to_string(repeat) + " -o " +
+                                  dir.path().string() + "/x.png",
+                              120);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return r.output;
+  };
+  const std::regex best_re("time_ms=([0-9.]+)"), mean_re("mean_ms=([0-9.]+)");
+  std::smatch best, mean;
+  const std::string once = stats(1);
+  ASSERT_TRUE(std::regex_search(once, best, best_re)) << once;
+  EXPECT_FALSE(std::regex_search(once, mean, mean_re)) << "one render has no mean after the first: " << once;
+  const std::string four = stats(4);
+  ASSERT_TRUE(std::regex_search(four, best, best_re)) << four;
+  ASSERT_TRUE(std::regex_search(four, mean, mean_re)) << four;
+  EXPECT_GT(std::stod(best[1]), 0) << four;
+  EXPECT_GE(std::stod(mean[1]), std::stod(best[1])) << four;
 }
 
 }  // namespace
