@@ -125,7 +125,8 @@ std::vector<Config> sweep(bool quick) {
 // orbit's cheapest here (110 against 113-114 ms for frames 5-29, AMD EPYC), and the farm
 // renders them all. Per frame, 5 renders: `mean` is that of the 4 after the first (a steady
 // stream's time per frame, what frames a second compare with), `best` the fastest of the 5
-// (the luckiest frame on a shared machine: 4.5-9% below the mean on an Intel Xeon).
+// (the luckiest frame on a shared machine: 2-6% below the mean in the goals' runs on an
+// Intel Xeon).
 struct OneProcess {
   double mean = 0, best = 0;
 };
