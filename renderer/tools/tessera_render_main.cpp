@@ -136,8 +136,8 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   double best_ms = 1e300, best_cpu_ms = 1e300;
   // The mean of the renders after the first: a steady stream's time per frame, which is what a
   // farm's frames a second compare with (its warm-up frames left out); the best of repeats is
-  // the luckiest frame on a shared machine (the best of 11 was 4.5-9% below the mean in three
-  // runs on an Intel Xeon).
+  // the luckiest frame on a shared machine (in three runs of 11 on an Intel Xeon the mean was
+  // 1.045-1.09x the best).
   double later_ms = 0;
   for (int r = 0; r < a.repeat; ++r) {
     const auto t0 = std::chrono::steady_clock::now();
