@@ -8,7 +8,7 @@ COPY setup.sh ./
 RUN TESSERA_MINIMAL=1 ./setup.sh deps && rm -rf /var/lib/apt/lists/*
 COPY . .
 # One image for every x86-64 host: the hot loops pick their instruction set at run time.
-RUN cmake -S . -B /opt/tessera/build -G Ninja -DCMAKE_BUILD_TYPE=Release \
+RUN cmake -S . -B /opt/tessera/build -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_UNITY_BUILD=ON \
  && cmake --build /opt/tessera/build -j"$(nproc)" --target \
       tessera-master tessera-renderer tessera-compositor tessera-display tessera-render tessera-up \
  && cd /opt/tessera/build/bin \

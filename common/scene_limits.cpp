@@ -11,14 +11,14 @@ namespace tessera {
 static_assert(kMaxImagePixels * 16 == proto::kMaxPayload, "a whole-image rgba32f piece must fit one message");
 
 namespace {
-std::string num(double v) {
+std::string shown(double v) {
   char b[40];
   std::snprintf(b, sizeof b, "%.15g", v);
   return b;
 }
 std::string inRange(double v, double lo, double hi, const std::string& unit) {
   if (v >= lo && v <= hi) return "";
-  return num(v) + " must be in [" + num(lo) + ", " + num(hi) + "]" + unit;
+  return shown(v) + " must be in [" + shown(lo) + ", " + shown(hi) + "]" + unit;
 }
 }  // namespace
 
@@ -43,14 +43,14 @@ KeyProblem cameraProblem(const Camera& c) {
   const double dist = std::hypot(d.x, d.y, d.z);
   if (!std::isfinite(dist))
     return {"camera.eye", "distance to the target overflows (eye and target must be within " +
-                              num(kMaxCameraDistance) + " of each other)"};
+                              shown(kMaxCameraDistance) + " of each other)"};
   if (dist > 0 && !(dist >= kMinCameraDistance && dist <= kMaxCameraDistance))
-    return {"camera.eye", "distance to the target is " + num(dist) + ", out of range [" + num(kMinCameraDistance) +
-                              ", " + num(kMaxCameraDistance) + "]"};
+    return {"camera.eye", "distance to the target is " + shown(dist) + ", out of range [" + shown(kMinCameraDistance) +
+                              ", " + shown(kMaxCameraDistance) + "]"};
   for (const auto& [key, v] : {std::pair{"camera.eye", c.eye}, std::pair{"camera.target", c.target}})
     for (double x : {v.x, v.y, v.z})
       if (!(std::abs(x) <= kMaxCameraDistance))
-        return {key, "coordinate " + num(x) + " is out of range (|coordinate| <= " + num(kMaxCameraDistance) +
+        return {key, "coordinate " + shown(x) + " is out of range (|coordinate| <= " + shown(kMaxCameraDistance) +
                          "; the volume spans 1)"};
   if (c.orthographic) {
     if (std::string p = inRange(c.height, kMinOrthoHeight, kMaxOrthoHeight, ""); !p.empty())
@@ -68,7 +68,7 @@ std::string farmAccuracyProblem(const Quality& q, int renderers) {
   if (renderers <= 1 || q.early_termination > 1 || q.early_termination >= kMinFarmEarlyTermination) return "";
   char levels[32];
   std::snprintf(levels, sizeof levels, "%.2f", (1 - q.early_termination) * 255);
-  return "quality.early_termination: " + num(q.early_termination) + " with " + std::to_string(renderers) +
+  return "quality.early_termination: " + shown(q.early_termination) + " with " + std::to_string(renderers) +
          " renderers lets each brick stop its rays on its own, an error of up to " + levels +
          " levels (of 255) against one process, over the farm's 1-level contract; use >= 0.9961 or one renderer";
 }

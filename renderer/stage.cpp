@@ -5,6 +5,7 @@
 #include <map>
 #include <optional>
 
+#include "common/clock.h"
 #include "common/cpu.h"
 #include "common/volume_summary.h"
 #include "common/net/curve.h"
@@ -20,9 +21,6 @@
 
 namespace tessera::renderer {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
 class Stage {
  public:

@@ -4,15 +4,12 @@
 #include <chrono>
 #include <utility>
 
+#include "common/clock.h"
 #include "common/net/log.h"
 #include "renderer/volume/volume_accel.h"
 
 namespace tessera::renderer {
 namespace {
-
-double msSince(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
 
 uint64_t floorMod(long long a, long long m) { return (uint64_t)(((a % m) + m) % m); }
 
@@ -92,7 +89,7 @@ void StepCache::recycle(Entry&& e) {
 std::vector<float> StepCache::takeSpare() { return std::exchange(spare_, {}); }
 
 StepCache::Entry StepCache::load(int step, double& ms, std::vector<float> storage) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   Entry e;
   auto v = std::make_shared<Volume>(loadVolume(scene_, box_, step, std::move(storage)));
   if (step > 0 && (v->data_range[0] < v->mapped_range[0] || v->data_range[1] > v->mapped_range[1]))

@@ -10,26 +10,26 @@ namespace tessera::renderer {
 
 namespace {
 
-constexpr int B = MinMaxHierarchy::kBlock, E = VolumeAccel::kEdge;  // 8 cells, 9 voxels an edge
-static_assert(B * B * B == 64 * kOccupancyWords, "one bit per cell of a brick");
+constexpr int kB = MinMaxHierarchy::kBlock, kE = VolumeAccel::kEdge;  // 8 cells, 9 voxels an edge
+static_assert(kB * kB * kB == 64 * kOccupancyWords, "one bit per cell of a brick");
 
 // Range of each cell's 2^3 voxels: reduced along x, then y, then z.
-void cellRanges(const uint16_t* brick, uint16_t mn[B * B * B], uint16_t mx[B * B * B]) {
-  uint16_t xl[E][E][B], xh[E][E][B];  // [z][y][cell x]
-  for (int z = 0; z < E; ++z)
-    for (int y = 0; y < E; ++y) {
-      const uint16_t* r = brick + E * (y + E * z);
-      for (int x = 0; x < B; ++x) xl[z][y][x] = std::min(r[x], r[x + 1]), xh[z][y][x] = std::max(r[x], r[x + 1]);
+void cellRanges(const uint16_t* brick, uint16_t mn[kB * kB * kB], uint16_t mx[kB * kB * kB]) {
+  uint16_t xl[kE][kE][kB], xh[kE][kE][kB];  // [z][y][cell x]
+  for (int z = 0; z < kE; ++z)
+    for (int y = 0; y < kE; ++y) {
+      const uint16_t* r = brick + kE * (y + kE * z);
+      for (int x = 0; x < kB; ++x) xl[z][y][x] = std::min(r[x], r[x + 1]), xh[z][y][x] = std::max(r[x], r[x + 1]);
     }
-  uint16_t yl[E][B][B], yh[E][B][B];  // [z][cell y][cell x]
-  for (int z = 0; z < E; ++z)
-    for (int y = 0; y < B; ++y)
-      for (int x = 0; x < B; ++x)
+  uint16_t yl[kE][kB][kB], yh[kE][kB][kB];  // [z][cell y][cell x]
+  for (int z = 0; z < kE; ++z)
+    for (int y = 0; y < kB; ++y)
+      for (int x = 0; x < kB; ++x)
         yl[z][y][x] = std::min(xl[z][y][x], xl[z][y + 1][x]), yh[z][y][x] = std::max(xh[z][y][x], xh[z][y + 1][x]);
-  for (int z = 0; z < B; ++z)
-    for (int y = 0; y < B; ++y)
-      for (int x = 0; x < B; ++x) {
-        const int c = x + B * (y + B * z);
+  for (int z = 0; z < kB; ++z)
+    for (int y = 0; y < kB; ++y)
+      for (int x = 0; x < kB; ++x) {
+        const int c = x + kB * (y + kB * z);
         mn[c] = std::min(yl[z][y][x], yl[z + 1][y][x]);
         mx[c] = std::max(yh[z][y][x], yh[z + 1][y][x]);
       }
@@ -54,12 +54,12 @@ std::vector<uint64_t> cellOccupancy(const VolumeAccel& accel, const MinMaxHierar
   static_assert(VolumeAccel::kQuantScale == 65535.0f, "values are quantized to 16 bits");
   auto entry = [](uint16_t q) { return (int)((uint32_t)q * (N - 1) / 65535u); };
   auto fill = [&](long long begin, long long end) {
-    uint16_t mn[B * B * B], mx[B * B * B];
+    uint16_t mn[kB * kB * kB], mx[kB * kB * kB];
     for (long long b = begin; b < end; ++b) {
       if (emptiness.empty[0][(size_t)b]) continue;
       cellRanges(&accel.bricked[(size_t)b * VolumeAccel::kBrickSize], mn, mx);
       uint64_t* words = &bits[(size_t)b * kOccupancyWords];
-      for (int c = 0; c < B * B * B; ++c)
+      for (int c = 0; c < kB * kB * kB; ++c)
         if (lit[entry(mx[c]) + 1] > lit[entry(mn[c])]) words[c / 64] |= uint64_t{1} << (c % 64);
     }
   };

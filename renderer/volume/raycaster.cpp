@@ -207,14 +207,14 @@ class TileWorker {
 
   // The fast path without sample counts: rays set up kSpanLanes at a time (raySpans).
   void castTileFast(int tx, int ty, int ex, int ey) {
-    constexpr double kInf = std::numeric_limits<double>::infinity();
+    constexpr double inf = std::numeric_limits<double>::infinity();
     const DepthBounds* depth = f_.depth;  // only with clipping
     for (int py = ty; py < ey; ++py)
       for (int px0 = tx; px0 < ex; px0 += kSpanLanes) {
         const int n = std::min(kSpanLanes, ex - px0);
         double lo[kSpanLanes], hi[kSpanLanes];
         unsigned wanted = 0;
-        for (int i = 0; i < kSpanLanes; ++i) lo[i] = -kInf, hi[i] = kInf;  // raySpans reads every lane
+        for (int i = 0; i < kSpanLanes; ++i) lo[i] = -inf, hi[i] = inf;  // raySpans reads every lane
         for (int i = 0; i < n; ++i) {
           if (depth) {  // a cell with no non-empty node: no ray to set up
             const size_t ci = depth->cell(px0 + i, py);
@@ -256,11 +256,11 @@ class TileWorker {
       if (f_.count) counts.skipped += (uint64_t)spanSamples(f_.geom, f_.gen.pixelRay(px, py), f_.brick, step);
       return false;
     }
-    constexpr double kInf = std::numeric_limits<double>::infinity();
+    constexpr double inf = std::numeric_limits<double>::infinity();
     int64_t before = 0;
     const bool hit = raySpanClipped(f_.geom, f_.gen.pixelRay(px, py), f_.brick, f_.clip, step, span,
                                     f_.count ? &before : nullptr, f_.count ? &after : nullptr,
-                                    depth ? depth->lo[ci] : -kInf, depth ? depth->hi[ci] : kInf);
+                                    depth ? depth->lo[ci] : -inf, depth ? depth->hi[ci] : inf);
     counts.skipped += (uint64_t)before;
     if (!hit) counts.skipped += (uint64_t)after;
     return hit;

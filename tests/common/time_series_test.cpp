@@ -18,14 +18,15 @@ namespace {
 
 using test::TempDir;
 
-constexpr int kNx = 9, kNy = 7, kNz = 5, kSteps = 4;
+constexpr int kSx = 9, kSy = 7, kSz = 5, kSteps = 4;
 
 // A different value at every voxel of every step, so a step or axis mix-up shows.
 std::vector<int16_t> stepSamples(int step) {
-  std::vector<int16_t> v((size_t)kNx * kNy * kNz);
-  for (int z = 0; z < kNz; ++z)
-    for (int y = 0; y < kNy; ++y)
-      for (int x = 0; x < kNx; ++x) v[x + kNx * (y + kNy * z)] = (int16_t)(x * 3 - y * 40 + z * 500 + step * 1000 - 900);
+  std::vector<int16_t> v((size_t)kSx * kSy * kSz);
+  for (int z = 0; z < kSz; ++z)
+    for (int y = 0; y < kSy; ++y)
+      for (int x = 0; x < kSx; ++x)
+        v[x + kSx * (y + kSy * z)] = (int16_t)(x * 3 - y * 40 + z * 500 + step * 1000 - 900);
   return v;
 }
 
@@ -46,7 +47,7 @@ void writeRawSteps(const TempDir& t) {
 }
 
 void writeNifti4d(const std::string& path) {
-  const int64_t dims[8] = {4, kNx, kNy, kNz, kSteps, 1, 1, 1};
+  const int64_t dims[8] = {4, kSx, kSy, kSz, kSteps, 1, 1, 1};
   nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 1);
   ASSERT_NE(nim, nullptr);
   nim->dx = nim->pixdim[1] = 0.5;
@@ -57,13 +58,13 @@ void writeNifti4d(const std::string& path) {
   nifti_image_free(nim);
 }
 
-void writeNifti3d(const std::string& path, int step, int nz = kNz) {
-  const int64_t dims[8] = {3, kNx, kNy, nz, 1, 1, 1, 1};
+void writeNifti3d(const std::string& path, int step, int nz = kSz) {
+  const int64_t dims[8] = {3, kSx, kSy, nz, 1, 1, 1, 1};
   nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 1);
   ASSERT_NE(nim, nullptr);
   nim->dx = nim->pixdim[1] = 0.5;
   const auto v = stepSamples(step);
-  std::memcpy(nim->data, v.data(), (size_t)kNx * kNy * nz * 2);
+  std::memcpy(nim->data, v.data(), (size_t)kSx * kSy * nz * 2);
   ASSERT_EQ(nifti_set_filenames(nim, path.c_str(), 0, 1), 0);
   nifti_image_write(nim);
   nifti_image_free(nim);
@@ -72,7 +73,7 @@ void writeNifti3d(const std::string& path, int step, int nz = kNz) {
 void writeNrrd4d(const std::string& path) {
   auto v = allSteps();
   Nrrd* n = nrrdNew();
-  ASSERT_EQ(nrrdWrap_va(n, v.data(), nrrdTypeShort, 4, (size_t)kNx, (size_t)kNy, (size_t)kNz, (size_t)kSteps), 0);
+  ASSERT_EQ(nrrdWrap_va(n, v.data(), nrrdTypeShort, 4, (size_t)kSx, (size_t)kSy, (size_t)kSz, (size_t)kSteps), 0);
   nrrdAxisInfoSet_va(n, nrrdAxisInfoSpacing, 0.5, 1.0, 1.0, AIR_NAN);
   ASSERT_EQ(nrrdSave(path.c_str(), n, nullptr), 0) << path;
   nrrdNix(n);  // the data is ours
@@ -133,7 +134,7 @@ TEST(TimeSeries, EveryFormLoadsTheSameStepsAsRawFiles) {
       "  series: {pattern: t%d.raw, first: 0, last: 3}\n" + kRaw, "  series: run.series\n" + kRaw,
       "  file: four.nii\n", "  file: four.nii.gz\n", "  file: four.nrrd\n",
       "  series: {pattern: n%d.nii, first: 0, last: 3}\n"};
-  const VoxelBox whole{{0, 0, 0}, {kNx, kNy, kNz}}, window{{2, 1, 1}, {7, 6, 4}};
+  const VoxelBox whole{{0, 0, 0}, {kSx, kSy, kSz}}, window{{2, 1, 1}, {7, 6, 4}};
   for (const auto& form : forms) {
     Scene s = scene(t, form);
     ASSERT_EQ(s.series.steps, kSteps) << form;
@@ -190,18 +191,18 @@ TEST(TimeSeries, BadSeriesAreNamedBeforeTheFirstFrame) {
 TEST(TimeSeries, AStepThatDiffersOrIsMissingIsNamedWhenRead) {
   TempDir t("series-step-bad");
   writeNifti3d(t.file("a0.nii"), 0);
-  writeNifti3d(t.file("a1.nii"), 1, kNz - 1);  // one slice short
+  writeNifti3d(t.file("a1.nii"), 1, kSz - 1);  // one slice short
   const Scene s = scene(t, "  series: [a0.nii, a1.nii, a2.nii]\n");
-  EXPECT_NO_THROW(loadVolume(s, {{0, 0, 0}, {kNx, kNy, kNz}}, 0));
+  EXPECT_NO_THROW(loadVolume(s, {{0, 0, 0}, {kSx, kSy, kSz}}, 0));
   try {
-    loadVolume(s, {{0, 0, 0}, {kNx, kNy, kNz}}, 1);
+    loadVolume(s, {{0, 0, 0}, {kSx, kSy, kSz}}, 1);
     ADD_FAILURE() << "a step of other dims loaded";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("a1.nii: dims [9, 7, 4] differs from step 0's [9, 7, 5]"), std::string::npos)
         << e.what();
   }
   try {
-    loadVolume(s, {{0, 0, 0}, {kNx, kNy, kNz}}, 2);
+    loadVolume(s, {{0, 0, 0}, {kSx, kSy, kSz}}, 2);
     ADD_FAILURE() << "a missing step loaded";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("a2.nii: file not found"), std::string::npos) << e.what();
@@ -211,7 +212,7 @@ TEST(TimeSeries, AStepThatDiffersOrIsMissingIsNamedWhenRead) {
   std::filesystem::resize_file(t.file("t2.raw"), 100);
   const Scene r = scene(t, "  series: {pattern: t%d.raw, first: 0, last: 3}\n" + kRaw);
   try {
-    loadVolume(r, {{0, 0, 0}, {kNx, kNy, kNz}}, 2);
+    loadVolume(r, {{0, 0, 0}, {kSx, kSy, kSz}}, 2);
     ADD_FAILURE() << "a short step loaded";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("t2.raw: file size is 100 bytes"), std::string::npos) << e.what();

@@ -17,13 +17,13 @@ using Kind = RestartVerdict::Kind;
 constexpr int exitStatus(int code) { return (code & 0xff) << 8; }
 constexpr int signalStatus(int signo) { return signo & 0x7f; }
 
-ComposeProject parse(const std::string& yaml) {
+ComposeProject parseProject(const std::string& yaml) {
   return parseCompose(yaml, "/nonexistent-dir", {}, "compose.yaml");
 }
 
 std::string errorOf(const std::string& yaml) {
   try {
-    parse(yaml);
+    parseProject(yaml);
   } catch (const ComposeError& e) {
     return e.what();
   }
@@ -31,7 +31,7 @@ std::string errorOf(const std::string& yaml) {
 }
 
 TEST(RestartPolicy, ParsesEveryComposeValue) {
-  const auto p = parse(R"(
+  const auto p = parseProject(R"(
 services:
   a: {command: x}
   b: {command: x, restart: "no"}

@@ -10,17 +10,17 @@ namespace {
 using namespace std::chrono_literals;
 using proto::Role;
 
-const Clock::time_point t0 = Clock::now();
+const Clock::time_point kStart = Clock::now();
 std::string controlId(char c) { return std::string(16, c) + "c"; }
 
 TEST(Membership, RanksPerRoleAndHeartbeatIdentityIsBound) {
   Membership m;
   bool joined = false;
-  Member& r0 = m.join(controlId('a'), {Role::Renderer, 11, "", ""}, t0, &joined);
+  Member& r0 = m.join(controlId('a'), {Role::Renderer, 11, "", ""}, kStart, &joined);
   EXPECT_TRUE(joined);
   EXPECT_EQ(r0.rank, 0u);
-  EXPECT_EQ(m.join(controlId('b'), {Role::Renderer, 12, "", ""}, t0).rank, 1u);
-  EXPECT_EQ(m.join(controlId('d'), {Role::Display, 13, "", ""}, t0).rank, 0u);
+  EXPECT_EQ(m.join(controlId('b'), {Role::Renderer, 12, "", ""}, kStart).rank, 1u);
+  EXPECT_EQ(m.join(controlId('d'), {Role::Display, 13, "", ""}, kStart).rank, 0u);
   EXPECT_EQ(m.count(Role::Renderer), 2);
   // The heartbeat connection of renderer 0 belongs to it; it is no control connection.
   std::string hb = StageLink::heartbeatIdentity(controlId('a'));
@@ -34,37 +34,37 @@ TEST(Membership, RanksPerRoleAndHeartbeatIdentityIsBound) {
 
 TEST(Membership, SecondHelloOnTheSameConnectionIsTheSameMember) {
   Membership m;
-  m.join(controlId('a'), {Role::Renderer, 11, "", ""}, t0);
+  m.join(controlId('a'), {Role::Renderer, 11, "", ""}, kStart);
   bool joined = true;
-  EXPECT_EQ(m.join(controlId('a'), {Role::Renderer, 11, "", ""}, t0, &joined).rank, 0u);
+  EXPECT_EQ(m.join(controlId('a'), {Role::Renderer, 11, "", ""}, kStart, &joined).rank, 0u);
   EXPECT_FALSE(joined);
   EXPECT_EQ(m.count(Role::Renderer), 1);
 }
 
 TEST(Membership, SilentMemberIsLostAndReadmittedWhenHeardAgain) {
   Membership m;
-  Member& r = m.join(controlId('a'), {Role::Renderer, 11, "", ""}, t0);
-  m.join(controlId('b'), {Role::Renderer, 12, "", ""}, t0 + 2s);
-  auto lost = m.expire(t0 + 3s, 2.0);
+  Member& r = m.join(controlId('a'), {Role::Renderer, 11, "", ""}, kStart);
+  m.join(controlId('b'), {Role::Renderer, 12, "", ""}, kStart + 2s);
+  auto lost = m.expire(kStart + 3s, 2.0);
   ASSERT_EQ(lost.size(), 1u);
   EXPECT_EQ(lost[0]->pid, 11u);
   EXPECT_EQ(m.count(Role::Renderer), 1);
   // Paused (SIGSTOP), then continued: its next heartbeat brings it back with its rank.
-  EXPECT_TRUE(m.heard(r, t0 + 4s));
+  EXPECT_TRUE(m.heard(r, kStart + 4s));
   EXPECT_TRUE(r.alive);
   EXPECT_EQ(m.count(Role::Renderer), 2);
-  EXPECT_FALSE(m.heard(r, t0 + 5s)) << "only the first word re-admits";
+  EXPECT_FALSE(m.heard(r, kStart + 5s)) << "only the first word re-admits";
 }
 
 TEST(Membership, MemberThatMissedADeadlineWaitsOutItsQuarantine) {
   Membership m;
-  Member& r = m.join(controlId('a'), {Role::Renderer, 11, "", ""}, t0);
-  m.missedDeadline(r, t0);
+  Member& r = m.join(controlId('a'), {Role::Renderer, 11, "", ""}, kStart);
+  m.missedDeadline(r, kStart);
   EXPECT_FALSE(r.alive);
-  EXPECT_FALSE(m.heard(r, t0 + 1s)) << "heartbeats alone must not bring back a stage that does not deliver";
+  EXPECT_FALSE(m.heard(r, kStart + 1s)) << "heartbeats alone must not bring back a stage that does not deliver";
   auto q = std::chrono::duration<double>(Membership::quarantineS(1));
-  EXPECT_TRUE(m.heard(r, t0 + std::chrono::duration_cast<Clock::duration>(q) + 1ms));
-  m.missedDeadline(r, t0 + 10s);
+  EXPECT_TRUE(m.heard(r, kStart + std::chrono::duration_cast<Clock::duration>(q) + 1ms));
+  m.missedDeadline(r, kStart + 10s);
   EXPECT_GT(Membership::quarantineS(2), Membership::quarantineS(1));
   EXPECT_LE(Membership::quarantineS(30), 60.0);
 }
@@ -89,24 +89,24 @@ CreditWindow::Waiting waitingFor(std::vector<uint32_t> renderers) {
 TEST(Membership, ADeadlineInASwapBlamesTheRendererTheOthersAwait) {
   Membership m;
   Member* r[4];
-  for (char c = 0; c < 4; ++c) r[(int)c] = &m.join(controlId('a' + c), {Role::Renderer, 20u + c, "", ""}, t0);
+  for (char c = 0; c < 4; ++c) r[(int)c] = &m.join(controlId('a' + c), {Role::Renderer, 20u + c, "", ""}, kStart);
   r[0]->waiting_frame = 7, r[0]->waiting_for = 1;
   r[1]->waiting_frame = 7, r[1]->waiting_for = 2;
   const Member* culprit = nullptr;
-  const std::string who = describeWaiting(m, 7, waitingFor({0, 1, 2}), t0, &culprit);
+  const std::string who = describeWaiting(m, 7, waitingFor({0, 1, 2}), kStart, &culprit);
   ASSERT_NE(culprit, nullptr);
   EXPECT_EQ(culprit->rank, 2u) << who;
   EXPECT_NE(who.find("renderer 1 awaits renderer 2's swap piece"), std::string::npos) << who;
-  describeWaiting(m, 8, waitingFor({0, 1, 2}), t0, &culprit);
+  describeWaiting(m, 8, waitingFor({0, 1, 2}), kStart, &culprit);
   EXPECT_EQ(culprit->rank, 0u) << "the waits are for frame 7";
-  describeWaiting(m, 7, waitingFor({0, 1}), t0, &culprit);
+  describeWaiting(m, 7, waitingFor({0, 1}), kStart, &culprit);
   EXPECT_EQ(culprit->rank, 1u) << "renderer 2 reported: 1 awaits a piece that was lost, blame stays with 1";
   r[2]->waiting_frame = 7, r[2]->waiting_for = 0;
-  describeWaiting(m, 7, waitingFor({0, 1, 2}), t0, &culprit);
+  describeWaiting(m, 7, waitingFor({0, 1, 2}), kStart, &culprit);
   EXPECT_EQ(culprit->rank, 0u) << "a cycle of waits";
   r[2]->waiting_for = proto::kNobody;
-  m.missedDeadline(*r[2], t0);
-  describeWaiting(m, 7, waitingFor({0, 1, 2}), t0, &culprit);
+  m.missedDeadline(*r[2], kStart);
+  describeWaiting(m, 7, waitingFor({0, 1, 2}), kStart, &culprit);
   EXPECT_EQ(culprit->rank, 1u) << "renderer 2 is already lost";
 }
 
@@ -116,41 +116,41 @@ TEST(Membership, ADeadlineInASwapBlamesTheRendererTheOthersAwait) {
 TEST(Membership, ADeadlineTheDisplayWaitsOutBlamesTheSenderItAwaits) {
   Membership m;
   Member* r[2];
-  for (char c = 0; c < 2; ++c) r[(int)c] = &m.join(controlId('a' + c), {Role::Renderer, 20u + c, "", ""}, t0);
-  Member& comp = m.join(controlId('c'), {Role::Compositor, 30, "", ""}, t0);
-  Member& display = m.join(controlId('d'), {Role::Display, 40, "", ""}, t0);
+  for (char c = 0; c < 2; ++c) r[(int)c] = &m.join(controlId('a' + c), {Role::Renderer, 20u + c, "", ""}, kStart);
+  Member& comp = m.join(controlId('c'), {Role::Compositor, 30, "", ""}, kStart);
+  Member& display = m.join(controlId('d'), {Role::Display, 40, "", ""}, kStart);
   const Member* culprit = nullptr;
-  std::string who = describeWaiting(m, 7, waitingFor({}), t0, &culprit);
+  std::string who = describeWaiting(m, 7, waitingFor({}), kStart, &culprit);
   ASSERT_NE(culprit, nullptr);
   EXPECT_EQ(culprit->role, Role::Display) << who;
   display.waiting_frame = 7, display.waiting_for = 1;
-  who = describeWaiting(m, 7, waitingFor({}), t0, &culprit);
+  who = describeWaiting(m, 7, waitingFor({}), kStart, &culprit);
   EXPECT_EQ(culprit, r[1]) << who;
   EXPECT_NE(who.find("display 0 awaits renderer 1's strips"), std::string::npos) << who;
   CreditWindow::Waiting direct = waitingFor({});
   direct.display_sources = Role::Compositor;
   display.waiting_for = 0;
-  describeWaiting(m, 7, direct, t0, &culprit);
+  describeWaiting(m, 7, direct, kStart, &culprit);
   EXPECT_EQ(culprit, &comp) << "a direct-send frame: compositor 0's strips";
-  describeWaiting(m, 8, direct, t0, &culprit);
+  describeWaiting(m, 8, direct, kStart, &culprit);
   EXPECT_EQ(culprit->role, Role::Display) << "the display awaits frame 7, not 8";
   const Member* named_by = nullptr;
-  describeWaiting(m, 7, direct, t0, &culprit, &named_by);
+  describeWaiting(m, 7, direct, kStart, &culprit, &named_by);
   EXPECT_EQ(named_by, &display);
-  describeWaiting(m, 7, direct, t0 + 2s, &culprit);
+  describeWaiting(m, 7, direct, kStart + 2s, &culprit);
   EXPECT_EQ(culprit->role, Role::Display) << "the display's last heartbeat is 2 s old";
-  m.missedDeadline(comp, t0, &display);
-  describeWaiting(m, 7, direct, t0, &culprit);
+  m.missedDeadline(comp, kStart, &display);
+  describeWaiting(m, 7, direct, kStart, &culprit);
   EXPECT_EQ(culprit, &comp) << "compositor 0 is already lost: nobody more is dropped, the frame waits for it";
   EXPECT_FALSE(culprit->alive);
   display.waiting_for = 1;
-  who = describeWaiting(m, 7, waitingFor({}), t0 + 10s, &culprit);
+  who = describeWaiting(m, 7, waitingFor({}), kStart + 10s, &culprit);
   EXPECT_EQ(culprit->role, Role::Display) << "naming another sender than the one dropped 10 s before: " << who;
-  display.last_seen = t0 + 61s;
-  describeWaiting(m, 7, waitingFor({}), t0 + 61s, &culprit);
+  display.last_seen = kStart + 61s;
+  describeWaiting(m, 7, waitingFor({}), kStart + 61s, &culprit);
   EXPECT_EQ(culprit, r[1]) << "a minute later, a new failure";
-  m.missedDeadline(display, t0);
-  describeWaiting(m, 7, waitingFor({}), t0 + 61s, &culprit);
+  m.missedDeadline(display, kStart);
+  describeWaiting(m, 7, waitingFor({}), kStart + 61s, &culprit);
   EXPECT_EQ(culprit, nullptr) << "a lost display names nobody";
 }
 
@@ -158,15 +158,16 @@ TEST(Membership, ADeadlineTheDisplayWaitsOutBlamesTheSenderItAwaits) {
 // renderer 1's piece (lost on the way): renderer 1 is blamed, not the compositor.
 TEST(Membership, ADeadlineACompositorWaitsOutBlamesTheRendererWhosePieceItLacks) {
   Membership m;
-  Member& r1 = (m.join(controlId('a'), {Role::Renderer, 20, "", ""}, t0), m.join(controlId('b'), {Role::Renderer, 21, "", ""}, t0));
-  Member& comp = m.join(controlId('c'), {Role::Compositor, 30, "", ""}, t0);
+  Member& r1 = (m.join(controlId('a'), {Role::Renderer, 20, "", ""}, kStart),
+                m.join(controlId('b'), {Role::Renderer, 21, "", ""}, kStart));
+  Member& comp = m.join(controlId('c'), {Role::Compositor, 30, "", ""}, kStart);
   CreditWindow::Waiting w;
   w.compositors = {0};
   const Member* culprit = nullptr;
-  describeWaiting(m, 7, w, t0, &culprit);
+  describeWaiting(m, 7, w, kStart, &culprit);
   EXPECT_EQ(culprit, &comp);
   comp.waiting_frame = 7, comp.waiting_for = 1;
-  const std::string who = describeWaiting(m, 7, w, t0, &culprit);
+  const std::string who = describeWaiting(m, 7, w, kStart, &culprit);
   EXPECT_EQ(culprit, &r1) << who;
   EXPECT_NE(who.find("compositor 0 awaits renderer 1's piece"), std::string::npos) << who;
 }

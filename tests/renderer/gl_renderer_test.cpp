@@ -22,12 +22,12 @@ GlRenderer& gl() {
 
 // Two blobs of different colours (sum of two spheres' fields), chunked: many small chunks so
 // that culling leaves chunks out of most tiles.
-struct Scene {
+struct ChunkedMesh {
   Mesh mesh;
   std::vector<Chunk> chunks;
 };
-const Scene& blobs() {
-  static const Scene s = [] {
+const ChunkedMesh& blobs() {
+  static const ChunkedMesh s = [] {
     Volume v;
     const int n = 36;
     v.dims = {n, n, n};
@@ -39,7 +39,7 @@ const Scene& blobs() {
           const double a = length(p - Vec3{-0.15, 0.05, 0}), b = length(p - Vec3{0.2, -0.1, 0.1});
           v.values[v.index(x, y, z)] = (float)(0.02 / (a * a + 0.01) + 0.01 / (b * b + 0.005));
         }
-    Scene out;
+    ChunkedMesh out;
     out.mesh = marchingCubes(v, 0.45f, {0.9f, 0.5f, 0.2f});
     // Vary colours per vertex so that interpolation is exercised.
     for (size_t i = 0; i < out.mesh.vertexCount(); ++i) out.mesh.colors[3 * i + 2] = 0.5f + 0.5f * out.mesh.positions[3 * i];
