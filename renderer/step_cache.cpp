@@ -1,7 +1,6 @@
 #include "renderer/step_cache.h"
 
 #include <algorithm>
-#include <chrono>
 #include <utility>
 
 #include "common/clock.h"

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "common/bricks.h"
+#include "common/clock.h"
 #include "common/image.h"
 #include "common/scene.h"
 #include "common/volume.h"
@@ -32,10 +33,6 @@
 using namespace tessera;
 
 namespace {
-
-double msSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 Rect rows(int y0, int y1, int width) { return y1 > y0 ? Rect{0, y0, width, y1 - y0} : Rect{}; }
 

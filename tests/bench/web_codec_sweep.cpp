@@ -17,16 +17,16 @@
 
 #include <CLI/CLI.hpp>
 
+#include "common/clock.h"
 #include "common/image.h"
 #include "common/io/image_io.h"
 #include "display/web_frame.h"
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using tessera::Clock;
+using tessera::msSince;
 const std::array<double, 3> kBg{32 / 255.0, 32 / 255.0, 36 / 255.0};  // the web view's default
-
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // Encodings timed per frame and codec, the best kept (the first pays for the encoders' buffers).
 constexpr int kRepeats = 5;
