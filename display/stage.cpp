@@ -79,8 +79,9 @@ class Stage {
         drops_.drop(rank, s.error());
         continue;
       }
-      if (s->stream.size() > waiting_budget_ / kWaitingFrames) {  // more than every pixel of a frame once
-        drops_.drop(rank, fmt::format("strips of {} bytes: more than a whole frame", s->stream.size()));
+      if (const size_t most = maxStripStreamBytes(opt_.width, opt_.height); s->stream.size() > most) {
+        drops_.drop(rank, fmt::format("strips of {} bytes: more than a whole frame's pixels, each in a strip of its own ({} bytes)",
+                                      s->stream.size(), most));
         continue;
       }
       if (s->sender != rank) {
@@ -223,7 +224,8 @@ class Stage {
   // The web view's background without --background: the window's dark grey.
   static constexpr std::array<double, 3> kWebBackground{32 / 255.0, 32 / 255.0, 36 / 255.0};
   // Strips waiting for FrameParams: at most this many whole frames of strips (every pixel
-  // once at 4 bytes, plus 2 header pixels per row); the race needs about one.
+  // once at 4 bytes, plus 2 header pixels per row; a tiled frame's few headers more fit
+  // in the slack); the race needs about one.
   static constexpr size_t kWaitingFrames = 8;
   Assembly frames_;
   uint64_t presented_ = 0, rejected_ = 0;

@@ -18,6 +18,13 @@ struct StripHeader {
 };
 inline constexpr int kStripHeaderPixels = 2;
 
+// The most bytes one sender's strip stream for a width x height frame can hold: every pixel
+// once, each in a strip of its own (12 bytes a pixel). A sort-first compositor sends a strip
+// per tile row, so a frame row crossing T tiles carries T headers: one header a row is no bound.
+inline size_t maxStripStreamBytes(int width, int height) {
+  return size_t(4) * (1 + kStripHeaderPixels) * size_t(width > 0 ? width : 0) * size_t(height > 0 ? height : 0);
+}
+
 void packHeader(const StripHeader& h, uint8_t out[8]);
 // False if the check byte does not match.
 bool unpackHeader(const uint8_t in[8], StripHeader& h);

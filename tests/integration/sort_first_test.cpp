@@ -66,6 +66,42 @@ TEST_P(SortFirstFarm, FramesAreBitIdenticalToOneProcess) {
   EXPECT_EQ(lines, frames);
 }
 
+// A mesh that covers every row of every tile: each tile row is a strip of its own with its own
+// header, so one compositor's stream of two tiles side by side holds two headers a row. The
+// display once took more than one header a row for a malformed stream, dropped every such
+// frame and blamed the compositor, and the farm never got past its first frame.
+TEST(SortFirstFarmFull, AMeshCoveringEveryTileRowReachesTheDisplay) {
+  FarmDir dir("sortfirst-full");
+  const int frames = 2;
+  fs::path scene = dir.path() / "full.yaml";
+  std::ofstream(scene) << "volume:\n  generator: {name: marschner-lobb, size: 24}\n"
+                       << "mesh:\n  isosurface: {of: volume, level: 0.5}\n"
+                       << "camera: {eye: [0.05, 0.1, 2], target: [0, 0, 0], up: [0, 1, 0], fov: 15}\n"
+                       << "light: [0.4, 1.0, 0.6]\nantialiasing: {method: none}\nimage: [97, 83]\n"
+                       << "orbit: {frames: 64, axis: [0, 1, 0]}\n";
+  auto run = dir.runFarm(scene, 2, 1, frames, 60, "--env TESSERA_TILING=static");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  for (int k = 0; k < frames; ++k) {
+    ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << "\n" << run.output;
+    Image8 farm = dir.farmFrame(k);
+    EXPECT_TRUE(dir.matches(farm, dir.reference(scene, k), 0, "full_" + std::to_string(k)));  // bit-identical
+    // Every row of the frame has content, so every tile row was a strip of its own.
+    int full_rows = 0;
+    for (int y = 0; y < farm.height; ++y) {
+      bool left = false, right = false;
+      for (int x = 0; x < farm.width; ++x) (x < farm.width / 2 ? left : right) |= farm.at(x, y)[3] != 0;
+      full_rows += left && right;
+    }
+    EXPECT_EQ(full_rows, farm.height) << "frame " << k << " does not cover both halves of every row";
+  }
+  std::ifstream metrics(dir.path() / "out" / "metrics.jsonl");
+  for (std::string line; std::getline(metrics, line);) {
+    auto j = nlohmann::json::parse(line);
+    EXPECT_EQ(j["strips_rejected"].get<int>(), 0) << line;
+    EXPECT_EQ(j["display_dropped"].get<int>(), 0) << line;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Tilings, SortFirstFarm,
     ::testing::Values(Case{1, 1, "static", 1, "{method: none}"}, Case{2, 1, "balanced", 1, "{method: none}"},
