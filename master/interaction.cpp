@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/scene.h"
+
 namespace tessera::master {
 
 Camera applyInput(const Camera& cam, const proto::Input& in) {
@@ -19,7 +21,14 @@ Camera applyInput(const Camera& cam, const proto::Input& in) {
   } catch (const std::invalid_argument&) {
     // up would be parallel to the view: keep the orbit, drop the tilt
   }
-  c.eye = c.target + (c.eye - c.target) * std::clamp(in.zoom, 0.2, 5.0);
+  // Each step scales the distance by 0.2..5, and the distance stays within the scene file's
+  // limits: an eye zoomed out past them overflowed the view direction, every later input
+  // threw, and every frame failed. A step that would leave the limits stops at them.
+  const Vec3 away = c.eye - c.target;
+  const double d = length(away);
+  Camera zoomed = c;
+  zoomed.eye = c.target + away * (std::clamp(d * std::clamp(in.zoom, 0.2, 5.0), kMinCameraDistance, kMaxCameraDistance) / d);
+  if (cameraProblem(zoomed).what.empty()) c = zoomed;
   return c;
 }
 

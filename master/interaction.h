@@ -6,7 +6,8 @@
 namespace tessera::master {
 
 // Orbits the eye about the target (dx about `up`, dy about the camera's right axis,
-// refusing to tilt onto the pole) and scales its distance by zoom (clamped to 0.2..5).
+// refusing to tilt onto the pole) and scales its distance by zoom (clamped to 0.2..5; the
+// distance stays within the scene file's camera limits).
 // Throws std::invalid_argument for non-finite values or zoom <= 0.
 Camera applyInput(const Camera& cam, const proto::Input& in);
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "common/scene.h"
+
 namespace tessera::master {
 namespace {
 
@@ -30,6 +32,25 @@ TEST(Interaction, ZoomIsClampedAndTiltKeepsTheCameraValid) {
   Camera c = applyInput(camera(), in);
   EXPECT_NO_THROW(c.validate());
   EXPECT_NEAR(length(c.eye - c.target), 2.5, 1e-9);
+}
+
+// Zooming on and on stops at the scene file's distance limits, and the camera still answers:
+// far out, the view direction once overflowed and every later input threw.
+TEST(Interaction, ZoomStopsAtTheDistanceLimitsAndStillAnswers) {
+  for (double step : {5.0, 0.2}) {
+    Camera c = camera();
+    proto::Input in;
+    in.zoom = step;
+    for (int i = 0; i < 1000; ++i) c = applyInput(c, in);
+    const double limit = step > 1 ? kMaxCameraDistance : kMinCameraDistance;
+    EXPECT_NEAR(length(c.eye - c.target), limit, limit * 1e-9) << "zoom steps of " << step;
+    EXPECT_TRUE(cameraProblem(c).what.empty()) << cameraProblem(c).what;
+    in.zoom = 1 / step;  // back the other way, and a turn
+    in.orbit_dx = 30;
+    const Camera back = applyInput(c, in);
+    EXPECT_NEAR(length(back.eye - back.target), limit / step, limit / step * 1e-9);
+    EXPECT_NO_THROW(back.validate());
+  }
 }
 
 TEST(Interaction, BadValuesThrowInvalidArgument) {
