@@ -321,7 +321,8 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector
   };
   // Rows of the window; whole rows (and whole slices) are contiguous in the file and read at once.
   const bool full_x = v.dims[0] == n[0], full_xy = full_x && v.dims[1] == n[1];
-  const int rows_per_read = full_xy ? v.dims[1] * v.dims[2] : full_x ? v.dims[1] : 1;
+  // size_t: a window's rows (y * z) can pass 2^31 (a 4 GiB file of 1 x 65536 x 65536 wrapped to 0).
+  const size_t rows_per_read = full_xy ? (size_t)v.dims[1] * v.dims[2] : full_x ? (size_t)v.dims[1] : 1;
   const size_t per_read = (size_t)v.dims[0] * rows_per_read;
   for (size_t row = 0; row < (size_t)v.dims[1] * v.dims[2]; row += rows_per_read) {
     const int y = box.lo[1] + (int)(row % v.dims[1]), z = box.lo[2] + (int)(row / v.dims[1]);
