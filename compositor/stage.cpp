@@ -144,7 +144,9 @@ class Stage {
     st.encode_ms = s.encode_ms;
     st.bytes_raw = s.stream.size();
     st.bytes_encoded = bytes.size();
-    sendBytes(display(r.params.display_endpoint), std::move(bytes));
+    if (!sendBytes(display(r.params.display_endpoint), std::move(bytes)))  // the display stopped reading
+      drops_.drop(link_.rank(), fmt::format("strips not sent to the display: its queue stayed full for {} ms",
+                                            kDataSendTimeout.count()));
     st.dropped = reported_drops_ = drops_.total();
     link_.report(proto::encode(st, link_.rank()));
   }
@@ -162,10 +164,7 @@ class Stage {
 
   zmq::socket_t& display(const std::string& endpoint) {
     if (endpoint != display_endpoint_) {
-      display_ = makeSocket(ctx_, zmq::socket_type::dealer);
-      display_.set(zmq::sockopt::linger, 1000);
-      display_.set(zmq::sockopt::routing_id, link_.dataIdentity());  // the display admits it by this
-      connectTo(display_, endpoint);
+      display_ = connectDataSender(ctx_, endpoint, link_.dataIdentity());
       display_endpoint_ = endpoint;
     }
     return display_;

@@ -258,7 +258,7 @@ class Stage {
       }
       swap_->start(f.p, link_.rank(), f.plan, f.c->image, f.c->active);
     }
-    auto send = [&](const std::string& endpoint, std::vector<std::byte>&& bytes) { sendBytes(socketFor(endpoint), std::move(bytes)); };
+    auto send = [&](const std::string& endpoint, std::vector<std::byte>&& bytes) { sendTo(endpoint, std::move(bytes)); };
     if (const auto partner = swap_->advance(send, f.st, drops_)) {
       link_.setWaiting(f.p.frame, *partner);  // said in the heartbeats, for the master's blame
       return false;
@@ -287,7 +287,7 @@ class Stage {
       auto bytes = proto::encode(o.framebuffer, link_.rank(), p.codec);
       st.bytes_raw += o.framebuffer.pixels.size();
       st.bytes_encoded += bytes.size();
-      sendBytes(socketFor(*endpoint), std::move(bytes));
+      sendTo(*endpoint, std::move(bytes));
     }
     st.encode_ms = msSince(t0);
     st.dropped = drops_.total();
@@ -312,7 +312,7 @@ class Stage {
     st.bytes_raw += piece.pixels.size();
     packed_ = std::move(piece.pixels);
     st.bytes_encoded += bytes.size();
-    sendBytes(socketFor(region.endpoint), std::move(bytes));
+    sendTo(region.endpoint, std::move(bytes));
   }
 
   // A finished band goes to the display as a compositor's region would.
@@ -327,7 +327,7 @@ class Stage {
     auto bytes = proto::encode(s, link_.rank(), p.codec);
     st.bytes_raw += s.stream.size();
     st.bytes_encoded += bytes.size();
-    sendBytes(socketFor(p.display_endpoint), std::move(bytes));
+    sendTo(p.display_endpoint, std::move(bytes));
   }
 
   // Peers come and go (a restarted renderer has a new swap port): connections to endpoints
@@ -341,14 +341,20 @@ class Stage {
     });
   }
 
+  // A part for a compositor, a swap partner or the display. A receiver that stopped reading
+  // (dead, frozen, or cut off) fills its queue; the send then gives up after kDataSendTimeout
+  // and the part is dropped and counted, instead of blocking this renderer for good: the
+  // master re-issues the frame, and a replacement receiver has an endpoint of its own.
+  void sendTo(const std::string& endpoint, std::vector<std::byte>&& bytes) {
+    if (!sendBytes(socketFor(endpoint), std::move(bytes)))
+      drops_.drop(link_.rank(), fmt::format("part not sent to {}: its queue stayed full for {} ms", endpoint,
+                                            kDataSendTimeout.count()));
+  }
+
   zmq::socket_t& socketFor(const std::string& endpoint) {
     auto it = pushes_.find(endpoint);
     if (it == pushes_.end()) {
-      zmq::socket_t s = makeSocket(ctx_, zmq::socket_type::dealer);
-      s.set(zmq::sockopt::routing_id, link_.dataIdentity());  // compositors, partners and the display admit it by this
-      s.set(zmq::sockopt::linger, 1000);  // let the last pieces leave at shutdown
-      connectTo(s, endpoint);
-      it = pushes_.emplace(endpoint, std::move(s)).first;
+      it = pushes_.emplace(endpoint, connectDataSender(ctx_, endpoint, link_.dataIdentity())).first;
     }
     return it->second;
   }

@@ -13,6 +13,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include "common/net/curve.h"
+
 namespace tessera {
 
 bool sendBytes(zmq::socket_t& s, std::vector<std::byte>&& bytes, bool more, bool dontwait) {
@@ -44,6 +46,15 @@ zmq::socket_t makeSocket(zmq::context_t& ctx, zmq::socket_type type, int64_t max
   s.set(zmq::sockopt::linger, 0);
   s.set(zmq::sockopt::sndhwm, 64);
   s.set(zmq::sockopt::rcvhwm, 64);
+  return s;
+}
+
+zmq::socket_t connectDataSender(zmq::context_t& ctx, const std::string& endpoint, const std::string& identity) {
+  zmq::socket_t s = makeSocket(ctx, zmq::socket_type::dealer);
+  s.set(zmq::sockopt::routing_id, identity);
+  s.set(zmq::sockopt::linger, 1000);
+  s.set(zmq::sockopt::sndtimeo, (int)kDataSendTimeout.count());
+  connectTo(s, endpoint);
   return s;
 }
 

@@ -15,8 +15,19 @@
 namespace tessera {
 
 // Moves `bytes` into ZeroMQ without copying (freed by ZeroMQ after the send).
-// Returns false if the socket would block (with dontwait) or was closed.
+// Returns false if the socket would block (with dontwait), its send timeout ran out, or it
+// was closed.
 bool sendBytes(zmq::socket_t& s, std::vector<std::byte>&& bytes, bool more = false, bool dontwait = false);
+
+// How long a stage's send of frame data may wait for room in a receiver's queue (64
+// messages): the master's shortest frame deadline, after which it re-issues the frame anyway.
+inline constexpr std::chrono::milliseconds kDataSendTimeout{3000};
+
+// A stage's socket for frame data to one receiver (a compositor, a swap partner, the
+// display), connected: a DEALER that names itself `identity` (receivers admit it by this),
+// gives its last parts a second to leave at shutdown, and gives up a send after
+// kDataSendTimeout rather than block the stage for good on a receiver that stopped reading.
+zmq::socket_t connectDataSender(zmq::context_t& ctx, const std::string& endpoint, const std::string& identity);
 
 inline std::span<const std::byte> view(const zmq::message_t& m) {
   return {static_cast<const std::byte*>(m.data()), m.size()};
