@@ -49,6 +49,11 @@ Image8::Image8(int w, int h) : width(w), height(h) {
   px.assign((size_t)w * h * 4, 0);
 }
 
+void Image8::clear(const Rect& r) {
+  const Rect c = intersect(r, Rect{0, 0, width, height});
+  for (int y = c.y; y < c.y + c.h; ++y) std::fill_n(at(c.x, y), 4 * (size_t)c.w, uint8_t{0});
+}
+
 namespace {
 template <class Img>
 Rect activeRegionImpl(const Img& img) {

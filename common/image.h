@@ -42,6 +42,7 @@ struct Image8 {
   std::vector<uint8_t> px;  // 4 bytes per pixel, premultiplied RGBA
   Image8() = default;
   Image8(int w, int h);
+  void clear(const Rect& r);  // transparent black inside r (clipped to the image)
   uint8_t* at(int x, int y) { return &px[4 * ((size_t)y * width + x)]; }
   const uint8_t* at(int x, int y) const { return &px[4 * ((size_t)y * width + x)]; }
   bool operator==(const Image8&) const = default;

@@ -120,7 +120,7 @@ class Stage {
       frame_ = Image8(r.params.width, r.params.height);
     const proto::SortLastWork* sort_last = r.params.sortLast();  // else sort-first: r.tiles are routed
     if (sort_last) st.active_pixels = compositeRegion(reg, sort_last->order, r.pieces, row_, frame_);
-    else route(r.framebuffers, st);
+    else route(r, st);
     st.work_ms = msSince(t0);
     for (const auto& p : r.pieces) st.active = unite(st.active, p.active);
     auto t1 = Clock::now();
@@ -152,11 +152,18 @@ class Stage {
   }
 
   // Sort-first: strips find their place from their headers alone (Lightning-2 style).
-  void route(const std::vector<proto::Framebuffer>& fbs, proto::StageStats& st) {
-    for (const auto& fb : fbs) {
+  // Sort-first: each renderer's strips into its own tiles. The tiles are cleared first, so a
+  // row a renderer left out is transparent, never the frame before's.
+  void route(const Gather::Ready& r, proto::StageStats& st) {
+    for (const Rect& t : r.tiles) frame_.clear(t);
+    std::vector<Rect> own;
+    for (const auto& fb : r.framebuffers) {
+      own.clear();
+      for (const auto& t : r.params.sortFirst()->tiles)
+        if (t.compositor == link_.rank() && t.renderer == fb.renderer) own.push_back(t.tile);
       Image8 img(fb.width, fb.height);
       std::memcpy(img.px.data(), fb.pixels.data(), fb.pixels.size());
-      RouteStats rs = routeFramebuffer(img, frame_, 0);
+      RouteStats rs = routeFramebuffer(img, frame_, 0, own);
       if (rs.strips_rejected) drops_.drop(fb.renderer, std::to_string(rs.strips_rejected) + " strips rejected");
       st.active_pixels += rs.pixels_written;
     }

@@ -44,7 +44,13 @@ void Metrics::cancelled(uint64_t frame) {
 void Metrics::stats(const proto::StageStats& s) {
   auto it = frames_.find(s.frame);
   if (it == frames_.end()) return;  // written already
-  (s.role == proto::Role::Renderer ? it->second.r : it->second.c).push_back(s);
+  if (s.epoch != it->second.epoch) return;  // for an earlier issue of the frame
+  // One report per stage and frame: a repeated one replaces the first, so that no member can
+  // grow the master's memory by repeating its Stats.
+  auto& reports = s.role == proto::Role::Renderer ? it->second.r : it->second.c;
+  auto same = std::find_if(reports.begin(), reports.end(), [&](const proto::StageStats& r) { return r.rank == s.rank; });
+  if (same != reports.end()) *same = s;
+  else reports.push_back(s);
   if (it->second.done && (int)it->second.r.size() >= it->second.renderers &&
       (int)it->second.c.size() >= it->second.compositors)
     write(it->first, it->second), frames_.erase(it);

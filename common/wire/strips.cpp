@@ -174,7 +174,13 @@ void writeTileHeaders(const TilePacking& p, Image8& fb, uint8_t display) {
   }
 }
 
-RouteStats routeFramebuffer(const Image8& fb, Image8& dst, uint8_t display) {
+RouteStats routeFramebuffer(const Image8& fb, Image8& dst, uint8_t display, std::span<const Rect> allowed) {
+  auto inside = [&](const StripHeader& h) {
+    if (allowed.empty()) return true;
+    return std::any_of(allowed.begin(), allowed.end(), [&](const Rect& t) {
+      return h.y >= t.y && h.y < t.y + t.h && h.x >= t.x && h.x + h.width <= t.x + t.w;
+    });
+  };
   RouteStats s;
   if (fb.width <= 0 || fb.height <= 0 || fb.px.size() < 4 * size_t(fb.width) * size_t(fb.height)) return s;
   for (int y = 0; y < fb.height; ++y) {
@@ -187,7 +193,7 @@ RouteStats routeFramebuffer(const Image8& fb, Image8& dst, uint8_t display) {
         s.truncated = true;
         break;
       }
-      if (h.display != display || !fits(h, dst)) {
+      if (h.display != display || !fits(h, dst) || !inside(h)) {
         ++s.strips_rejected;
       } else {
         std::memmove(dst.at(h.x, h.y), fb.at(x, y), 4 * size_t(h.width));

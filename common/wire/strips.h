@@ -63,6 +63,8 @@ TilePacking packTiles(const std::vector<Rect>& tiles, int max_fb_width);
 void writeTileHeaders(const TilePacking& p, Image8& fb, uint8_t display);
 // Routes a packed framebuffer with no side information: each framebuffer row is scanned
 // from x = 0 as [header][strip][header][strip]...; a header whose check fails ends the row.
-RouteStats routeFramebuffer(const Image8& fb, Image8& dst, uint8_t display);
+// With `allowed` (the sender's own tiles), a strip outside all of them is rejected: one
+// renderer cannot overwrite another's tiles.
+RouteStats routeFramebuffer(const Image8& fb, Image8& dst, uint8_t display, std::span<const Rect> allowed = {});
 
 }  // namespace tessera

@@ -239,6 +239,22 @@ TEST(RouteFramebuffer, CorruptHeaderEndsOnlyItsRow) {
   EXPECT_EQ(dst.at(7, 2)[0], 0x7F);
 }
 
+// A renderer's strips land only in its own tiles: a framebuffer packed for two tiles, of
+// which the sender owns one, writes that one and has the other's strips rejected.
+TEST(RouteFramebuffer, StripsOutsideTheSendersTilesAreRejected) {
+  Image8 img(8, 4);
+  for (auto& b : img.px) b = 0x7F;
+  TilePacking p = packTiles({{0, 0, 4, 4}, {4, 0, 4, 4}}, 100);
+  Image8 fb = packedFramebuffer(img, p, 0);
+  Image8 dst(8, 4);
+  const Rect own[] = {{0, 0, 4, 4}};
+  EXPECT_EQ(routeFramebuffer(fb, dst, 0, own), (RouteStats{4, 4, false, 4 * 4}));
+  EXPECT_EQ(dst.at(3, 3)[0], 0x7F);
+  EXPECT_EQ(dst.at(4, 0)[0], 0) << "another renderer's tile was written";
+  const Rect both[] = {{0, 0, 4, 4}, {4, 0, 4, 4}};
+  EXPECT_EQ(routeFramebuffer(fb, dst, 0, both), (RouteStats{8, 0, false, 8 * 4}));
+}
+
 TEST(RouteFramebuffer, StripRunningPastTheRowIsTruncation) {
   Image8 fb(10, 1);
   packHeader({0, 0, 9, 0}, fb.at(0, 0));  // needs 2 + 9 > 10 pixels

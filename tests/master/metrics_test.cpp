@@ -10,8 +10,9 @@
 namespace tessera::master {
 namespace {
 
-proto::StageStats stats(proto::Role role, uint32_t rank, uint64_t frame, double ms) {
+proto::StageStats stats(proto::Role role, uint32_t rank, uint64_t frame, double ms, uint32_t epoch = 0) {
   proto::StageStats s;
+  s.epoch = epoch;
   s.role = role;
   s.rank = rank;
   s.frame = frame;
@@ -87,7 +88,7 @@ TEST(Metrics, LineWrittenOnceDoneAndAllStatsAreInWithTheFaultCounters) {
   {
     Metrics m(path.string());
     m.issued(0, 2, 1, 1, FrameSpec{});
-    m.stats(stats(proto::Role::Renderer, 0, 0, 10));
+    m.stats(stats(proto::Role::Renderer, 0, 0, 10, 2));
     m.reassigned();
     m.reissued(3);
     m.refused();
@@ -96,10 +97,10 @@ TEST(Metrics, LineWrittenOnceDoneAndAllStatsAreInWithTheFaultCounters) {
     d.frame = 0;
     m.done(d, 12, 5);
     EXPECT_EQ(m.pending(), 1u) << "the compositor's stats are missing";
-    m.stats(stats(proto::Role::Compositor, 0, 0, 4));
+    m.stats(stats(proto::Role::Compositor, 0, 0, 4, 2));
     EXPECT_EQ(m.pending(), 0u);
     EXPECT_EQ(m.framesDone(), 1u);
-    m.stats(stats(proto::Role::Compositor, 0, 0, 4));  // late duplicate: ignored
+    m.stats(stats(proto::Role::Compositor, 0, 0, 4, 2));  // late duplicate: ignored
   }
   std::ifstream in(path);
   std::string line;
@@ -111,6 +112,30 @@ TEST(Metrics, LineWrittenOnceDoneAndAllStatsAreInWithTheFaultCounters) {
   EXPECT_EQ(j["reissued_frames"], 3);
   EXPECT_EQ(j["refused_peers"], 2);
   EXPECT_FALSE(std::getline(in, line)) << "one line per frame";
+  std::filesystem::remove(path);
+}
+
+// A member that repeats its Stats (or sends them for an earlier issue of the frame) counts
+// once: it once grew the master's memory with every copy until the frame was written.
+TEST(Metrics, RepeatedAndStaleStatsCountOnce) {
+  auto path = std::filesystem::temp_directory_path() / ("tessera_metrics_repeat_" + std::to_string(::getpid()) + ".jsonl");
+  {
+    Metrics m(path.string());
+    m.issued(0, 1, 2, 0, FrameSpec{});
+    for (int i = 0; i < 1000; ++i) m.stats(stats(proto::Role::Renderer, 0, 0, 10 + i, 1));
+    m.stats(stats(proto::Role::Renderer, 1, 0, 99, 0));  // an earlier issue's
+    proto::FrameDone d;
+    m.done(d, 12, 0);
+    EXPECT_EQ(m.pending(), 1u) << "renderer 1 has not reported for this issue of the frame";
+    m.stats(stats(proto::Role::Renderer, 1, 0, 7, 1));
+    EXPECT_EQ(m.pending(), 0u);
+  }
+  std::ifstream in(path);
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  auto j = nlohmann::json::parse(line);
+  EXPECT_EQ(j["render_reports"], 2);
+  EXPECT_EQ(j["render_ms_max"], 1009) << "renderer 0's last report";
   std::filesystem::remove(path);
 }
 
