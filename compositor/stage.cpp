@@ -25,7 +25,9 @@ class Stage {
       : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Compositor, opt.advertise_host),
         inbox_(ctx, {proto::Role::Renderer}, maxPixelMessageBytes(opt.width, opt.height),
                Gather::waitingBudget(opt.width, opt.height)),
-        gather_(0) {}
+        gather_(0) {
+    link_.expectFrameSize(opt.width, opt.height);
+  }
 
   int run(const std::atomic<bool>* stop) {
     if (!link_.join(stop)) {

@@ -27,6 +27,7 @@ class Stage {
         waiting_budget_(kWaitingFrames * 4 * size_t(opt.width + kStripHeaderPixels) * size_t(opt.height)),
         inbox_(ctx, {proto::Role::Compositor, proto::Role::Renderer}, maxPixelMessageBytes(opt.width, opt.height), waiting_budget_),
         frames_(waiting_budget_) {
+    link_.expectFrameSize(opt.width, opt.height);
     inbox_.bind(opt_.endpoints.bind(opt_.endpoints.display()));
     // Listening from the start: a viewer may connect before the first frame.
     if (!opt_.web.empty()) web_ = makeWebSink(opt_.web, opt_.web_token, opt_.background.value_or(kWebBackground));

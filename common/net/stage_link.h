@@ -42,6 +42,10 @@ class StageLink {
     bool shutdown = false;
   };
   Published receive(DropCounter& drops, int max_messages = 256);
+  // The frame size this stage's buffers and message limits were made for (its own scene):
+  // FrameParams for a larger frame are passed on, and the mismatch is logged once as an
+  // error naming both sizes (a master started with another scene than this stage).
+  void expectFrameSize(int width, int height) { max_w_ = width, max_h_ = height; }
   // The master probes every 250 ms: this long without a word means it is gone, and a stage
   // left alone (outside the launcher) exits instead of waiting forever.
   bool masterLost() const;
@@ -65,6 +69,8 @@ class StageLink {
   void clearWaiting() { setWaiting(0, proto::kNobody); }
 
  private:
+  int max_w_ = 0, max_h_ = 0;  // 0: no expected size
+  bool size_logged_ = false;
   zmq::context_t& ctx_;
   Endpoints ep_;
   proto::Role role_;
