@@ -112,8 +112,8 @@ class Stage {
     if (!r.region) {  // no part in this frame (a binary swap's, or a spare compositor's)
       // In a binary-swap farm no compositor reports otherwise: its drops reach the metrics with
       // a report of its own. (In a direct-send frame one would stand in for the real ones.)
-      if (!r.params.regions.empty() || drops_.total() == reported_drops_) return;
-      st.dropped = reported_drops_ = drops_.total();
+      if (!r.params.regions.empty() || drops_.total() + unsent_.total() == reported_drops_) return;
+      st.dropped = reported_drops_ = drops_.total() + unsent_.total();
       return link_.report(proto::encode(st, link_.rank()));
     }
     auto t0 = Clock::now();
@@ -147,14 +147,14 @@ class Stage {
     st.bytes_raw = s.stream.size();
     st.bytes_encoded = bytes.size();
     if (!sendBytes(display(r.params.display_endpoint), std::move(bytes)))  // the display stopped reading
-      drops_.drop(link_.rank(), fmt::format("strips not sent to the display: its queue stayed full for {} ms",
-                                            kDataSendTimeout.count()));
-    st.dropped = reported_drops_ = drops_.total();
+      unsent_.drop(0, fmt::format("strips not sent to the display: the queue to it stayed full for {} ms",
+                                  kDataSendTimeout.count()));
+    st.dropped = reported_drops_ = drops_.total() + unsent_.total();
     link_.report(proto::encode(st, link_.rank()));
   }
 
-  // Sort-first: strips find their place from their headers alone (Lightning-2 style).
-  // Sort-first: each renderer's strips into its own tiles. The tiles are cleared first, so a
+  // Sort-first: strips find their place from their headers alone (Lightning-2 style), each
+  // renderer's into its own tiles. The tiles are cleared first, so a
   // row a renderer left out is transparent, never the frame before's.
   void route(const Gather::Ready& r, proto::StageStats& st) {
     for (const Rect& t : r.tiles) frame_.clear(t);
@@ -190,6 +190,7 @@ class Stage {
   Image8 frame_;
   std::map<uint64_t, double> decode_ms_;  // by frame
   DropCounter drops_;
+  DropCounter unsent_;  // strips this compositor could not send (apart: drops_ counts by sender)
   uint64_t reported_drops_ = 0;
 };
 

@@ -23,11 +23,14 @@ Camera applyInput(const Camera& cam, const proto::Input& in) {
   }
   // Each step scales the distance by 0.2..5, and the distance stays within the scene file's
   // limits: an eye zoomed out past them overflowed the view direction, every later input
-  // threw, and every frame failed. A step that would leave the limits stops at them.
+  // threw, and every frame failed. A step that would leave the limits stops just inside them
+  // (1e-12 inside: the new eye's rounding must not land it outside); one that would take an
+  // eye coordinate past the limit (a target far off the origin) is not taken.
   const Vec3 away = c.eye - c.target;
   const double d = length(away);
+  const double lo = kMinCameraDistance * (1 + 1e-12), hi = kMaxCameraDistance * (1 - 1e-12);
   Camera zoomed = c;
-  zoomed.eye = c.target + away * (std::clamp(d * std::clamp(in.zoom, 0.2, 5.0), kMinCameraDistance, kMaxCameraDistance) / d);
+  zoomed.eye = c.target + away * (std::clamp(d * std::clamp(in.zoom, 0.2, 5.0), lo, hi) / d);
   if (cameraProblem(zoomed).what.empty()) c = zoomed;
   return c;
 }

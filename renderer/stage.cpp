@@ -184,7 +184,7 @@ class Stage {
       for (const auto& region : p.regions) sendPiece(p, b, region, viewOf(c.image, c.active, region.region), st);
       st.encode_ms += msSince(t1);
     }
-    st.dropped = drops_.total();
+    st.dropped = drops_.total() + unsent_.total();
     link_.report(proto::encode(st, link_.rank()));
   }
 
@@ -270,7 +270,7 @@ class Stage {
     if (!f.plan.band.empty()) sendBand(f.p, band, f.st);  // no rows: the display expects none (proto::swapBand)
     swap_->recycle(std::move(band));
     f.st.encode_ms += msSince(t1);
-    f.st.dropped = drops_.total();
+    f.st.dropped = drops_.total() + unsent_.total();
     link_.report(proto::encode(f.st, link_.rank()));
     return true;
   }
@@ -291,7 +291,7 @@ class Stage {
       sendTo(*endpoint, std::move(bytes));
     }
     st.encode_ms = msSince(t0);
-    st.dropped = drops_.total();
+    st.dropped = drops_.total() + unsent_.total();
     link_.report(proto::encode(st, link_.rank()));
   }
 
@@ -343,13 +343,14 @@ class Stage {
   }
 
   // A part for a compositor, a swap partner or the display. A receiver that stopped reading
-  // (dead, frozen, or cut off) fills its queue; the send then gives up after kDataSendTimeout
-  // and the part is dropped and counted, instead of blocking this renderer for good: the
-  // master re-issues the frame, and a replacement receiver has an endpoint of its own.
+  // (its process dead or stopped, its link cut) lets this socket's own queue fill; the send
+  // then gives up after kDataSendTimeout and the part is dropped and counted, instead of
+  // blocking this renderer for good: the master re-issues the frame, and a replacement
+  // receiver has an endpoint of its own.
   void sendTo(const std::string& endpoint, std::vector<std::byte>&& bytes) {
     if (!sendBytes(socketFor(endpoint), std::move(bytes)))
-      drops_.drop(link_.rank(), fmt::format("part not sent to {}: its queue stayed full for {} ms", endpoint,
-                                            kDataSendTimeout.count()));
+      unsent_.drop(0, fmt::format("part not sent to {}: the queue to it stayed full for {} ms", endpoint,
+                                  kDataSendTimeout.count()));
   }
 
   zmq::socket_t& socketFor(const std::string& endpoint) {
@@ -379,6 +380,7 @@ class Stage {
   uint64_t first_wanted_ = 0;  // frames below it were cancelled
   uint64_t frames_failed_ = 0;
   DropCounter drops_;
+  DropCounter unsent_;  // parts this renderer could not send (apart: drops_ counts by sender)
   std::optional<SwapFrame> rendering_;  // on the worker, or rendered and waiting for the rounds before it
   std::optional<SwapFrame> swapping_;   // its rounds in progress (swap_)
   RenderWorker worker_;  // last: destroyed first, after its job, while what the job uses lives

@@ -19,8 +19,9 @@ namespace tessera {
 // was closed.
 bool sendBytes(zmq::socket_t& s, std::vector<std::byte>&& bytes, bool more = false, bool dontwait = false);
 
-// How long a stage's send of frame data may wait for room in a receiver's queue (64
-// messages): the master's shortest frame deadline, after which it re-issues the frame anyway.
+// How long a stage's send of frame data may wait for room in its own queue to a receiver (64
+// messages, full only when the receiver stopped reading: its process dead or stopped, its link
+// cut): the master's shortest frame deadline, after which it re-issues the frame anyway.
 inline constexpr std::chrono::milliseconds kDataSendTimeout{3000};
 
 // A stage's socket for frame data to one receiver (a compositor, a swap partner, the

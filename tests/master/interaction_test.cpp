@@ -39,11 +39,13 @@ TEST(Interaction, ZoomIsClampedAndTiltKeepsTheCameraValid) {
 TEST(Interaction, ZoomStopsAtTheDistanceLimitsAndStillAnswers) {
   for (double step : {5.0, 0.2}) {
     Camera c = camera();
+    if (step > 1) c.eye = {0, 0, 220000};  // 220000 * (1e6 / 220000) rounds to just past 1e6
     proto::Input in;
     in.zoom = step;
     for (int i = 0; i < 1000; ++i) c = applyInput(c, in);
     const double limit = step > 1 ? kMaxCameraDistance : kMinCameraDistance;
     EXPECT_NEAR(length(c.eye - c.target), limit, limit * 1e-9) << "zoom steps of " << step;
+    EXPECT_GT(length(applyInput(c, in).eye - c.target), 0) << "still a camera";
     EXPECT_TRUE(cameraProblem(c).what.empty()) << cameraProblem(c).what;
     in.zoom = 1 / step;  // back the other way, and a turn
     in.orbit_dx = 30;
