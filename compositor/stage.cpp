@@ -161,7 +161,7 @@ class Stage {
     std::vector<Rect> own;
     for (const auto& fb : r.framebuffers) {
       own.clear();
-      for (const auto& t : r.params.sortFirst()->tiles)
+      for (const auto& t : r.params.sortFirst()->tiles)  // never none: Gather::check admits no other renderer
         if (t.compositor == link_.rank() && t.renderer == fb.renderer) own.push_back(t.tile);
       Image8 img(fb.width, fb.height);
       std::memcpy(img.px.data(), fb.pixels.data(), fb.pixels.size());
