@@ -112,8 +112,8 @@ class Stage {
     if (!r.region) {  // no part in this frame (a binary swap's, or a spare compositor's)
       // In a binary-swap farm no compositor reports otherwise: its drops reach the metrics with
       // a report of its own. (In a direct-send frame one would stand in for the real ones.)
-      if (!r.params.regions.empty() || drops_.total() + unsent_.total() == reported_drops_) return;
-      st.dropped = reported_drops_ = drops_.total() + unsent_.total();
+      if (!r.params.regions.empty() || dropped() == reported_drops_) return;
+      st.dropped = reported_drops_ = dropped();
       return link_.report(proto::encode(st, link_.rank()));
     }
     auto t0 = Clock::now();
@@ -149,7 +149,7 @@ class Stage {
     if (!sendBytes(display(r.params.display_endpoint), std::move(bytes)))  // the display stopped reading
       unsent_.drop(0, fmt::format("strips not sent to the display: the queue to it stayed full for {} ms",
                                   kDataSendTimeout.count()));
-    st.dropped = reported_drops_ = drops_.total() + unsent_.total();
+    st.dropped = reported_drops_ = dropped();
     link_.report(proto::encode(st, link_.rank()));
   }
 
@@ -191,6 +191,7 @@ class Stage {
   std::map<uint64_t, double> decode_ms_;  // by frame
   DropCounter drops_;
   DropCounter unsent_;  // strips this compositor could not send (apart: drops_ counts by sender)
+  uint64_t dropped() const { return drops_.total() + unsent_.total(); }  // what Stats report
   uint64_t reported_drops_ = 0;
 };
 

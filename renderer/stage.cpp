@@ -184,7 +184,7 @@ class Stage {
       for (const auto& region : p.regions) sendPiece(p, b, region, viewOf(c.image, c.active, region.region), st);
       st.encode_ms += msSince(t1);
     }
-    st.dropped = drops_.total() + unsent_.total();
+    st.dropped = dropped();
     link_.report(proto::encode(st, link_.rank()));
   }
 
@@ -270,7 +270,7 @@ class Stage {
     if (!f.plan.band.empty()) sendBand(f.p, band, f.st);  // no rows: the display expects none (proto::swapBand)
     swap_->recycle(std::move(band));
     f.st.encode_ms += msSince(t1);
-    f.st.dropped = drops_.total() + unsent_.total();
+    f.st.dropped = dropped();
     link_.report(proto::encode(f.st, link_.rank()));
     return true;
   }
@@ -291,7 +291,7 @@ class Stage {
       sendTo(*endpoint, std::move(bytes));
     }
     st.encode_ms = msSince(t0);
-    st.dropped = drops_.total() + unsent_.total();
+    st.dropped = dropped();
     link_.report(proto::encode(st, link_.rank()));
   }
 
@@ -381,6 +381,7 @@ class Stage {
   uint64_t frames_failed_ = 0;
   DropCounter drops_;
   DropCounter unsent_;  // parts this renderer could not send (apart: drops_ counts by sender)
+  uint64_t dropped() const { return drops_.total() + unsent_.total(); }  // what Stats report
   std::optional<SwapFrame> rendering_;  // on the worker, or rendered and waiting for the rounds before it
   std::optional<SwapFrame> swapping_;   // its rounds in progress (swap_)
   RenderWorker worker_;  // last: destroyed first, after its job, while what the job uses lives
