@@ -250,10 +250,19 @@ class RawFile {
 
   [[noreturn]] void nonFinite(size_t i, float x) const {
     const size_t nx = spec_.dims[0], ny = spec_.dims[1];
-    fail(spec_.samples(), "non-finite value " + std::to_string(x) + " at voxel (" + std::to_string(i % nx) + ", " +
-                         std::to_string(i / nx % ny) + ", " + std::to_string(i / (nx * ny)) + "), linear index " +
-                         std::to_string(i) + "; Tessera needs finite samples: replace NaN and infinities with a value "
-                         "outside the data's range (e.g. numpy.nan_to_num(v, nan=v_min)) and give range: to map it");
+    const std::string at = " at voxel (" + std::to_string(i % nx) + ", " + std::to_string(i / nx % ny) + ", " +
+                           std::to_string(i / (nx * ny)) + "), linear index " + std::to_string(i);
+    // A float64 sample, or one the header scales, can be finite and still overflow float32.
+    const bool scaled = spec_.slope != 1 || spec_.inter != 0;
+    if (std::isinf(x) && (spec_.type == VoxelType::Float64 || scaled))
+      fail(spec_.samples(), std::string(x > 0 ? "+" : "-") + "infinite or beyond float32's range (3.4e38)" +
+                                (scaled ? " after the header's scaling (slope " + std::to_string(spec_.slope) +
+                                              ", intercept " + std::to_string(spec_.inter) + ")"
+                                        : "") +
+                                at + "; Tessera holds samples as float32: rescale the data into its range");
+    fail(spec_.samples(), "non-finite value " + std::to_string(x) + at +
+                              "; Tessera needs finite samples: replace NaN and infinities with a value "
+                              "outside the data's range (e.g. numpy.nan_to_num(v, nan=v_min)) and give range: to map it");
   }
 
   static constexpr size_t kPieceBytes = 256u << 10;  // well inside a core's L2

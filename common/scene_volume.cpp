@@ -131,8 +131,20 @@ RawVolumeSpec Parser::volumeFile(const YAML::Node& n, const std::string& file, T
   if (steps > 1) {
     series.steps = steps;
     series.step_bytes = (uint64_t)s.dims[0] * s.dims[1] * s.dims[2] * voxelTypeSize(s.type);
+    // Every step's end, with one stat now (a compressed file's size says nothing).
+    std::error_code ec;
+    const uintmax_t have = std::filesystem::file_size(s.samples(), ec);
+    const uintmax_t need = s.offset + (uintmax_t)steps * series.step_bytes;
+    if (!s.gzip && !ec && have < need)
+      fail(key, s.samples() + " has " + std::to_string(have) + " bytes but " + std::to_string(steps) +
+                    " time steps of " + std::to_string(series.step_bytes) + " bytes" +
+                    (s.offset ? " after " + std::to_string(s.offset) + " bytes of header" : "") + " need " +
+                    std::to_string(need));
   }
   spacingAndRange(n, s);
+  if (std::string p = spacingProblem(s.spacing); !p.empty() && !n["spacing"])
+    fail(key, file + ": the header's spacing [" + std::to_string(s.spacing[0]) + ", " + std::to_string(s.spacing[1]) +
+                  ", " + std::to_string(s.spacing[2]) + "]: " + p + "; give volume.spacing: [x, y, z] to replace it");
   return s;
 }
 

@@ -54,10 +54,9 @@ RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps) {
   const double d[3] = {nim->dx, nim->dy, nim->dz};
   for (int a = 0; a < 3; ++a) {
     // A spacing of 0 is common in hand-made headers; pixdim's sign belongs to orientation.
+    // Checked by the scene parser, after the scene's volume.spacing (which may replace a bad one).
     s.spacing[a] = d[a] == 0 ? 1.0 : std::fabs(d[a]);
-    if (!std::isfinite(d[a])) fail("pixdim[" + std::to_string(a + 1) + "] = " + std::to_string(d[a]) + " is not finite");
   }
-  if (std::string p = spacingProblem(s.spacing); !p.empty()) fail("pixdim: " + p);
   if (nim->scl_slope != 0 && std::isfinite(nim->scl_slope) && std::isfinite(nim->scl_inter)) {
     s.slope = nim->scl_slope;
     s.inter = nim->scl_inter;

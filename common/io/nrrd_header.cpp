@@ -3,6 +3,7 @@
 // in the tests. The data follows the header's blank line (.nrrd) or sits in "data file"
 // (.nhdr), raw or gzip-encoded.
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -67,9 +68,13 @@ RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps) {
   std::string line;
   if (!std::getline(in, line) || line.rfind("NRRD000", 0) != 0) fail("not a NRRD file (no NRRD000x magic on line 1)");
   std::map<std::string, std::string> f;
+  bool blank_line = false;
   while (std::getline(in, line)) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty()) break;  // the end of the header; attached data follows
+    if (line.empty()) {  // the end of the header; attached data follows
+      blank_line = true;
+      break;
+    }
     if (line[0] == '#' || line.find(":=") != std::string::npos) continue;  // comments, key/value pairs
     const size_t colon = line.find(": ");
     if (colon == std::string::npos) fail("header line '" + line + "' is not 'field: value'");
@@ -101,15 +106,18 @@ RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps) {
     else steps = n;
   }
   if (time_steps) *time_steps = (int)steps;
-  if (axes == 4 && f.count("kinds")) {  // the time axis must be the last: RGB or vector data are not volumes
+  if (f.count("kinds")) {  // RGB, vector or tensor axes hold a voxel's components, not space
     std::istringstream kinds(f["kinds"]);
     std::string k;
-    for (int a = 0; a < 3 && kinds >> k; ++a)
-      if (k != "domain" && k != "space")
-        fail("kinds '" + f["kinds"] + "': axis " + std::to_string(a) + " is '" + k + "'; a 4-D volume needs 3 space axes then time");
+    for (int a = 0; a < 3 && kinds >> k; ++a) {
+      const bool unknown = k == "???" || k == "none";  // NRRD's "says nothing"
+      if (k == "domain" || k == "space" || unknown || (axes == 3 && k == "time")) continue;
+      fail("kinds '" + f["kinds"] + "': axis " + std::to_string(a) + " is '" + k + "'; " +
+           (axes == 4 ? "a 4-D volume needs 3 space axes then time" : "a volume's 3 axes must be space (domain)"));
+    }
   }
   if (!readSpacing(f, s.spacing)) fail("spacing '" + f["spacings"] + f["space directions"] + "'");
-  if (std::string p = spacingProblem(s.spacing); !p.empty()) fail("spacing: " + p);
+  // Its range is checked by the scene parser, after the scene's volume.spacing (which may replace it).
   const std::string enc = need("encoding");
   if (enc == "gzip" || enc == "gz") s.gzip = true;
   else if (enc != "raw") fail("encoding '" + enc + "': Tessera reads raw and gzip");
@@ -123,12 +131,20 @@ RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps) {
   if (data.find(' ') != std::string::npos || data == "LIST") fail("data file '" + data + "': one file expected");
   if (data.empty()) {
     // Attached: right after the blank line (where a gzip stream starts, if encoded).
-    (s.gzip ? s.gzip_start : s.offset) = (uint64_t)in.tellg();
+    const std::streamoff at = blank_line ? (std::streamoff)in.tellg() : -1;
+    if (at < 0) fail("the header has no 'data file' field and no blank line after it, so it holds no data");
+    (s.gzip ? s.gzip_start : s.offset) = (uint64_t)at;
   } else {
     const std::filesystem::path p(data);
     s.data_file = (p.is_relative() ? std::filesystem::path(path).parent_path() / p : p).lexically_normal().string();
   }
-  const long long skip = f.count("byte skip") ? std::stoll(f["byte skip"]) : 0;
+  long long skip = 0;
+  if (f.count("byte skip")) {
+    const std::string& v = f["byte skip"];
+    const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), skip);
+    if (ec != std::errc() || end != v.data() + v.size() || v.empty())
+      fail("byte skip '" + v + "' is not an integer (bytes to skip, or -1: the data ends the file)");
+  }
   if (skip == -1 && !s.gzip) {  // the data is the file's last bytes
     std::error_code ec;
     const uintmax_t size = std::filesystem::file_size(s.samples(), ec);

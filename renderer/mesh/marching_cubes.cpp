@@ -83,14 +83,41 @@ const CaseTable& caseTable() {
   return table;
 }
 
-}  // namespace
+// The volume whole in memory.
+struct WholeSource {
+  const Volume& v;
+  const Volume& geometry() const { return v; }
+  void need(int) {}
+  float at(int x, int y, int z) const { return v.at(x, y, z); }
+};
 
-Mesh marchingCubes(const Volume& vol, float level, std::array<float, 3> color) {
+// The volume as z-slabs of whole x-y planes, loaded as the layers of cubes reach them: layer
+// k reads planes k-1..k+2 (the cubes' corners and their gradients' neighbours).
+struct SlabSource {
+  const std::function<Volume(const VoxelBox&)>& load;
+  std::array<int, 3> dims;
+  int layers;
+  Volume cur;
+  int z0 = 0, z1 = 0;
+  const Volume& geometry() const { return cur; }
+  void need(int k) {
+    const int lo = std::max(k - 1, 0), hi = std::min(k + 3, dims[2]);
+    if (z1 > z0 && lo >= z0 && hi <= z1) return;
+    z0 = lo, z1 = std::min(dims[2], lo + layers + 3);
+    cur = Volume{};  // the slab before is freed before the next is read
+    cur = load(VoxelBox{{0, 0, z0}, {dims[0], dims[1], z1}});
+  }
+  float at(int x, int y, int z) const { return cur.at(x, y, z - z0); }
+};
+
+template <class Source>
+Mesh march(Source& src, const std::array<int, 3>& dims, float level, std::array<float, 3> color) {
   const CaseTable& table = caseTable();
-  const int nx = vol.dims[0], ny = vol.dims[1], nz = vol.dims[2];
+  const int nx = dims[0], ny = dims[1], nz = dims[2];
   Mesh m;
   if (nx < 2 || ny < 2 || nz < 2) return m;
-  const Vec3 lo = vol.boxMin(), half = vol.halfExtent();
+  src.need(0);
+  const Vec3 lo = src.geometry().boxMin(), half = src.geometry().halfExtent();
   const double cell[3] = {2 * half.x / nx, 2 * half.y / ny, 2 * half.z / nz};
   const int dim[3] = {nx, ny, nz};
   auto gradient = [&](const int g[3], double out[3]) {
@@ -98,7 +125,7 @@ Mesh marchingCubes(const Volume& vol, float level, std::array<float, 3> color) {
       int p[3] = {g[0], g[1], g[2]}, q[3] = {g[0], g[1], g[2]};
       p[a] = std::min(g[a] + 1, dim[a] - 1);
       q[a] = std::max(g[a] - 1, 0);
-      out[a] = (vol.at(p[0], p[1], p[2]) - vol.at(q[0], q[1], q[2])) / ((p[a] - q[a]) * cell[a]);
+      out[a] = (src.at(p[0], p[1], p[2]) - src.at(q[0], q[1], q[2])) / ((p[a] - q[a]) * cell[a]);
     }
   };
   // Vertex ids of the grid edges touching the current layer of cubes (k..k+1): x and y edges in
@@ -118,7 +145,7 @@ Mesh marchingCubes(const Volume& vol, float level, std::array<float, 3> color) {
     const size_t at = (size_t)ga[0] + (size_t)nx * ga[1];
     uint32_t& slot = axis == 0 ? ex[ga[2] - k][at] : axis == 1 ? ey[ga[2] - k][at] : ez[at];
     if (slot != kNone) return slot;
-    const float fa = vol.at(ga[0], ga[1], ga[2]), fb = vol.at(gb[0], gb[1], gb[2]);
+    const float fa = src.at(ga[0], ga[1], ga[2]), fb = src.at(gb[0], gb[1], gb[2]);
     const double t = (level - fa) / (double)(fb - fa);  // fa != fb: the edge is crossed
     double na[3], nb[3], n[3];
     gradient(ga, na);
@@ -137,11 +164,12 @@ Mesh marchingCubes(const Volume& vol, float level, std::array<float, 3> color) {
     return slot;
   };
   for (int k = 0; k + 1 < nz; ++k) {
+    src.need(k);
     for (int j = 0; j + 1 < ny; ++j)
       for (int i = 0; i + 1 < nx; ++i) {
         int mask = 0;
         for (int c = 0; c < 8; ++c)
-          if (vol.at(i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2)) >= level) mask |= 1 << c;
+          if (src.at(i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2)) >= level) mask |= 1 << c;
         for (const auto& tri : table.tris[mask])
           for (int e : tri) m.indices.push_back(vertex(i, j, k, e));
       }
@@ -152,6 +180,19 @@ Mesh marchingCubes(const Volume& vol, float level, std::array<float, 3> color) {
     std::fill(ez.begin(), ez.end(), kNone);
   }
   return m;
+}
+
+}  // namespace
+
+Mesh marchingCubes(const Volume& vol, float level, std::array<float, 3> color) {
+  WholeSource src{vol};
+  return march(src, vol.dims, level, color);
+}
+
+Mesh marchingCubes(const std::array<int, 3>& dims, const std::function<Volume(const VoxelBox&)>& load, float level,
+                   int layers, std::array<float, 3> color) {
+  SlabSource src{load, dims, std::max(layers, 1), {}};
+  return march(src, dims, level, color);
 }
 
 }  // namespace tessera::renderer

@@ -31,6 +31,11 @@ bool parseType(const std::string& s, Type& t) {
   return false;
 }
 
+size_t typeSize(Type t) {
+  static constexpr size_t kSize[] = {1, 1, 2, 2, 4, 4, 4, 8};
+  return kSize[(int)t];
+}
+
 struct Prop {
   std::string name;
   Type type = Type::F32;
@@ -52,8 +57,7 @@ class Body {
 
   double next(Type t) {
     if (ascii_) return nextToken();
-    static constexpr size_t kSize[] = {1, 1, 2, 2, 4, 4, 4, 8};
-    const size_t n = kSize[(int)t];
+    const size_t n = typeSize(t);
     if (pos_ + n > b_.size()) fail("unexpected end of file");
     unsigned char raw[8];
     std::memcpy(raw, b_.data() + pos_, n);
@@ -113,6 +117,7 @@ class HeaderParser {
   void format(std::istringstream& in);
   void element(std::istringstream& in);
   void property(std::istringstream& in, const std::string& line);
+  void checkCounts() const;
 
   const std::string& bytes_;
   const std::string& name_;
@@ -138,6 +143,7 @@ Header HeaderParser::parse() {
   }
   if (!have_format_) bad("missing format line");
   h_.body = pos_;
+  checkCounts();
   return h_;
 }
 
@@ -166,6 +172,24 @@ void HeaderParser::element(std::istringstream& in) {
   if (!(in >> e.name >> count) || count < 0) bad("expected 'element <name> <count>'");
   e.count = (size_t)count;
   h_.elements.push_back(e);
+}
+
+// Refuses counts the body cannot hold before anything is allocated or looped over: an item
+// takes at least one byte per property in ascii (a digit; separators not counted) and its
+// fixed-size values and list lengths in binary. An element without properties takes no bytes,
+// whatever its count, and is skipped whole (MeshReader).
+void HeaderParser::checkCounts() const {
+  size_t left = bytes_.size() - h_.body;
+  for (const Element& e : h_.elements) {
+    size_t per_item = 0;
+    for (const Prop& p : e.props) per_item += h_.ascii ? 1 : typeSize(p.list ? p.count_type : p.type);
+    if (per_item == 0) continue;
+    if (e.count > left / per_item)
+      throw std::runtime_error(name_ + ": bad PLY header: element '" + e.name + "' declares " + std::to_string(e.count) +
+                               " items, but the " + std::to_string(bytes_.size() - h_.body) +
+                               " bytes after the header hold at most " + std::to_string(left / per_item));
+    left -= e.count * per_item;
+  }
 }
 
 void HeaderParser::property(std::istringstream& in, const std::string& line) {
@@ -255,6 +279,7 @@ Mesh MeshReader::build() {
 
 void MeshReader::readElement(const Element& e) {
   const Layout l = layoutOf(e, name_);
+  if (e.props.empty()) return;  // nothing to read, however many items it declares
   if (l.is_vertex) {
     have_normals_ = l.normals();
     have_colors_ = l.colors();

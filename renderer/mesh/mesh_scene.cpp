@@ -12,12 +12,28 @@ SceneGeometry loadSceneGeometry(const Scene& scene, uint32_t per_chunk) {
   if (!scene.mesh->file.empty()) {
     try {
       g.mesh = loadMesh(scene.mesh->file);
-    } catch (const std::runtime_error& e) {
+    } catch (const std::runtime_error& e) {  // the readers' errors name the file
       throw SceneError(name + ": mesh: " + e.what());
+    } catch (const std::exception& e) {  // bad_alloc: a mesh too big for this host's memory
+      throw SceneError(name + ": mesh: " + scene.mesh->file + ": " + e.what());
     }
     fitToUnitBox(g.mesh);
   } else {
-    g.mesh = marchingCubes(loadVolume(scene), (float)scene.mesh->level);
+    // In slabs of 32 layers: a renderer holds the mesh, never the whole volume. A file with
+    // no range is streamed for its min..max with the first slab only; the slabs after it
+    // take that range, which normalises every voxel as the whole volume's load would.
+    Scene slabs = scene;
+    g.mesh = marchingCubes(
+        volumeDims(scene),
+        [&](const VoxelBox& box) {
+          Volume v = loadVolume(slabs, box);
+          if (auto* raw = std::get_if<RawVolumeSpec>(&slabs.volume); raw && !raw->has_range) {
+            raw->has_range = true;
+            raw->range = v.mapped_range;
+          }
+          return v;
+        },
+        (float)scene.mesh->level, 32);
     if (g.mesh.triangleCount() == 0)
       throw SceneError(name + ": mesh.isosurface.level: no surface at level " + std::to_string(scene.mesh->level));
   }

@@ -185,5 +185,53 @@ TEST(VolumeFiles, BadHeadersAreNamedByFileAndField) {
       << cut;
 }
 
+// Found by review: a header ending the file (no blank line, no data file) read from offset
+// 2^64 - 1; "byte skip: abc" said only "stoll"; an RGB axis was drawn as 3 voxels of space.
+TEST(VolumeFiles, NrrdHeadersWithoutDataOrWithBadFieldsAreNamed) {
+  TempDir t("bad-nrrd");
+  const std::string head = "NRRD0004\ntype: uchar\ndimension: 3\nencoding: raw\n";
+  std::ofstream(t.file("nodata.nrrd")) << head << "sizes: 2 2 2";
+  const std::string nodata = errorOf("volume: {file: nodata.nrrd}\n", t.path.string());
+  EXPECT_NE(nodata.find("nodata.nrrd: the header has no 'data file' field and no blank line"), std::string::npos)
+      << nodata;
+  const char bytes[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+  t.write("d.raw", bytes, sizeof bytes);
+  for (const char* skip : {"abc", "12abc", "99999999999999999999"}) {
+    std::ofstream(t.file("skip.nhdr")) << head << "sizes: 2 2 2\ndata file: d.raw\nbyte skip: " << skip << "\n";
+    const std::string e = errorOf("volume: {file: skip.nhdr}\n", t.path.string());
+    EXPECT_NE(e.find(std::string("skip.nhdr: byte skip '") + skip + "' is not an integer"), std::string::npos) << e;
+  }
+  std::ofstream(t.file("rgb.nhdr")) << head << "sizes: 2 2 2\nkinds: RGB-color domain domain\ndata file: d.raw\n";
+  const std::string rgb = errorOf("volume: {file: rgb.nhdr}\n", t.path.string());
+  EXPECT_NE(rgb.find("axis 0 is 'RGB-color'"), std::string::npos) << rgb;
+  std::ofstream(t.file("ok.nhdr")) << head << "sizes: 2 2 2\nkinds: domain space ???\ndata file: d.raw\n";
+  EXPECT_EQ(errorOf("volume: {file: ok.nhdr}\n", t.path.string()), "<no error>");
+}
+
+// The scene's volume.spacing replaces a header's spacing, also one the header gets wrong; a
+// 4-D file shorter than its steps is said at load, not at the step that runs out.
+TEST(VolumeFiles, TheSceneReplacesABadHeaderSpacingAndShortFourDFilesAreSaidAtOnce) {
+  TempDir t("spacing");
+  const int64_t dims[8] = {3, 2, 2, 2, 1, 1, 1, 1};
+  nifti_image* nim = nifti_make_new_nim(dims, DT_UINT8, 1);
+  nim->dx = nim->pixdim[1] = 1;
+  nim->dy = nim->pixdim[2] = 1;
+  nim->dz = nim->pixdim[3] = 1e-9;
+  nifti_set_filenames(nim, t.file("thin.nii").c_str(), 0, 1);
+  nifti_image_write(nim);
+  nifti_image_free(nim);
+  const std::string bad = errorOf("volume: {file: thin.nii}\n", t.path.string());
+  EXPECT_NE(bad.find("thin.nii: the header's spacing [1.000000, 1.000000, 0.000000]: spacing ratio"), std::string::npos) << bad;
+  EXPECT_NE(bad.find("give volume.spacing: [x, y, z] to replace it"), std::string::npos) << bad;
+  EXPECT_EQ(fromScene("volume: {file: thin.nii, spacing: [1, 1, 2]}\n", t.path.string()).spacing,
+            (std::array<double, 3>{1, 1, 2}));
+  const char bytes[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+  t.write("d4.raw", bytes, sizeof bytes);
+  std::ofstream(t.file("short.nhdr")) << "NRRD0004\ntype: uchar\ndimension: 4\nsizes: 2 2 2 1000\nencoding: raw\n"
+                                         "data file: d4.raw\n";
+  const std::string e = errorOf("volume: {file: short.nhdr}\n", t.path.string());
+  EXPECT_NE(e.find("d4.raw has 8 bytes but 1000 time steps of 8 bytes need 8000"), std::string::npos) << e;
+}
+
 }  // namespace
 }  // namespace tessera

@@ -286,6 +286,22 @@ TEST(Volume, AWindowWithoutARangeStillRefusesANonFiniteValueAnywhere) {
   }
 }
 
+// A finite float64 sample beyond float32's range is not a NaN to replace: the message says so.
+TEST(Volume, AFloat64SampleBeyondFloat32SaysSoRatherThanNaN) {
+  TempDir t("volume");
+  std::vector<double> d(2 * 2 * 2, 1.0);
+  d[1] = -1e300;
+  RawVolumeSpec s = test::rawSpec(t.write("big.raw", d.data(), d.size() * 8), {2, 2, 2}, VoxelType::Float64, {1, 1, 1}, false, {0, 0});
+  try {
+    loadRawVolume(s);
+    FAIL() << "-1e300 went unseen";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("big.raw: -infinite or beyond float32's range (3.4e38) at voxel (1, 0, 0)"),
+              std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find("NaN"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Volume, AGeneratedWindowEqualsThatPartOfTheWholeVolume) {
   for (const char* name : {"hollow-shell", "marschner-lobb", "noise-cloud"}) {
     const GeneratorSpec spec{name, 24, 3, {1, 1, 1}};

@@ -14,6 +14,7 @@
 #include "renderer/mesh/marching_cubes.h"
 #include "renderer/mesh/mesh.h"
 #include "renderer/mesh/mesh_scene.h"
+#include "tests/common/temp_dir.h"
 
 namespace tessera::renderer {
 namespace {
@@ -116,6 +117,25 @@ TEST(PlyTest, BadInputsNameTheFileAndPlace) {
   std::string word = kAsciiQuad;
   word.replace(word.find("0 0 1 0 0 0"), 11, "0 0 one 0 0 0");
   expectError([&] { parsePly(word, "g.ply"); }, {"vertex 4", "expected a number"});
+}
+
+// Counts are checked against the body before anything is allocated or looped over: without it
+// an element of no properties and 1e18 items looped for hours, and a huge vertex count threw
+// bad_alloc naming no file.
+TEST(PlyTest, CountsTheBodyCannotHoldAreRefusedBeforeReading) {
+  std::string junk = kAsciiQuad;
+  junk.insert(junk.find("element vertex"), "element junk 1000000000000000000\n");
+  EXPECT_EQ(parsePly(junk, "j.ply").vertexCount(), 5u);  // no properties: no bytes, skipped whole
+  std::string huge = kAsciiQuad;
+  huge.replace(huge.find("element vertex 5"), 16, "element vertex 4611686018427387904");
+  expectError([&] { parsePly(huge, "h.ply"); },
+              {"h.ply", "element 'vertex' declares 4611686018427387904 items", "hold at most"});
+  std::string big_binary = binaryPly(false);
+  big_binary.replace(big_binary.find("element vertex 3"), 16, "element vertex 100000000000");
+  expectError([&] { parsePly(big_binary, "i.ply"); }, {"i.ply", "element 'vertex' declares 100000000000 items"});
+  std::string faces = binaryPly(false);  // 3 vertices of 36 bytes, then 1 + 12 + 8 bytes: room for 21 list lengths
+  faces.replace(faces.find("element face 1"), 14, "element face 22");
+  expectError([&] { parsePly(faces, "k.ply"); }, {"k.ply", "element 'face' declares 22 items", "at most 21"});
 }
 
 TEST(ObjTest, CornerFormsNegativeIndicesAndPolygons) {
@@ -286,6 +306,47 @@ TEST(MeshSceneTest, ShippedScenesLoadTheirGeometry) {
   const Box b = bounds(g.mesh);
   EXPECT_NEAR(std::max({b.hi.x - b.lo.x, b.hi.y - b.lo.y, b.hi.z - b.lo.z}), 1.0, 1e-6);  // fitted
   EXPECT_EQ(sceneRenderOptions(tetra).supersample, 3);
+}
+
+void expectSameMesh(const Mesh& a, const Mesh& b) {
+  ASSERT_GT(b.triangleCount(), 0u);
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.normals, b.normals);
+  EXPECT_EQ(a.colors, b.colors);
+  EXPECT_EQ(a.indices, b.indices);
+}
+
+// A renderer builds an isosurface from z-slabs and never holds the whole volume (found by
+// review: every renderer loaded it whole); the mesh is the whole volume's bit for bit.
+TEST(MeshSceneTest, TheIsosurfaceFromSlabsIsTheWholeVolumesBitForBit) {
+  const GeneratorSpec spec{"marschner-lobb", 20, 1, {1, 1.5, 0.75}};
+  const Mesh whole = marchingCubes(generateVolume(spec), 0.5f);
+  for (int layers : {1, 2, 5, 17, 40}) {
+    int loads = 0, deepest = 0;
+    const Mesh slabs = marchingCubes(
+        {20, 20, 20},
+        [&](const VoxelBox& box) {
+          ++loads, deepest = std::max(deepest, box.hi[2] - box.lo[2]);
+          return generateVolume(spec, box);
+        },
+        0.5f, layers);
+    expectSameMesh(slabs, whole);
+    EXPECT_LE(deepest, std::min(20, layers + 3)) << layers;
+    if (layers + 3 >= 20) EXPECT_EQ(loads, 1);
+    else EXPECT_GE(loads, 19 / (layers + 2)) << layers;  // each slab moves the front by >= layers planes
+  }
+  // A raw file with no range: the slabs after the first take the range streamed with it.
+  test::TempDir t("iso-slabs");
+  const Volume v = generateVolume(GeneratorSpec{"marschner-lobb", 70, 1, {1, 1, 1}});
+  std::vector<uint16_t> raw(v.values.size());
+  for (size_t i = 0; i < raw.size(); ++i) raw[i] = (uint16_t)(100 + 3000 * v.values[i]);
+  t.write("ml.raw", raw.data(), raw.size() * 2);
+  const Scene s = parseScene("volume: {file: ml.raw, dims: [70, 70, 70], type: uint16}\n"
+                             "mesh: {isosurface: {of: volume, level: 0.4}}\ncamera: {eye: [0, 0, 2.5], target: [0, 0, 0]}\n",
+                             t.path.string(), "s.yaml");
+  Mesh expected = marchingCubes(loadVolume(s), 0.4f);
+  buildChunks(expected, 64);  // which orders the triangles as the scene's geometry has them
+  expectSameMesh(loadSceneGeometry(s, 64).mesh, expected);
 }
 
 TEST(MeshSceneTest, BadMeshKeysAreErrorsNamingTheKey) {
