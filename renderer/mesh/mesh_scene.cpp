@@ -1,6 +1,7 @@
 // Loading a mesh scene's geometry (see mesh_scene.h).
 #include "renderer/mesh/mesh_scene.h"
 
+#include "common/volume_summary.h"
 #include "renderer/mesh/marching_cubes.h"
 
 namespace tessera::renderer {
@@ -20,20 +21,11 @@ SceneGeometry loadSceneGeometry(const Scene& scene, uint32_t per_chunk) {
     fitToUnitBox(g.mesh);
   } else {
     // In slabs of 32 layers: a renderer holds the mesh, never the whole volume. A file with
-    // no range is streamed for its min..max with the first slab only; the slabs after it
-    // take that range, which normalises every voxel as the whole volume's load would.
+    // no range is streamed once for its min..max, which every slab then normalises with.
     Scene slabs = scene;
-    g.mesh = marchingCubes(
-        volumeDims(scene),
-        [&](const VoxelBox& box) {
-          Volume v = loadVolume(slabs, box);
-          if (auto* raw = std::get_if<RawVolumeSpec>(&slabs.volume); raw && !raw->has_range) {
-            raw->has_range = true;
-            raw->range = v.mapped_range;
-          }
-          return v;
-        },
-        (float)scene.mesh->level, 32);
+    fixVolumeRange(slabs);
+    g.mesh = marchingCubes(volumeDims(slabs), [&](const VoxelBox& box) { return loadVolume(slabs, box); },
+                           (float)scene.mesh->level, 32);
     if (g.mesh.triangleCount() == 0)
       throw SceneError(name + ": mesh.isosurface.level: no surface at level " + std::to_string(scene.mesh->level));
   }
