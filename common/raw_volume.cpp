@@ -14,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -282,12 +283,29 @@ class RawFile {
 
 }  // namespace
 
+// The file stays open between windows; with no declared range the whole file's min..max is
+// streamed once, for the first window, and every later window normalises with it.
+struct RawVolumeReader::Open {
+  RawVolumeSpec spec;  // before file, which refers to it
+  RawFile file;
+  std::optional<std::array<double, 2>> scanned;
+  explicit Open(RawVolumeSpec s) : spec(std::move(s)), file(spec) {}
+};
+
+RawVolumeReader::RawVolumeReader(RawVolumeSpec spec) : open_(std::make_unique<Open>(std::move(spec))) {}
+RawVolumeReader::~RawVolumeReader() = default;
+
 Volume loadRawVolume(const RawVolumeSpec& spec) {
   return loadRawVolume(spec, VoxelBox{{0, 0, 0}, spec.dims});
 }
 
 Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector<float> storage) {
-  RawFile file(spec);
+  return RawVolumeReader(spec).read(box, std::move(storage));
+}
+
+Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage) {
+  const RawVolumeSpec& spec = open_->spec;
+  RawFile& file = open_->file;
   const auto& n = spec.dims;
   if (std::string p = windowProblem(n, box); !p.empty()) fail(spec.file, p);
   Volume v;
@@ -302,7 +320,10 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector
   // The range to normalise with: declared, else the whole volume's (every window normalises
   // alike; streamed first), else, for the whole volume, its values' once read.
   std::array<double, 2> data{INFINITY, -INFINITY};
-  if (v.isWindow() && !spec.has_range) data = file.scanRange();
+  if (v.isWindow() && !spec.has_range) {
+    if (!open_->scanned) open_->scanned = file.scanRange();
+    data = *open_->scanned;
+  }
   const bool known = spec.has_range || v.isWindow();
   // Like ParaView: with no declared range, colours and opacity span the data's own values.
   double lo = spec.has_range ? spec.range[0] : data[0], hi = spec.has_range ? spec.range[1] : data[1];

@@ -121,6 +121,21 @@ Volume loadVolume(const Scene& scene);
 // see loadRawVolume and stepVolume.
 // `storage`: memory a file's samples may be read into (see loadRawVolume).
 Volume loadVolume(const Scene& scene, const VoxelBox& box, int step = 0, std::vector<float> storage = {});
+// The scene's volume (of step `step`) opened once for many windows: see RawVolumeReader.
+// Slabs read front to back (the master's summary, isosurfaces, tessera-info's histogram)
+// then decode a compressed file once. Throws as loadVolume does.
+class VolumeReader {
+ public:
+  explicit VolumeReader(const Scene& scene, int step = 0);
+  Volume read(const VoxelBox& box, std::vector<float> storage = {});
+
+ private:
+  template <class F>
+  auto named(F&& f) -> decltype(f());
+  std::string name_;
+  std::optional<RawVolumeReader> raw_;
+  GeneratorSpec generated_;
+};
 // Where step `step` of the scene's volume is: its file (a series), its offset (a 4-D file)
 // or its generator time. A step's own header is read and checked against step 0's: throws
 // std::runtime_error naming the file, the field and both values when they differ, or the

@@ -54,16 +54,31 @@ std::array<int, 3> volumeDims(const Scene& scene) {
 }
 
 Volume loadVolume(const Scene& scene, const VoxelBox& box, int step, std::vector<float> storage) {
-  const std::string name = scene.path.empty() ? "<default scene>" : scene.path;
+  return VolumeReader(scene, step).read(box, std::move(storage));
+}
+
+// Errors name the scene and the volume key, as the parser's do.
+template <class F>
+auto VolumeReader::named(F&& f) -> decltype(f()) {
   try {
-    const auto spec = stepVolume(scene, step);
-    if (const auto* raw = std::get_if<RawVolumeSpec>(&spec)) return loadRawVolume(*raw, box, std::move(storage));
-    return generateVolume(std::get<GeneratorSpec>(spec), box);
+    return f();
   } catch (const SceneError&) {
     throw;
   } catch (const std::exception& e) {
-    throw SceneError(name + ": volume: " + e.what());
+    throw SceneError(name_ + ": volume: " + e.what());
   }
+}
+
+VolumeReader::VolumeReader(const Scene& scene, int step) : name_(scene.path.empty() ? "<default scene>" : scene.path) {
+  named([&] {
+    auto spec = stepVolume(scene, step);
+    if (auto* raw = std::get_if<RawVolumeSpec>(&spec)) raw_.emplace(std::move(*raw));
+    else generated_ = std::get<GeneratorSpec>(spec);
+  });
+}
+
+Volume VolumeReader::read(const VoxelBox& box, std::vector<float> storage) {
+  return named([&] { return raw_ ? raw_->read(box, std::move(storage)) : generateVolume(generated_, box); });
 }
 
 }  // namespace tessera

@@ -131,7 +131,7 @@ class Parser {
   }
   // The keys a scene may set for any volume file.
   void spacingAndRange(const YAML::Node& n, RawVolumeSpec& s) const {
-    if (n["spacing"]) s.spacing = spacing(n["spacing"], "volume.spacing");
+    if (n["spacing"]) s.spacing = spacing(n["spacing"], "volume.spacing"), s.spacing_given = true;
     if (n["range"]) {
       auto r = numbers(n["range"], "volume.range", 2);
       if (!(r[0] < r[1])) fail("volume.range", "expected [min, max] with min < max");

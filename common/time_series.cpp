@@ -17,15 +17,17 @@ std::string dimsText(const std::array<int, 3>& d) {
   return s;
 }
 
-// Step t's header against step 0's: a series has one shape.
-void checkSameShape(const RawVolumeSpec& step, const RawVolumeSpec& first, const std::string& first_file) {
+// Step t's header against step 0's: a series has one shape. The headers' spacing matters
+// only when the scene does not give one for every step.
+void checkSameShape(const RawVolumeSpec& step, const RawVolumeSpec& first, const std::string& first_file,
+                    bool spacing_given) {
   auto differ = [&](const std::string& field, const std::string& a, const std::string& b) {
     throw std::runtime_error(step.file + ": " + field + " " + a + " differs from step 0's " + b + " (" + first_file +
                              "); every step of a series needs the same dims, type and spacing");
   };
   if (step.dims != first.dims) differ("dims", dimsText(step.dims), dimsText(first.dims));
   if (step.type != first.type) differ("type", voxelTypeName(step.type), voxelTypeName(first.type));
-  for (int a = 0; a < 3; ++a)
+  for (int a = 0; a < 3 && !spacing_given; ++a)
     if (step.spacing[a] != first.spacing[a])
       differ("spacing[" + std::to_string(a) + "]", std::to_string(step.spacing[a]), std::to_string(first.spacing[a]));
 }
@@ -87,7 +89,7 @@ std::variant<RawVolumeSpec, GeneratorSpec> stepVolume(const Scene& scene, int st
   }
   if (std::string why = notRegularFile(file); !why.empty()) throw std::runtime_error(file + ": " + why);
   RawVolumeSpec h = readVolumeHeader(file);
-  checkSameShape(h, readVolumeHeader(t.files[0]), t.files[0]);  // the header's, not the scene's spacing
+  checkSameShape(h, readVolumeHeader(t.files[0]), t.files[0], s.spacing_given);
   // The scene's keys hold for every step.
   h.spacing = s.spacing;
   h.has_range = s.has_range;

@@ -7,6 +7,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -51,6 +52,7 @@ struct RawVolumeSpec {
   std::array<int, 3> dims{0, 0, 0};
   VoxelType type = VoxelType::UInt8;
   std::array<double, 3> spacing{1, 1, 1};
+  bool spacing_given = false;           // by the scene (volume.spacing), over a header's
   bool has_range = false;               // else the data's own min..max is mapped to 0..1
   std::array<double, 2> range{0, 255};
   VolumeFormat format = VolumeFormat::Raw;
@@ -106,6 +108,19 @@ Volume loadRawVolume(const RawVolumeSpec& spec);
 // anywhere in the file are refused as loadRawVolume refuses them.
 // `storage`: memory to read into (a freed window of the same size: no page faults, no zeroing).
 Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector<float> storage = {});
+// The same file opened once for many windows, as loadRawVolume reads them. Windows read in
+// file order (slabs of planes front to back) cost one pass over the file in all: a gzip
+// stream is decoded once, not from its start for every window. The range scan is done once.
+class RawVolumeReader {
+ public:
+  explicit RawVolumeReader(RawVolumeSpec spec);  // throws as loadRawVolume does
+  ~RawVolumeReader();
+  Volume read(const VoxelBox& box, std::vector<float> storage = {});
+
+ private:
+  struct Open;
+  std::unique_ptr<Open> open_;
+};
 // Throws std::invalid_argument for an unknown name or size < 2. A box gives a window:
 // each voxel is computed from its position in the whole volume, so windows equal the
 // matching part of the whole.

@@ -30,8 +30,9 @@ VolumeSummary summarizeVolume(const Scene& original) {
   s.lo.assign(count, INFINITY);
   s.hi.assign(count, -INFINITY);
   std::array<double, 2> data{INFINITY, -INFINITY};
+  VolumeReader reader(scene);  // one pass over the file (a gzip stream decoded once)
   for (int z0 = 0; z0 < n[2]; z0 += s.edge) {
-    const Volume slab = loadVolume(scene, VoxelBox{{0, 0, z0}, {n[0], n[1], std::min(n[2], z0 + s.edge)}});
+    const Volume slab = reader.read(VoxelBox{{0, 0, z0}, {n[0], n[1], std::min(n[2], z0 + s.edge)}});
     s.shape.spacing = slab.spacing;
     s.shape.mapped_range = slab.mapped_range;  // every slab's: the range was fixed above
     data[0] = std::min(data[0], slab.data_range[0]);

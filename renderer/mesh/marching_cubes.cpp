@@ -92,22 +92,36 @@ struct WholeSource {
 };
 
 // The volume as z-slabs of whole x-y planes, loaded as the layers of cubes reach them: layer
-// k reads planes k-1..k+2 (the cubes' corners and their gradients' neighbours).
+// k reads planes k-1..k+2 (the cubes' corners and their gradients' neighbours). Each load
+// starts where the last ended (a compressed file streams forward, once); the 3 planes
+// before a slab are kept for the layers that straddle two slabs.
 struct SlabSource {
   const std::function<Volume(const VoxelBox&)>& load;
   std::array<int, 3> dims;
   int layers;
-  Volume cur;
-  int z0 = 0, z1 = 0;
+  Volume cur{}, tail{};  // planes [z0, z1) and the 3 (or fewer) before z0
+  int z0 = 0, z1 = 0, t0 = 0;
   const Volume& geometry() const { return cur; }
   void need(int k) {
-    const int lo = std::max(k - 1, 0), hi = std::min(k + 3, dims[2]);
-    if (z1 > z0 && lo >= z0 && hi <= z1) return;
-    z0 = lo, z1 = std::min(dims[2], lo + layers + 3);
-    cur = Volume{};  // the slab before is freed before the next is read
-    cur = load(VoxelBox{{0, 0, z0}, {dims[0], dims[1], z1}});
+    const int hi = std::min(k + 3, dims[2]);
+    const size_t plane = (size_t)dims[0] * dims[1];
+    while (z1 == 0 || hi > z1) {
+      Volume keep;  // planes [max(0, z1 - 3), z1), from this slab or the tail before it
+      const int k0 = std::max(0, z1 - 3);
+      keep.dims = {dims[0], dims[1], z1 - k0};
+      keep.values.resize(keep.voxelCount());
+      for (int z = k0; z < z1; ++z) {
+        const Volume& from = z >= z0 ? cur : tail;
+        const float* p = &from.values[(size_t)(z - (z >= z0 ? z0 : t0)) * plane];
+        std::copy(p, p + plane, &keep.values[(size_t)(z - k0) * plane]);
+      }
+      tail = std::move(keep), t0 = k0;
+      cur = Volume{};  // the slab before is freed before the next is read
+      z0 = z1, z1 = std::min(dims[2], z0 + layers + (z0 == 0 ? 3 : 0));
+      cur = load(VoxelBox{{0, 0, z0}, {dims[0], dims[1], z1}});
+    }
   }
-  float at(int x, int y, int z) const { return cur.at(x, y, z - z0); }
+  float at(int x, int y, int z) const { return z >= z0 ? cur.at(x, y, z - z0) : tail.at(x, y, z - t0); }
 };
 
 template <class Source>
@@ -191,7 +205,7 @@ Mesh marchingCubes(const Volume& vol, float level, std::array<float, 3> color) {
 
 Mesh marchingCubes(const std::array<int, 3>& dims, const std::function<Volume(const VoxelBox&)>& load, float level,
                    int layers, std::array<float, 3> color) {
-  SlabSource src{load, dims, std::max(layers, 1), {}};
+  SlabSource src{load, dims, std::max(layers, 1)};
   return march(src, dims, level, color);
 }
 

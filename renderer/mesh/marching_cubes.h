@@ -15,8 +15,8 @@ namespace tessera::renderer {
 Mesh marchingCubes(const Volume& volume, float level,
                    std::array<float, 3> color = {kDefaultMeshColor[0], kDefaultMeshColor[1], kDefaultMeshColor[2]});
 // The same mesh, bit for bit, from a volume of `dims` read as z-slabs of `layers` cube layers
-// (plus the 3 planes around them): `load(box)` returns the window `box` (whole x-y planes), so
-// memory holds one slab, never the volume.
+// (plus 3 planes kept from the slab before): `load(box)` returns the window `box` (whole x-y
+// planes; each box starts where the last ended), so memory holds one slab, never the volume.
 Mesh marchingCubes(const std::array<int, 3>& dims, const std::function<Volume(const VoxelBox&)>& load, float level,
                    int layers, std::array<float, 3> color = {kDefaultMeshColor[0], kDefaultMeshColor[1], kDefaultMeshColor[2]});
 

@@ -24,7 +24,8 @@ SceneGeometry loadSceneGeometry(const Scene& scene, uint32_t per_chunk) {
     // no range is streamed once for its min..max, which every slab then normalises with.
     Scene slabs = scene;
     fixVolumeRange(slabs);
-    g.mesh = marchingCubes(volumeDims(slabs), [&](const VoxelBox& box) { return loadVolume(slabs, box); },
+    VolumeReader reader(slabs);  // slabs come front to back: one pass over the file
+    g.mesh = marchingCubes(volumeDims(slabs), [&](const VoxelBox& box) { return reader.read(box); },
                            (float)scene.mesh->level, 32);
     if (g.mesh.triangleCount() == 0)
       throw SceneError(name + ": mesh.isosurface.level: no surface at level " + std::to_string(scene.mesh->level));

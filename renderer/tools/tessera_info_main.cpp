@@ -17,6 +17,7 @@
 #include "common/image.h"
 #include "common/io/image_io.h"
 #include "common/scene.h"
+#include "common/volume_summary.h"
 #include "renderer/tools/tool_main.h"
 
 namespace {
@@ -43,16 +44,29 @@ struct Histogram {
   std::vector<uint64_t> counts;   // equal-width bins over [lo, hi]; the last includes hi
 };
 
-// Over the data's own values in file units; `v` must be normalised over its own range.
-Histogram histogram(const Volume& v, int bins) {
-  Histogram h{v.data_range[0], v.data_range[1], std::vector<uint64_t>(bins, 0)};
-  const double lo = v.data_range[0], span = v.data_range[1] - v.data_range[0];
+// A volume read front to back in slabs of whole planes (about 64 MiB of floats each): the
+// tool holds one slab, never the volume, which may be bigger than this machine's memory.
+template <class F>
+void forEachSlab(const Scene& scene, F&& f) {
+  const std::array<int, 3> n = volumeDims(scene);
+  const int depth = (int)std::clamp<size_t>((16u << 20) / ((size_t)n[0] * n[1]), 1, (size_t)n[2]);
+  VolumeReader reader(scene);
+  for (int z = 0; z < n[2]; z += depth) f(reader.read(VoxelBox{{0, 0, z}, {n[0], n[1], std::min(n[2], z + depth)}}));
+}
+
+// Equal-width bins over the data's values `data` in file units. `scene` maps a fixed range
+// (a raw file's: the data's own) to 0..1, so each value is found again from its slab's.
+Histogram histogram(const Scene& scene, std::array<double, 2> data, int bins) {
+  Histogram h{data[0], data[1], std::vector<uint64_t>(bins, 0)};
   const double width = (h.hi - h.lo) / bins;
-  for (float x : v.values) {
-    const double raw = lo + x * span;
-    const int b = width > 0 ? (int)std::floor((raw - h.lo) / width) : 0;
-    ++h.counts[std::clamp(b, 0, bins - 1)];
-  }
+  forEachSlab(scene, [&](const Volume& slab) {
+    const double lo = slab.mapped_range[0], span = slab.mapped_range[1] - slab.mapped_range[0];
+    for (float x : slab.values) {
+      const double raw = lo + x * span;
+      const int b = width > 0 ? (int)std::floor((raw - h.lo) / width) : 0;
+      ++h.counts[std::clamp(b, 0, bins - 1)];
+    }
+  });
   return h;
 }
 
@@ -124,27 +138,35 @@ int run(int argc, char** argv) {
   std::printf("# scene %s, every default filled in\n%s\n", scene_path.empty() ? "(built-in)" : scene_path.c_str(),
               sceneYaml(scene).c_str());
   if (!scene.has_volume) return 0;
-  // Loaded over the data's own range, so a narrower `range` clips nothing of the histogram.
+  // Over the data's own range, so a narrower `range` clips nothing of the histogram: a raw
+  // file's is streamed once for its min..max, a generator's values are found slab by slab.
   Scene unclipped = scene;
-  if (auto* r = std::get_if<RawVolumeSpec>(&unclipped.volume)) r->has_range = false;
-  Volume v = loadVolume(unclipped);
   const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume);
-  if (raw && raw->has_range) v.mapped_range = raw->range;
-  std::printf("volume: %d x %d x %d voxels, %s, spacing %g %g %g\n", v.dims[0], v.dims[1], v.dims[2],
-              raw ? voxelTypeName(raw->type)
-                  : "generated (float)",
-              v.spacing[0], v.spacing[1], v.spacing[2]);
-  std::printf("values: %.9g .. %.9g; mapped to the transfer function: %.9g .. %.9g%s\n", v.data_range[0],
-              v.data_range[1], v.mapped_range[0], v.mapped_range[1],
+  if (auto* r = std::get_if<RawVolumeSpec>(&unclipped.volume)) r->has_range = false;
+  Volume shape;
+  shape.spacing = raw ? raw->spacing : std::get<GeneratorSpec>(scene.volume).spacing;
+  shape.data_range = fixVolumeRange(unclipped);
+  if (!raw) {
+    shape.data_range = {INFINITY, -INFINITY};
+    forEachSlab(unclipped, [&](const Volume& slab) {
+      shape.data_range = {std::min(shape.data_range[0], slab.data_range[0]), std::max(shape.data_range[1], slab.data_range[1])};
+    });
+  }
+  shape.dims = volumeDims(scene);
+  shape.mapped_range = raw && raw->has_range ? raw->range : raw ? shape.data_range : std::array<double, 2>{0, 1};
+  std::printf("volume: %d x %d x %d voxels, %s, spacing %g %g %g\n", shape.dims[0], shape.dims[1], shape.dims[2],
+              raw ? voxelTypeName(raw->type) : "generated (float)", shape.spacing[0], shape.spacing[1], shape.spacing[2]);
+  std::printf("values: %.9g .. %.9g; mapped to the transfer function: %.9g .. %.9g%s\n", shape.data_range[0],
+              shape.data_range[1], shape.mapped_range[0], shape.mapped_range[1],
               raw && !raw->has_range ? " (no range given: the data's own)" : "");
-  if (std::string why = rangeProblem(v); !why.empty()) std::printf("warning: %s\n", why.c_str());
-  const Histogram h = histogram(v, bins);
+  if (std::string why = rangeProblem(shape); !why.empty()) std::printf("warning: %s\n", why.c_str());
+  const Histogram h = histogram(unclipped, shape.data_range, bins);
   printHistogram(h);
   if (!plot.empty()) {
     plotHistogram(h, plot);
     std::printf("wrote %s\n", plot.c_str());
   }
-  printRendererMemory(v.dims, scene.shading.on);
+  printRendererMemory(shape.dims, scene.shading.on);
   return 0;
 }
 

@@ -58,11 +58,11 @@ void writeNifti4d(const std::string& path) {
   nifti_image_free(nim);
 }
 
-void writeNifti3d(const std::string& path, int step, int nz = kSz) {
+void writeNifti3d(const std::string& path, int step, int nz = kSz, double dx = 0.5) {
   const int64_t dims[8] = {3, kSx, kSy, nz, 1, 1, 1, 1};
   nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 1);
   ASSERT_NE(nim, nullptr);
-  nim->dx = nim->pixdim[1] = 0.5;
+  nim->dx = nim->pixdim[1] = dx;
   const auto v = stepSamples(step);
   std::memcpy(nim->data, v.data(), (size_t)kSx * kSy * nz * 2);
   ASSERT_EQ(nifti_set_filenames(nim, path.c_str(), 0, 1), 0);
@@ -217,6 +217,26 @@ TEST(TimeSeries, AStepThatDiffersOrIsMissingIsNamedWhenRead) {
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("t2.raw: file size is 100 bytes"), std::string::npos) << e.what();
   }
+}
+
+// Steps whose headers differ in spacing are refused, unless the scene's volume.spacing
+// replaces every step's (found by review: it was refused then too).
+TEST(TimeSeries, TheScenesSpacingReplacesStepsHeadersThatDifferInIt) {
+  TempDir t("series-spacing");
+  writeNifti3d(t.file("a0.nii"), 0);
+  writeNifti3d(t.file("a1.nii"), 1, kSz, 0.7);
+  const VoxelBox box{{0, 0, 0}, {kSx, kSy, kSz}};
+  try {
+    loadVolume(scene(t, "  series: [a0.nii, a1.nii]\n"), box, 1);
+    ADD_FAILURE() << "a step of other spacing loaded";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("a1.nii: spacing[0] 0.700000 differs from step 0's 0.500000"), std::string::npos)
+        << e.what();
+  }
+  const Scene given = scene(t, "  series: [a0.nii, a1.nii]\n  spacing: [2, 1, 1]\n");
+  const Volume v = loadVolume(given, box, 1);
+  EXPECT_EQ(v.spacing, (std::array<double, 3>{2, 1, 1}));
+  EXPECT_EQ(v.values, loadVolume(scene(t, "  series: [a1.nii]\n"), box, 0).values);
 }
 
 TEST(TimeSeries, AGeneratedSeriesClosesItsLoop) {

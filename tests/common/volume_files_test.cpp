@@ -86,6 +86,33 @@ TEST(VolumeFiles, NiftiPlainAndGzippedLoadAsTheRawFileOfTheSameSamples) {
   }
 }
 
+// One open file for many windows (the master's summary, isosurfaces and tessera-info read
+// slabs front to back, so a gzip stream is decoded once): every window, in order or not,
+// with or without a declared range, is loadVolume's window exactly.
+TEST(VolumeFiles, AReaderServesEveryWindowAsLoadVolumeDoes) {
+  TempDir t("reader");
+  writeNifti(t.file("r.nii.gz"));
+  for (const char* range : {"", ", range: [-1000, 2000]"}) {
+    const Scene s = parseScene(std::string("volume: {file: r.nii.gz") + range + "}\n", t.path.string(), "s.yaml");
+    VolumeReader reader(s);
+    // Slabs front to back, then a slab before the last and a part-plane window.
+    const std::vector<VoxelBox> boxes{{{0, 0, 0}, {kNx, kNy, 2}}, {{0, 0, 2}, {kNx, kNy, 5}}, {{0, 0, 5}, {kNx, kNy, kNz}},
+                                      {{0, 0, 1}, {kNx, kNy, 3}}, {{2, 3, 4}, {9, 11, 7}}};
+    for (const VoxelBox& box : boxes) {
+      const Volume a = reader.read(box), b = loadVolume(s, box);
+      EXPECT_EQ(a.dims, b.dims);
+      EXPECT_EQ(a.origin, b.origin);
+      EXPECT_EQ(a.data_range, b.data_range) << range;
+      EXPECT_EQ(a.mapped_range, b.mapped_range) << range;
+      EXPECT_EQ(a.values, b.values) << range << " z " << box.lo[2];
+    }
+  }
+  // A generated volume is the generator's window.
+  const Scene g = parseScene("volume: {generator: {name: marschner-lobb, size: 12}}\n", t.path.string(), "g.yaml");
+  VolumeReader reader(g);
+  EXPECT_EQ(reader.read(VoxelBox{{0, 0, 4}, {12, 12, 8}}).values, loadVolume(g, VoxelBox{{0, 0, 4}, {12, 12, 8}}).values);
+}
+
 TEST(VolumeFiles, NiftiScalingIsApplied) {
   TempDir t("nifti-scaled");
   writeNifti(t.file("s.nii"), 2.0, -5.0);
