@@ -150,6 +150,18 @@ TEST(FirstContact, AnInteractiveRunWithoutAWindowSaysHowToSteerAndStopIt) {
   EXPECT_FALSE(fs::exists(dir.frame(1))) << "a frame without input";
 }
 
+// The counts of tessera-info's histogram lines ("lo .. hi count bar"), in order.
+std::vector<unsigned long long> histogramCounts(const std::string& output) {
+  std::vector<unsigned long long> counts;
+  std::istringstream in(output);
+  for (std::string l; std::getline(in, l);) {
+    double a, b;
+    unsigned long long c;
+    if (std::sscanf(l.c_str(), " %lf .. %lf %llu", &a, &b, &c) == 3) counts.push_back(c);
+  }
+  return counts;
+}
+
 TEST(FirstContact, TesseraInfoReportsTheValuesAndTheirHistogramExactly) {
   FarmDir dir("info");
   std::vector<uint8_t> v(8 * 8 * 8, 0);  // 256 voxels of 0, 192 of 100, 64 of 200
@@ -168,13 +180,7 @@ TEST(FirstContact, TesseraInfoReportsTheValuesAndTheirHistogramExactly) {
   for (const char* line : {"0 .. 50", "50 .. 100", "100 .. 150", "150 .. 200"}) {
     EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
   }
-  std::vector<unsigned long long> counts;
-  std::istringstream in(r.output);
-  for (std::string l; std::getline(in, l);) {
-    double a, b;
-    unsigned long long c;
-    if (std::sscanf(l.c_str(), " %lf .. %lf %llu", &a, &b, &c) == 3) counts.push_back(c);
-  }
+  const std::vector<unsigned long long> counts = histogramCounts(r.output);
   EXPECT_EQ(counts, (std::vector<unsigned long long>{256, 0, 192, 64})) << r.output;
   EXPECT_NE(r.output.find("transfer_function:"), std::string::npos) << "the effective scene is missing\n" << r.output;
   EXPECT_NE(r.output.find("camera:"), std::string::npos) << r.output;
@@ -196,13 +202,7 @@ TEST(FirstContact, TesseraInfoReportsTheValuesAndTheirHistogramExactly) {
   const auto n = runCommand(bin("tessera-info") + " " + (dir.path() / "k.nii").string() + " --bins 4", 60);
   ASSERT_EQ(n.exit_code, 0) << n.output;
   EXPECT_NE(n.output.find("volume: 8 x 8 x 8 voxels, uint8"), std::string::npos) << n.output;
-  std::vector<unsigned long long> from_nifti;
-  std::istringstream nin(n.output);
-  for (std::string l; std::getline(nin, l);) {
-    double a, b;
-    unsigned long long c;
-    if (std::sscanf(l.c_str(), " %lf .. %lf %llu", &a, &b, &c) == 3) from_nifti.push_back(c);
-  }
+  const std::vector<unsigned long long> from_nifti = histogramCounts(n.output);
   EXPECT_EQ(from_nifti, counts) << n.output;
 }
 
@@ -224,13 +224,7 @@ TEST(FirstContact, TesseraInfoReadsAVolumeBiggerThanItsMemoryInSlabs) {
                             120);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("values: 0 .. 200;"), std::string::npos) << r.output;
-  std::vector<unsigned long long> counts;
-  std::istringstream in(r.output);
-  for (std::string l; std::getline(in, l);) {
-    double a, b;
-    unsigned long long c;
-    if (std::sscanf(l.c_str(), " %lf .. %lf %llu", &a, &b, &c) == 3) counts.push_back(c);
-  }
+  const std::vector<unsigned long long> counts = histogramCounts(r.output);
   EXPECT_EQ(counts, (std::vector<unsigned long long>{512ull * 512 * 512 - 1, 1})) << r.output;
 }
 
