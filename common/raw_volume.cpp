@@ -58,7 +58,10 @@ void convert(const unsigned char* p, size_t count, const RawVolumeSpec& s, float
   }
 }
 
-// An open raw file of known dims and type.
+}  // namespace
+
+// An open raw file of known dims and type. Not in the anonymous namespace: a
+// RawVolumeReader holds one.
 class RawFile {
  public:
   explicit RawFile(const RawVolumeSpec& spec) : spec_(spec), ts_(voxelTypeSize(spec.type)) {
@@ -281,15 +284,17 @@ class RawFile {
   std::vector<unsigned char> buf_;
 };
 
-}  // namespace
-
 // The file stays open between windows; with no declared range the whole file's min..max is
 // streamed once, for the first window, and every later window normalises with it.
+// A later window may lie further on in the file (`shift`, a 4-D file's later step): the
+// spec's offset moves with it, and the scan is the shifted samples' own.
 struct RawVolumeReader::Open {
   RawVolumeSpec spec;  // before file, which refers to it
   RawFile file;
+  uint64_t base;       // the offset the reader was opened with
   std::optional<std::array<double, 2>> scanned;
-  explicit Open(RawVolumeSpec s) : spec(std::move(s)), file(spec) {}
+  uint64_t scanned_shift = 0;
+  explicit Open(RawVolumeSpec s) : spec(std::move(s)), file(spec), base(spec.offset) {}
 };
 
 RawVolumeReader::RawVolumeReader(RawVolumeSpec spec) : open_(std::make_unique<Open>(std::move(spec))) {}
@@ -303,9 +308,11 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector
   return RawVolumeReader(spec).read(box, std::move(storage));
 }
 
-Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage) {
+Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage, uint64_t shift) {
   const RawVolumeSpec& spec = open_->spec;
   RawFile& file = open_->file;
+  open_->spec.offset = open_->base + shift;
+  if (open_->scanned && open_->scanned_shift != shift) open_->scanned.reset();
   const auto& n = spec.dims;
   if (std::string p = windowProblem(n, box); !p.empty()) fail(spec.file, p);
   Volume v;
@@ -321,7 +328,7 @@ Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage) {
   // alike; streamed first), else, for the whole volume, its values' once read.
   std::array<double, 2> data{INFINITY, -INFINITY};
   if (v.isWindow() && !spec.has_range) {
-    if (!open_->scanned) open_->scanned = file.scanRange();
+    if (!open_->scanned) open_->scanned = file.scanRange(), open_->scanned_shift = shift;
     data = *open_->scanned;
   }
   const bool known = spec.has_range || v.isWindow();

@@ -24,7 +24,8 @@ struct Orbit {
 };
 
 // The volume's time steps (`volume: {series: ...}`, a 4-D file, or a time-varying generator
-// with `steps`), all of one shape: the same dims, type and spacing. Opening a series reads
+// with `steps`), all of one shape: the same dims and type, and the same spacing unless the
+// scene's volume.spacing replaces the headers'. Opening a series reads
 // the first step's header only; later steps are checked when first read (stepVolume).
 struct TimeSeries {
   int steps = 1;
@@ -121,25 +122,28 @@ Volume loadVolume(const Scene& scene);
 // see loadRawVolume and stepVolume.
 // `storage`: memory a file's samples may be read into (see loadRawVolume).
 Volume loadVolume(const Scene& scene, const VoxelBox& box, int step = 0, std::vector<float> storage = {});
-// The scene's volume (of step `step`) opened once for many windows: see RawVolumeReader.
-// Slabs read front to back (the master's summary, isosurfaces, tessera-info's histogram)
-// then decode a compressed file once. Throws as loadVolume does.
+// The scene's volume opened once for many windows (see RawVolumeReader): windows read in
+// file order cost one pass over a compressed file (plus a scan when no range is declared:
+// see fixVolumeRange), not one from its start each. Slabs front
+// to back (the master's summary, isosurfaces, tessera-info's histogram) and the steps of a
+// 4-D file played forwards are. `scene` must outlive the reader; one thread at a time.
+// Throws as loadVolume does.
 class VolumeReader {
  public:
-  explicit VolumeReader(const Scene& scene, int step = 0);
-  Volume read(const VoxelBox& box, std::vector<float> storage = {});
+  explicit VolumeReader(const Scene& scene);
+  ~VolumeReader();
+  Volume read(const VoxelBox& box, int step = 0, std::vector<float> storage = {});
 
  private:
-  template <class F>
-  auto named(F&& f) -> decltype(f());
-  std::string name_;
-  std::optional<RawVolumeReader> raw_;
-  GeneratorSpec generated_;
+  const Scene& scene_;
+  std::optional<RawVolumeReader> raw_;  // of the file last read
+  RawVolumeSpec opened_;                // what raw_ was opened with
 };
 // Where step `step` of the scene's volume is: its file (a series), its offset (a 4-D file)
 // or its generator time. A step's own header is read and checked against step 0's: throws
-// std::runtime_error naming the file, the field and both values when they differ, or the
-// step when it is outside 0..steps-1. The scene's range and spacing apply to every step.
+// std::runtime_error naming the file, the field and both values when they differ (spacing
+// only when the scene gives none), or the step when it is outside 0..steps-1. The scene's
+// range and spacing apply to every step.
 std::variant<RawVolumeSpec, GeneratorSpec> stepVolume(const Scene& scene, int step);
 // The volume's dims from the scene alone (no voxel read).
 std::array<int, 3> volumeDims(const Scene& scene);

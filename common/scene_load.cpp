@@ -54,31 +54,30 @@ std::array<int, 3> volumeDims(const Scene& scene) {
 }
 
 Volume loadVolume(const Scene& scene, const VoxelBox& box, int step, std::vector<float> storage) {
-  return VolumeReader(scene, step).read(box, std::move(storage));
+  return VolumeReader(scene).read(box, step, std::move(storage));
 }
 
-// Errors name the scene and the volume key, as the parser's do.
-template <class F>
-auto VolumeReader::named(F&& f) -> decltype(f()) {
+VolumeReader::VolumeReader(const Scene& scene) : scene_(scene) {}
+VolumeReader::~VolumeReader() = default;
+
+// A step in the file already open (a 4-D file's, or the one volume's) is read through it,
+// further on by its offset; another file is opened in its place.
+Volume VolumeReader::read(const VoxelBox& box, int step, std::vector<float> storage) {
   try {
-    return f();
+    const auto spec = stepVolume(scene_, step);
+    const auto* raw = std::get_if<RawVolumeSpec>(&spec);
+    if (!raw) return generateVolume(std::get<GeneratorSpec>(spec), box);
+    if (!raw_ || raw->samples() != opened_.samples() || raw->offset < opened_.offset) {
+      raw_.reset();  // closed before the next opens
+      raw_.emplace(*raw);
+      opened_ = *raw;
+    }
+    return raw_->read(box, std::move(storage), raw->offset - opened_.offset);
   } catch (const SceneError&) {
     throw;
   } catch (const std::exception& e) {
-    throw SceneError(name_ + ": volume: " + e.what());
+    throw SceneError((scene_.path.empty() ? "<default scene>" : scene_.path) + ": volume: " + e.what());
   }
-}
-
-VolumeReader::VolumeReader(const Scene& scene, int step) : name_(scene.path.empty() ? "<default scene>" : scene.path) {
-  named([&] {
-    auto spec = stepVolume(scene, step);
-    if (auto* raw = std::get_if<RawVolumeSpec>(&spec)) raw_.emplace(std::move(*raw));
-    else generated_ = std::get<GeneratorSpec>(spec);
-  });
-}
-
-Volume VolumeReader::read(const VoxelBox& box, std::vector<float> storage) {
-  return named([&] { return raw_ ? raw_->read(box, std::move(storage)) : generateVolume(generated_, box); });
 }
 
 }  // namespace tessera

@@ -44,8 +44,10 @@ void volume(YAML::Emitter& e, const Scene& s) {
       list(e, raw->dims);
       e << YAML::Key << "type" << YAML::Value << voxelTypeName(raw->type);
     }
-    e << YAML::Key << "spacing" << YAML::Value;
-    list(e, raw->spacing);
+    if (raw->format == VolumeFormat::Raw || raw->spacing_given) {  // else the header's, as dims
+      e << YAML::Key << "spacing" << YAML::Value;
+      list(e, raw->spacing);
+    }
     if (raw->has_range) {  // left out, the data's own min..max is mapped
       e << YAML::Key << "range" << YAML::Value;
       list(e, raw->range);

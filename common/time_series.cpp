@@ -23,7 +23,8 @@ void checkSameShape(const RawVolumeSpec& step, const RawVolumeSpec& first, const
                     bool spacing_given) {
   auto differ = [&](const std::string& field, const std::string& a, const std::string& b) {
     throw std::runtime_error(step.file + ": " + field + " " + a + " differs from step 0's " + b + " (" + first_file +
-                             "); every step of a series needs the same dims, type and spacing");
+                             "); every step of a series needs the same dims and type, and the same spacing unless "
+                             "volume.spacing gives one for all");
   };
   if (step.dims != first.dims) differ("dims", dimsText(step.dims), dimsText(first.dims));
   if (step.type != first.type) differ("type", voxelTypeName(step.type), voxelTypeName(first.type));

@@ -110,12 +110,16 @@ Volume loadRawVolume(const RawVolumeSpec& spec);
 Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector<float> storage = {});
 // The same file opened once for many windows, as loadRawVolume reads them. Windows read in
 // file order (slabs of planes front to back) cost one pass over the file in all: a gzip
-// stream is decoded once, not from its start for every window. The range scan is done once.
+// stream is decoded once, not from its start for every window. With no declared range the
+// first window scans the whole file first (one more pass; fixVolumeRange does it once for
+// the scene instead), and later windows reuse that scan.
 class RawVolumeReader {
  public:
   explicit RawVolumeReader(RawVolumeSpec spec);  // throws as loadRawVolume does
   ~RawVolumeReader();
-  Volume read(const VoxelBox& box, std::vector<float> storage = {});
+  // `shift`: bytes past the spec's offset where the window's volume starts (a 4-D file's
+  // step t lies t steps of samples further on).
+  Volume read(const VoxelBox& box, std::vector<float> storage = {}, uint64_t shift = 0);
 
  private:
   struct Open;

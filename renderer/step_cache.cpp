@@ -16,6 +16,8 @@ uint64_t floorMod(long long a, long long m) { return (uint64_t)(((a % m) + m) % 
 
 StepCache::StepCache(const Scene& scene, BackendKind backend, uint64_t budget_bytes)
     : scene_(scene), backend_(backend), budget_(budget_bytes) {
+  const auto* raw = std::get_if<RawVolumeSpec>(&scene_.volume);
+  if (raw && raw->gzip && scene_.series.steps > 1 && scene_.series.files.empty()) stream_ = std::make_unique<VolumeReader>(scene_);
   // Only a series prefetches; the cpu backend's hierarchy is built there too (osmesa's GL
   // objects belong to the render thread's context: built on first use there).
   if (scene_.series.steps > 1) thread_ = std::thread([this] { prefetchLoop(); });
@@ -90,7 +92,13 @@ std::vector<float> StepCache::takeSpare() { return std::exchange(spare_, {}); }
 StepCache::Entry StepCache::load(int step, double& ms, std::vector<float> storage) {
   const auto t0 = Clock::now();
   Entry e;
-  auto v = std::make_shared<Volume>(loadVolume(scene_, box_, step, std::move(storage)));
+  std::shared_ptr<Volume> v;
+  if (stream_) {
+    std::lock_guard lock(stream_mu_);
+    v = std::make_shared<Volume>(stream_->read(box_, step, std::move(storage)));
+  } else {
+    v = std::make_shared<Volume>(loadVolume(scene_, box_, step, std::move(storage)));
+  }
   if (step > 0 && (v->data_range[0] < v->mapped_range[0] || v->data_range[1] > v->mapped_range[1]))
     spdlog::warn("step {}: values {} .. {} lie outside the range [{}, {}] fixed for the series (step 0's, or "
                  "volume.range): they show as its ends; give volume.range to cover every step",

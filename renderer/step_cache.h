@@ -89,6 +89,11 @@ class StepCache {
   std::vector<int> wanted_;
   std::vector<float> spare_;  // at most one window's samples: taken by the next load
   StepCacheStats stats_;
+  // A gzip-compressed 4-D file is one stream: its steps are read through one reader, so step
+  // t + 1 continues where step t ended (one step decompressed, not t + 1). Other files are
+  // read by a reader of their own per load, the render path's and the prefetch's in parallel.
+  std::mutex stream_mu_;
+  std::unique_ptr<VolumeReader> stream_;  // under stream_mu_; null when not one stream
   bool stop_ = false;
   std::thread thread_;  // last: started once everything above is ready
 };

@@ -111,6 +111,30 @@ TEST(FarmTime, AMissingOrShortStepIsNamedCountedAndSkipped) {
   EXPECT_TRUE(dir.matches(dir.farmFrame(6), dir.reference(scene, 0, "--step 6"), 1, "after_bad"));
 }
 
+// A gzip 4-D file's steps are read through one stream per renderer (forwards: one step's
+// decompression each): swinging forwards and back shows what one process renders of each step.
+TEST(FarmTime, AGzippedFourDFileSwingsThroughOneStreamAsOneProcessRendersIt) {
+  FarmDir dir("time-gzip");
+  auto w = runCommand(bin("tessera-write-series") + " " + (dir.path() / "data").string() +
+                          " --size 24 --steps 6 --type uint16 --formats nifti && gzip -1 " + (dir.path() / "data" / "series.nii").string(),
+                      60);
+  ASSERT_EQ(w.exit_code, 0) << w.output;
+  const fs::path scene = dir.path() / "data" / "gz.yaml";
+  std::ofstream(scene) << "volume: {file: series.nii.gz, range: [0, 65535]}\ntime: {play: true, mode: swing}\n"
+                       << "image: [64, 48]\ncamera: {eye: [0.4, 0.6, 2.0], target: [0, 0, 0], up: [0, 1, 0], fov: 30}\n";
+  const auto r = dir.runFarm(scene, 2, 1, 10);  // steps 0 1 2 3 4 5 4 3 2 1
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto m = metrics(dir);
+  ASSERT_EQ(m.size(), 10u) << r.output;
+  for (int k = 0; k < 10; ++k) {
+    const int step = k <= 5 ? k : 10 - k;
+    EXPECT_EQ(m[k]["step"], step) << "frame " << k;
+    EXPECT_TRUE(dir.matches(dir.farmFrame(k), dir.reference(scene, 0, "--step " + std::to_string(step)), 1,
+                            "gz_frame_" + std::to_string(k)));
+  }
+  EXPECT_EQ(r.output.find("instead (bad steps"), std::string::npos) << r.output;  // no step failed to read
+}
+
 TEST(FarmTime, EachStepIsReadOnceWithinTheCacheBudget) {
   FarmDir dir("time-budget");
   constexpr int kSize = 128, kBudgetMiB = 12, kFrames = 24;

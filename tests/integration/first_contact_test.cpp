@@ -3,6 +3,7 @@
 // is said; tessera-info reports the values exactly.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include <cmath>
@@ -226,6 +227,45 @@ TEST(FirstContact, TesseraInfoReadsAVolumeBiggerThanItsMemoryInSlabs) {
   EXPECT_NE(r.output.find("values: 0 .. 200;"), std::string::npos) << r.output;
   const std::vector<unsigned long long> counts = histogramCounts(r.output);
   EXPECT_EQ(counts, (std::vector<unsigned long long>{512ull * 512 * 512 - 1, 1})) << r.output;
+}
+
+// tessera-info's other volumes: a generator's values are its own (no file units to map them
+// back to), a constant file is said, and a scene's range maps the colours, not the histogram.
+TEST(FirstContact, TesseraInfoOnAGeneratorAConstantFileAndADeclaredRange) {
+  FarmDir dir("info-kinds");
+  const auto gen = writeSceneFile(dir, "g.yaml", "volume: {generator: {name: head, size: 16}}\n");
+  const auto g = runCommand(bin("tessera-info") + " " + gen.string() + " --bins 4", 60);
+  ASSERT_EQ(g.exit_code, 0) << g.output;
+  const Volume v = generateVolume(GeneratorSpec{"head", 16, 1});
+  const auto [lo, hi] = std::minmax_element(v.values.begin(), v.values.end());
+  const double width = ((double)*hi - *lo) / 4;
+  std::vector<unsigned long long> expected(4, 0);
+  for (float x : v.values) ++expected[std::clamp((int)std::floor((x - (double)*lo) / width), 0, 3)];
+  EXPECT_EQ(histogramCounts(g.output), expected) << g.output;
+  EXPECT_NE(g.output.find("mapped to the transfer function: 0 .. 1\n"), std::string::npos) << g.output;
+
+  std::ofstream(dir.path() / "c.raw", std::ios::binary) << std::string(64, (char)7);
+  const auto c = runCommand(bin("tessera-info") + " " +
+                                writeSceneFile(dir, "c.yaml", "volume: {file: c.raw, dims: [4, 4, 4], type: uint8}\n").string() +
+                                " --bins 2",
+                            60);
+  ASSERT_EQ(c.exit_code, 0) << c.output;
+  EXPECT_NE(c.output.find("values: 7 .. 7;"), std::string::npos) << c.output;
+  EXPECT_NE(c.output.find("warning: every voxel has the value 7"), std::string::npos) << c.output;
+  EXPECT_EQ(histogramCounts(c.output), (std::vector<unsigned long long>{64, 0})) << c.output;
+
+  std::vector<uint8_t> k(8 * 8 * 8, 0);  // as in TesseraInfoReportsTheValuesAndTheirHistogramExactly
+  std::fill(k.begin() + 256, k.begin() + 448, 100);
+  std::fill(k.begin() + 448, k.end(), 200);
+  std::ofstream(dir.path() / "k.raw", std::ios::binary).write(reinterpret_cast<const char*>(k.data()), 512);
+  const auto r = runCommand(
+      bin("tessera-info") + " " +
+          writeSceneFile(dir, "k.yaml", "volume: {file: k.raw, dims: [8, 8, 8], type: uint8, range: [50, 150]}\n").string() +
+          " --bins 4",
+      60);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("values: 0 .. 200; mapped to the transfer function: 50 .. 150\n"), std::string::npos) << r.output;
+  EXPECT_EQ(histogramCounts(r.output), (std::vector<unsigned long long>{256, 0, 192, 64})) << r.output;
 }
 
 }  // namespace
