@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cerrno>
@@ -26,6 +27,8 @@
 
 namespace tessera {
 namespace {
+
+std::atomic<uint64_t> samples_read{0};
 
 [[noreturn]] void fail(const std::string& file, const std::string& what) {
   throw std::runtime_error(file + ": " + what);
@@ -146,6 +149,7 @@ class RawFile {
     unsigned char* dst = direct ? reinterpret_cast<unsigned char*>(out) : (buf_.resize(count * ts_), buf_.data());
     if (gz_) readGzip(at, dst, count * ts_);
     else readPlain(at, dst, count * ts_);
+    samples_read += count * ts_;
     if (direct) return checkFinite(first, count, out);
     const unsigned char* p = buf_.data();
     switch (spec_.type) {
@@ -299,6 +303,8 @@ struct RawVolumeReader::Open {
 
 RawVolumeReader::RawVolumeReader(RawVolumeSpec spec) : open_(std::make_unique<Open>(std::move(spec))) {}
 RawVolumeReader::~RawVolumeReader() = default;
+
+uint64_t volumeSamplesRead() { return samples_read; }
 
 Volume loadRawVolume(const RawVolumeSpec& spec) {
   return loadRawVolume(spec, VoxelBox{{0, 0, 0}, spec.dims});

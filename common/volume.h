@@ -108,6 +108,9 @@ Volume loadRawVolume(const RawVolumeSpec& spec);
 // anywhere in the file are refused as loadRawVolume refuses them.
 // `storage`: memory to read into (a freed window of the same size: no page faults, no zeroing).
 Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector<float> storage = {});
+// Bytes of samples this process read from volume files (decompressed bytes for a gzip
+// stream): a renderer says at exit that it read its bricks, not the file.
+uint64_t volumeSamplesRead();
 // The same file opened once for many windows, as loadRawVolume reads them. Windows read in
 // file order (slabs of planes front to back) cost one pass over the file in all: a gzip
 // stream is decoded once, not from its start for every window. With no declared range the

@@ -10,6 +10,7 @@
 #include <fmt/ranges.h>
 
 #include "common/net/curve.h"
+#include "common/volume_summary.h"
 #include "common/net/log.h"
 #include "common/net/transport.h"
 #include "master/membership.h"
@@ -50,7 +51,14 @@ class Master {
       spdlog::info("interactive run: a frame is rendered when the display window sends input (drag: orbit, wheel: zoom, "
                    "Space: play a series, h: help); without a window only the first frame is rendered (a series plays on). "
                    "Ctrl-C or closing the window stops it");
-    plan_ = makePlan(opt_.scene, opt_.balance, opt_.tiles_per_renderer, opt_.binary_swap);
+    // A volume file without `range`: its min..max is streamed here once, told to every
+    // renderer in its Welcome (they read only their bricks) and used for the summary.
+    fixed_ = opt_.scene;
+    if (fixed_.has_volume && !sortFirst()) {
+      fixVolumeRange(fixed_);
+      if (const auto* raw = std::get_if<RawVolumeSpec>(&fixed_.volume)) volume_range_ = raw->range;
+    }
+    plan_ = makePlan(fixed_, opt_.balance, opt_.tiles_per_renderer, opt_.binary_swap);
   }
 
   int run(const std::atomic<bool>* stop) {
@@ -121,7 +129,7 @@ class Master {
     Member& m = members_.join(identity, h, Clock::now(), &joined);
     // Where peers reach it: a compositor says its host, a renderer its bound swap socket.
     if (joined) m.endpoint = h.role == Role::Compositor ? opt_.endpoints.compositorOn(m.rank, h.endpoint) : h.endpoint;
-    sendTo(identity, proto::encode(proto::Welcome{m.role, m.rank}, kMasterRank));
+    sendTo(identity, proto::encode(proto::Welcome{m.role, m.rank, volume_range_}, kMasterRank));
     if (!joined) return;
     spdlog::info("{} {} joined pid={}{}", roleName(h.role), m.rank, h.pid,
                  m.endpoint.empty() ? "" : " endpoint=" + m.endpoint);
@@ -378,7 +386,9 @@ class Master {
   zmq::socket_t pub_, ctl_;
   Membership members_;
   CreditWindow window_;
+  Scene fixed_;  // the scene with a volume file's range fixed; the plan refers to its tf
   std::unique_ptr<Plan> plan_;
+  std::array<double, 2> volume_range_{0, 0};  // Welcome's: {0, 0} none
   bool started_ = false, display_lost_ = false;
   Clock::time_point last_stall_warning_;
   uint64_t next_frame_ = 0, first_wanted_ = 0;

@@ -30,9 +30,8 @@ class Stage {
     if (opt.scene.mesh) {
       tiles_ = std::make_unique<TileRenderer>(opt.scene);
     } else {
-      // Before joining, so a bad file is said at once; every window loaded later is
-      // normalised with the whole file's range (a series: step 0's) without scanning it again.
-      fixVolumeRange(scene_);
+      // Every window is normalised with the whole file's range (a series: step 0's): the
+      // master's, which comes with its Welcome (see fixRange).
       images_ = std::make_unique<BrickImages>(scene_, opt.backend, opt.cache_mb, opt.threads);
       swap_ = std::make_unique<SwapExchange>(ctx, maxPixelMessageBytes(scene_.width, scene_.height),
                                              2 * 16 * size_t(scene_.width) * size_t(scene_.height));
@@ -58,8 +57,21 @@ class Stage {
     }
   }
 
+  // A volume file without `range` is normalised with the range the master streamed the file
+  // for, so this renderer reads only its bricks (#9: never the whole volume); a master that
+  // sent none leaves the scan to this renderer. Before the first frame: nothing loaded yet.
+  void fixRange() {
+    auto* raw = std::get_if<RawVolumeSpec>(&scene_.volume);
+    if (!images_ || !raw || raw->has_range) return;
+    const auto r = link_.volumeRange();
+    if (r[0] < r[1]) raw->has_range = true, raw->range = r;
+    else fixVolumeRange(scene_);
+  }
+
   void logSteps() {
     if (images_) images_->logSteps();
+    if (std::holds_alternative<RawVolumeSpec>(scene_.volume))
+      spdlog::info("read {:.1f} MiB of volume samples", (double)volumeSamplesRead() / (1 << 20));
   }
 
   int run(const std::atomic<bool>* stop) {
@@ -69,6 +81,7 @@ class Stage {
       spdlog::error("renderer could not join the master at {}", opt_.endpoints.masterControl());
       return 1;
     }
+    fixRange();
     spdlog::info("renderer rank={} joined backend={} simd={}{}", link_.rank(),
                  scene_.mesh ? "osmesa-mesh" : backendName(opt_.backend), isaName(cpuIsa()),
                  swap_ ? " swap pieces at " + swap_endpoint_ : "");

@@ -96,6 +96,7 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
       continue;
     }
     rank_ = w->rank;
+    volume_range_ = w->volume_range;
     last_heard_ = Clock::now();
     break;
   }

@@ -6,6 +6,7 @@
 // (control) or 'h' (heartbeat), so the master binds the heartbeat connection to the member
 // that said Hello on the control connection (see heartbeatIdentity).
 #pragma once
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <mutex>
@@ -31,6 +32,8 @@ class StageLink {
   // False if `stop` was raised or no Welcome came within timeout_s.
   bool join(const std::atomic<bool>* stop, double timeout_s = 120);
   uint32_t rank() const { return rank_; }
+  // The Welcome's volume_range ({0, 0}: the master gave none).
+  std::array<double, 2> volumeRange() const { return volume_range_; }
   // What Hello says as this stage's endpoint (before join): a compositor's advertised host, a
   // renderer's swap socket.
   void setAdvertised(std::string endpoint) { advertise_ = std::move(endpoint); }
@@ -78,6 +81,7 @@ class StageLink {
   std::string identity_;
   zmq::socket_t sub_, ctl_;
   uint32_t rank_ = 0;
+  std::array<double, 2> volume_range_{0, 0};
   std::atomic<bool> quit_{false};
   std::mutex waiting_mutex_;  // the heartbeat thread reads both fields together
   uint64_t waiting_frame_ = 0;

@@ -198,12 +198,19 @@ std::vector<std::byte> encode(const Welcome& m, uint32_t sender) {
   return encodeStructured(Type::Welcome, 0, sender, [&](ByteWriter& w) {
     w.u8(static_cast<uint8_t>(m.role));
     w.u32(m.rank);
+    w.f64(m.volume_range[0]);
+    w.f64(m.volume_range[1]);
   });
 }
 Result<Welcome> decodeWelcome(std::span<const std::byte> msg) {
   return decodeStructured<Welcome>(msg, Type::Welcome, [](ByteReader& r, const Header&, Welcome& m) {
     m.role = readRole(r);
     m.rank = r.u32("rank");
+    m.volume_range[0] = detail::readFinite(r, "volume_range.lo");
+    m.volume_range[1] = detail::readFinite(r, "volume_range.hi");
+    const auto [lo, hi] = m.volume_range;
+    if (r.ok() && !(lo < hi) && !(lo == 0 && hi == 0))
+      r.fail("volume_range [" + std::to_string(lo) + ", " + std::to_string(hi) + "] is neither none nor lo < hi");
   });
 }
 

@@ -43,11 +43,11 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 11;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
+inline constexpr uint16_t kVersion = 12;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
   // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms); 5: time steps; 6: Stats
   // carry their FrameParams' epoch; 7: Piece pixels Up-filtered; 8: binary-swap plans in FrameParams; 9: swap
   // bands go to the display as Strips; 10: Strips strip-filtered, Heartbeats name the awaited swap partner;
-  // 11: Stats' wait_ms
+  // 11: Stats' wait_ms; 12: Welcome's volume_range
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -83,7 +83,10 @@ struct Header {
 //             endpoint: a compositor's advertised host ("" = the base host); a renderer's
 //             binary-swap socket as peers reach it ("" = none: direct send only)
 //             run: the farm's identity (TESSERA_RUN); the master refuses any other
-// Welcome:    role u8 1 (1..Role::Last) | rank u32 4
+// Welcome:    role u8 1 (1..Role::Last) | rank u32 4 | volume_range f64 2x8
+//             volume_range: the range the master mapped to 0..1 for a volume file the scene gives
+//             no `range` for (the whole file's min..max, step 0's for a series), so a renderer
+//             reads only its bricks, not the file once more for it; {0, 0}: none (finite, lo < hi)
 // Heartbeat:  role u8 1 (1..Role::Last) | rank u32 4 | waiting_frame u64 8 | waiting_for u32 4
 //             waiting_for: whose part of frame waiting_frame it awaits (a renderer: its swap partner's;
 //             a compositor: a renderer's piece; the display: a sender's strips), or kNobody
@@ -92,7 +95,7 @@ struct Hello {                                                             // st
   bool operator==(const Hello&) const = default;
 };
 struct Welcome {                                                           // master -> stage
-  Role role = Role::Renderer; uint32_t rank = 0;
+  Role role = Role::Renderer; uint32_t rank = 0; std::array<double, 2> volume_range{0, 0};
   bool operator==(const Welcome&) const = default;
 };
 inline constexpr uint32_t kNobody = 0xFFFFFFFFu;

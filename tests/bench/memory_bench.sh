@@ -19,9 +19,9 @@ image: [256, 256]
 EOF
 file_mib=$(( SIZE * SIZE * SIZE * 2 / 1048576 ))
 cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')
-echo "renderers,volume_voxels,file_mib,master_mib,renderer_max_mib,renderer_min_mib,wall_s" >"$OUT/memory.csv"
-echo "| renderers | volume | file | master peak | largest renderer peak | smallest renderer peak | wall time |"
-echo "|---|---|---|---|---|---|---|"
+echo "renderers,volume_voxels,file_mib,master_mib,renderer_max_mib,renderer_min_mib,renderer_read_max_mib,wall_s" >"$OUT/memory.csv"
+echo "| renderers | volume | file | master peak | largest renderer peak | smallest renderer peak | most a renderer read | wall time |"
+echo "|---|---|---|---|---|---|---|---|"
 for n in 1 2 4; do
   log="$OUT/farm_$n.log"
   start=$(date +%s%N)
@@ -31,11 +31,13 @@ for n in 1 2 4; do
   wall=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.1f", (b - a) / 1e9 }')
   peaks() { grep -E "^$1-?[0-9]* +\|.*peak memory" "$log" | sed -E 's/.*peak memory ([0-9.]+) MiB.*/\1/'; }
   master=$(peaks master | head -1)
-  rmax=$(peaks renderer | sort -g | tail -1)
+  rmax=$(peaks renderer | sort -g | tail -1 || true)
   rmin=$(peaks renderer | sort -g | head -1)
+  # What a renderer read of the file (its bricks and ghost voxels; "read N MiB of volume samples").
+  rread=$(grep -E "^renderer-?[0-9]* +\|.*MiB of volume samples" "$log" | sed -E 's/.*read ([0-9.]+) MiB.*/\1/' | sort -g | tail -1 || true)
   [ "$(peaks renderer | wc -l)" -eq "$n" ] || { echo "expected $n renderer peaks in $log" >&2; exit 1; }
-  echo "$n,$SIZE^3,$file_mib,$master,$rmax,$rmin,$wall" >>"$OUT/memory.csv"
-  printf '| %d | %d^3 uint16 | %d MiB | %.0f MiB | %.0f MiB | %.0f MiB | %.1f s |\n' "$n" "$SIZE" "$file_mib" "$master" "$rmax" "$rmin" "$wall"
+  echo "$n,$SIZE^3,$file_mib,$master,$rmax,$rmin,${rread:-},$wall" >>"$OUT/memory.csv"
+  printf '| %d | %d^3 uint16 | %d MiB | %.0f MiB | %.0f MiB | %.0f MiB | %s MiB | %.1f s |\n' "$n" "$SIZE" "$file_mib" "$master" "$rmax" "$rmin" "${rread:--}" "$wall"
 done
 echo
 echo "CPU: $cpu; csv: $OUT/memory.csv"

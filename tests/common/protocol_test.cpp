@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <limits>
 #include <random>
 
@@ -15,7 +17,7 @@ using namespace test;
 
 TEST(Protocol, HeaderLayoutOnTheWire) {
   Bytes m = encode(Welcome{Role::Compositor, 5}, 77);
-  ASSERT_EQ(m.size(), kHeaderSize + 5);
+  ASSERT_EQ(m.size(), kHeaderSize + 21);  // role, rank, volume_range
   EXPECT_EQ(std::string(reinterpret_cast<const char*>(m.data()), 4), "TSER");
   EXPECT_EQ(uint8_t(m[4]), kVersion);
   EXPECT_EQ(uint8_t(m[6]), uint8_t(Type::Welcome));
@@ -25,8 +27,8 @@ TEST(Protocol, HeaderLayoutOnTheWire) {
   EXPECT_EQ(h->type, Type::Welcome);
   EXPECT_EQ(h->sender, 77u);
   EXPECT_EQ(h->codec, Codec::None);
-  EXPECT_EQ(h->raw_size, 5u);
-  EXPECT_EQ(h->encoded_size, 5u);
+  EXPECT_EQ(h->raw_size, 21u);
+  EXPECT_EQ(h->encoded_size, 21u);
   EXPECT_EQ(h->checksum, adler(std::span(m).subspan(kHeaderSize)));
 }
 
@@ -45,6 +47,14 @@ TEST(Protocol, EveryStructuredMessageRoundTrips) {
   Hello hello{Role::Compositor, 4242, "tcp://127.0.0.1:7000", "3f9a0c1d2e4b"};
   expectRoundTrip(hello, encode(hello, 11), decodeHello, Type::Hello);
   expectRoundTrip(Welcome{Role::Display, 3}, encode(Welcome{Role::Display, 3}, 11), decodeWelcome, Type::Welcome);
+  const Welcome ranged{Role::Renderer, 2, {-1024.5, 3071}};
+  expectRoundTrip(ranged, encode(ranged, 11), decodeWelcome, Type::Welcome);
+  // A range a renderer could not normalise with is refused, naming it.
+  for (const std::array<double, 2> bad : {std::array<double, 2>{5, 5}, {7, 3}, {0, NAN}, {-INFINITY, 1}}) {
+    const auto w = decodeWelcome(encode(Welcome{Role::Renderer, 2, bad}, 11));
+    ASSERT_FALSE(w) << bad[0] << " " << bad[1];
+    EXPECT_NE(w.error().find("volume_range"), std::string::npos) << w.error();
+  }
   expectRoundTrip(Heartbeat{Role::Renderer, 9}, encode(Heartbeat{Role::Renderer, 9}, 11), decodeHeartbeat, Type::Heartbeat);
   expectRoundTrip(Probe{}, encode(Probe{}, 11), decodeProbe, Type::Probe);
   EXPECT_EQ(encode(Probe{}, 11).size(), kHeaderSize) << "Probe carries no payload";

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <vector>
 
@@ -69,6 +70,38 @@ TEST(FirstContact, AThreeLineSceneRendersTheDataOverItsOwnRange) {
   EXPECT_GT(cool, 0) << "no pixel shows the low end of the colour map";
   EXPECT_GT(warm, 0) << "no pixel shows the high end of the colour map";
   EXPECT_EQ(img.at(0, 0)[3], 0) << "the fitted view should leave the corners empty";
+}
+
+// A file without `range` on the farm: the master streams it once for its min..max and tells
+// the renderers, which read only their bricks (they used to stream the whole file each), and
+// the frame is tessera-render's (which scans the file itself) within the contract's 1/255.
+TEST(FirstContact, OnTheFarmEachRendererReadsOnlyItsBricksOfAFileWithoutRange) {
+  FarmDir dir("own-range-farm");
+  const int n = 128;  // 4 MiB of uint16
+  std::vector<uint16_t> v((size_t)n * n * n);
+  for (int z = 0; z < n; ++z)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const double r = std::sqrt(std::pow(x - 64, 2) + std::pow(y - 60, 2) + std::pow(z - 70, 2));
+        v[x + n * (y + (size_t)n * z)] = (uint16_t)std::lround(std::max(0.0, 1000 * (1 - r / 50)) + 3);
+      }
+  std::ofstream(dir.path() / "b.raw", std::ios::binary)
+      .write(reinterpret_cast<const char*>(v.data()), (std::streamsize)(v.size() * 2));
+  const auto scene = writeSceneFile(dir, "b.yaml",
+                                    "volume: {file: b.raw, dims: [128, 128, 128], type: uint16}\nimage: [64, 48]\n"
+                                    "camera: {eye: [0.4, 0.6, 2.0], target: [0, 0, 0], up: [0, 1, 0], fov: 30}\n");
+  const auto r = dir.runFarm(scene, 2, 1, 1);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(dir.matches(dir.farmFrame(0), dir.reference(scene, 0), 1, "own_range"));
+  const std::regex read_line("read ([0-9.]+) MiB of volume samples");
+  int renderers = 0;
+  for (auto it = std::sregex_iterator(r.output.begin(), r.output.end(), read_line); it != std::sregex_iterator(); ++it) {
+    ++renderers;
+    const double mib = std::stod((*it)[1].str());
+    EXPECT_GT(mib, 1.5) << "half the file is a renderer's bricks\n" << r.output;
+    EXPECT_LT(mib, 2.5) << "a renderer read more than its bricks and ghost voxels of the 4 MiB file\n" << r.output;
+  }
+  EXPECT_EQ(renderers, 2) << r.output;
 }
 
 TEST(FirstContact, ARangeOutsideTheDataIsSaidWithTheDataValues) {
