@@ -89,15 +89,15 @@ void StepCache::recycle(Entry&& e) {
 
 std::vector<float> StepCache::takeSpare() { return std::exchange(spare_, {}); }
 
-StepCache::Entry StepCache::load(int step, double& ms, std::vector<float> storage) {
+StepCache::Entry StepCache::load(int step, const VoxelBox& box, double& ms, std::vector<float> storage) {
   const auto t0 = Clock::now();
   Entry e;
   std::shared_ptr<Volume> v;
   if (stream_) {
     std::lock_guard lock(stream_mu_);
-    v = std::make_shared<Volume>(stream_->read(box_, step, std::move(storage)));
+    v = std::make_shared<Volume>(stream_->read(box, step, std::move(storage)));
   } else {
-    v = std::make_shared<Volume>(loadVolume(scene_, box_, step, std::move(storage)));
+    v = std::make_shared<Volume>(loadVolume(scene_, box, step, std::move(storage)));
   }
   if (step > 0 && (v->data_range[0] < v->mapped_range[0] || v->data_range[1] > v->mapped_range[1]))
     spdlog::warn("step {}: values {} .. {} lie outside the range [{}, {}] fixed for the series (step 0's, or "
@@ -135,7 +135,7 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
     Entry e;
     double ms = 0;
     try {
-      e = load(step, ms, std::move(storage));
+      e = load(step, box, ms, std::move(storage));
     } catch (const std::exception& ex) {
       lock.lock();
       loading_ = -1;
@@ -180,13 +180,14 @@ void StepCache::prefetchLoop() {
     }
     prefetching_ = next;
     const uint64_t generation = generation_;
+    const VoxelBox box = box_;  // get() may move the bricks while this loads
     std::vector<float> storage = takeSpare();
     lock.unlock();
     Entry e;
     double ms = 0;
     bool ok = true;
     try {
-      e = load(next, ms, std::move(storage));
+      e = load(next, box, ms, std::move(storage));
     } catch (const std::exception&) {
       ok = false;  // said (and counted) by get() when the step is shown
     }

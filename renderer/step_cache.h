@@ -60,9 +60,9 @@ class StepCache {
     uint64_t file_bytes = 0;  // read from the file for it
   };
   void prefetchLoop();
-  // Loads step `step` of box_ into `storage` (unlocked while reading); throws what
-  // loadVolume throws.
-  Entry load(int step, double& ms, std::vector<float> storage);
+  // Loads step `step` of `box` (box_ as the caller read it under mu_) into `storage`, unlocked
+  // while reading; throws what loadVolume throws.
+  Entry load(int step, const VoxelBox& box, double& ms, std::vector<float> storage);
   // A freed step's samples, for the next load: a step's window costs no page faults and no
   // zeroing (measured: ~5% of a playing renderer's time). Under mu_.
   void recycle(Entry&& e);
