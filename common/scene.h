@@ -124,7 +124,8 @@ Volume loadVolume(const Scene& scene);
 Volume loadVolume(const Scene& scene, const VoxelBox& box, int step = 0, std::vector<float> storage = {});
 // The scene's volume opened once for many windows (see RawVolumeReader): windows read in
 // file order cost one pass over a compressed file (plus a scan when no range is declared:
-// see fixVolumeRange), not one from its start each. Slabs front
+// see fixVolumeRange), not one from its start each; a window before the last one read
+// restarts the stream. Slabs front
 // to back (the master's summary, isosurfaces, tessera-info's histogram) and the steps of a
 // 4-D file played forwards are. `scene` must outlive the reader; one thread at a time.
 // Throws as loadVolume does.

@@ -67,15 +67,24 @@ Volume VolumeReader::read(const VoxelBox& box, int step, std::vector<float> stor
     const auto spec = stepVolume(scene_, step);
     const auto* raw = std::get_if<RawVolumeSpec>(&spec);
     if (!raw) return generateVolume(std::get<GeneratorSpec>(spec), box);
-    if (!raw_ || raw->samples() != opened_.samples() || raw->offset < opened_.offset) {
+    // The same samples file read the same way (a 4-D file's steps; NRRD headers of a series
+    // may share one data file and differ in encoding): only the offset moves.
+    const RawVolumeSpec& o = opened_;
+    const bool same = raw_ && raw->samples() == o.samples() && raw->offset >= o.offset && raw->type == o.type &&
+                      raw->big_endian == o.big_endian && raw->gzip == o.gzip && raw->gzip_start == o.gzip_start &&
+                      raw->slope == o.slope && raw->inter == o.inter && raw->dims == o.dims &&
+                      raw->has_range == o.has_range && raw->range == o.range;
+    if (!same) {
       raw_.reset();  // closed before the next opens
       raw_.emplace(*raw);
       opened_ = *raw;
     }
     return raw_->read(box, std::move(storage), raw->offset - opened_.offset);
   } catch (const SceneError&) {
+    raw_.reset();  // a stream that failed (corrupt data) is opened afresh by the next read
     throw;
   } catch (const std::exception& e) {
+    raw_.reset();
     throw SceneError((scene_.path.empty() ? "<default scene>" : scene_.path) + ": volume: " + e.what());
   }
 }

@@ -16,7 +16,8 @@ namespace tessera::renderer {
 
 class BrickImages {
  public:
-  // `scene` (its volume range fixed) must outlive this.
+  // `scene` must outlive this; its volume range is fixed before the first load (the renderer
+  // takes the master's, see Stage::fixRange).
   BrickImages(const Scene& scene, BackendKind backend, int cache_mb, int threads);
 
   struct Image {

@@ -84,9 +84,10 @@ struct Header {
 //             binary-swap socket as peers reach it ("" = none: direct send only)
 //             run: the farm's identity (TESSERA_RUN); the master refuses any other
 // Welcome:    role u8 1 (1..Role::Last) | rank u32 4 | volume_range f64 2x8
-//             volume_range: the range the master mapped to 0..1 for a volume file the scene gives
-//             no `range` for (the whole file's min..max, step 0's for a series), so a renderer
-//             reads only its bricks, not the file once more for it; {0, 0}: none (finite, lo < hi)
+//             volume_range: the range the master maps to 0..1 for a volume file (the scene's
+//             `range`, else the whole file's min..max, step 0's for a series; a constant file's
+//             value c as [c, c + 1]), so a renderer reads only its bricks, not the file once
+//             more for it; {0, 0}: none (a generated volume). Finite, lo < hi.
 // Heartbeat:  role u8 1 (1..Role::Last) | rank u32 4 | waiting_frame u64 8 | waiting_for u32 4
 //             waiting_for: whose part of frame waiting_frame it awaits (a renderer: its swap partner's;
 //             a compositor: a renderer's piece; the display: a sender's strips), or kNobody
