@@ -10,12 +10,12 @@
 #include <fmt/ranges.h>
 
 #include "common/net/curve.h"
-#include "common/volume_summary.h"
 #include "common/net/log.h"
 #include "common/net/transport.h"
 #include "master/membership.h"
 #include "master/metrics.h"
 #include "master/plan.h"
+#include "master/preparation.h"
 
 namespace tessera::master {
 namespace {
@@ -51,17 +51,13 @@ class Master {
       spdlog::info("interactive run: a frame is rendered when the display window sends input (drag: orbit, wheel: zoom, "
                    "Space: play a series, h: help); without a window only the first frame is rendered (a series plays on). "
                    "Ctrl-C or closing the window stops it");
-    // A volume file without `range`: its min..max is streamed here once, told to every
-    // renderer in its Welcome (they read only their bricks) and used for the summary.
-    fixed_ = opt_.scene;
-    if (fixed_.has_volume && !sortFirst()) {
-      fixVolumeRange(fixed_);
-      if (const auto* raw = std::get_if<RawVolumeSpec>(&fixed_.volume)) volume_range_ = raw->range;
-    }
-    plan_ = makePlan(fixed_, opt_.balance, opt_.tiles_per_renderer, opt_.binary_swap);
+    preparation_ = std::make_unique<Preparation>(opt_);  // last: a throw above waits for no reading
   }
 
   int run(const std::atomic<bool>* stop) {
+    prepared_ = preparation_->await(stop, [this] { probe(); });  // Hellos wait meanwhile
+    if (!prepared_) return 0;
+    plan_ = prepared_->plan.get();
     if (!gatherMembers(stop)) return 1;
     plan_->reassign(workers());
     started_ = true;
@@ -129,7 +125,7 @@ class Master {
     Member& m = members_.join(identity, h, Clock::now(), &joined);
     // Where peers reach it: a compositor says its host, a renderer its bound swap socket.
     if (joined) m.endpoint = h.role == Role::Compositor ? opt_.endpoints.compositorOn(m.rank, h.endpoint) : h.endpoint;
-    sendTo(identity, proto::encode(proto::Welcome{m.role, m.rank, volume_range_}, kMasterRank));
+    sendTo(identity, proto::encode(proto::Welcome{m.role, m.rank, prepared_->volume_range}, kMasterRank));
     if (!joined) return;
     spdlog::info("{} {} joined pid={}{}", roleName(h.role), m.rank, h.pid,
                  m.endpoint.empty() ? "" : " endpoint=" + m.endpoint);
@@ -159,11 +155,6 @@ class Master {
       return;
     }
     membershipChanged();
-  }
-
-  void readmit(const Member& m) {
-    spdlog::info("{} {} (pid {}) heard from again: re-admitted", roleName(m.role), m.rank, m.pid);
-    membersCameOrWent();
   }
 
   // A frame waiting long gets a warning naming who it waits for; past its deadline, the first
@@ -253,18 +244,10 @@ class Master {
     proto::FrameParams p;
     p.frame = frame;
     p.epoch = members_.epoch();
-    p.camera = spec.camera;
-    p.quality = spec.quality;
-    p.width = spec.width;
-    p.height = spec.height;
+    setView(p, spec);
     p.codec = opt_.codec;
     p.format = opt_.format;
     p.first_wanted = first_wanted_;
-    p.input_seq = spec.input_seq;
-    p.input_first = spec.input_first;
-    p.interactive = spec.interactive;
-    p.step = (uint32_t)spec.step;
-    p.next_step = (uint32_t)spec.next_step;
     plan_->fill(p, w);
     p.display_endpoint = opt_.endpoints.display();
     std::set<uint32_t> renderers = proto::renderersWithWork(p), compositors;
@@ -300,7 +283,10 @@ class Master {
     }
     // Everything else only from a connection that joined as a member.
     if (!from) return refuse(std::string("unknown peer sent ") + proto::typeName(header->type));
-    if (members_.heard(*from, Clock::now())) readmit(*from);
+    if (members_.heard(*from, Clock::now())) {
+      spdlog::info("{} {} (pid {}) heard from again: re-admitted", roleName(from->role), from->rank, from->pid);
+      membersCameOrWent();
+    }
     const bool control = from->identity == identity;
     switch (header->type) {
       case proto::Type::Heartbeat: {
@@ -386,9 +372,9 @@ class Master {
   zmq::socket_t pub_, ctl_;
   Membership members_;
   CreditWindow window_;
-  Scene fixed_;  // the scene with a volume file's range fixed; the plan refers to its tf
-  std::unique_ptr<Plan> plan_;
-  std::array<double, 2> volume_range_{0, 0};  // Welcome's: {0, 0} none
+  std::unique_ptr<Preparation> preparation_;  // started once the sockets are bound
+  std::unique_ptr<Prepared> prepared_;
+  Plan* plan_ = nullptr;  // prepared_'s
   bool started_ = false, display_lost_ = false;
   Clock::time_point last_stall_warning_;
   uint64_t next_frame_ = 0, first_wanted_ = 0;

@@ -33,6 +33,18 @@ FrameSpec orbitFrame(const Scene& scene, uint64_t frame) {
   return s;
 }
 
+void setView(proto::FrameParams& p, const FrameSpec& spec) {
+  p.camera = spec.camera;
+  p.quality = spec.quality;
+  p.width = spec.width;
+  p.height = spec.height;
+  p.input_seq = spec.input_seq;
+  p.input_first = spec.input_first;
+  p.interactive = spec.interactive;
+  p.step = (uint32_t)spec.step;
+  p.next_step = (uint32_t)spec.next_step;
+}
+
 Refinement::Refinement(const Camera& camera, const Quality& quality, int width, int height, const Playback& time,
                        int steps)
     : camera_(camera), quality_(quality), max_w_(width), max_h_(height), width_(width), height_(height),

@@ -33,6 +33,8 @@ struct FrameSpec {
 
 // A fixed run's frame: the orbit's camera at the scene's quality and size.
 FrameSpec orbitFrame(const Scene& scene, uint64_t frame);
+// Sets what the spec decides in p: the view, the size, the inputs shown and the steps.
+void setView(proto::FrameParams& p, const FrameSpec& spec);
 
 class Refinement {
  public:

@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <deque>
-#include <map>
 #include <optional>
 
 #include "common/clock.h"
@@ -15,6 +14,7 @@
 #include "common/net/stage_link.h"
 #include "common/net/transport.h"
 #include "renderer/brick_images.h"
+#include "renderer/outbox.h"
 #include "renderer/render_worker.h"
 #include "renderer/swap_exchange.h"
 #include "renderer/tile_render.h"
@@ -176,7 +176,7 @@ class Stage {
 
   void renderBricks(const proto::FrameParams& p, const proto::SortLastWork& work, proto::StageStats& st) {
     if (tiles_) return drops_.drop(~0u, "sort-last FrameParams for a geometry scene");
-    closeSocketsNotIn(p, work);
+    outbox_.keepOnly(p, work);
     const uint32_t rank = link_.rank();
     if (auto plan = planSwap(p, rank)) {
       if (!swap_) return drops_.drop(~0u, "binary-swap FrameParams for a renderer without a swap socket");
@@ -344,35 +344,7 @@ class Stage {
     sendTo(p.display_endpoint, std::move(bytes));
   }
 
-  // Peers come and go (a restarted renderer has a new swap port): connections to endpoints
-  // this frame does not name would retry a dead address forever.
-  void closeSocketsNotIn(const proto::FrameParams& p, const proto::SortLastWork& work) {
-    std::erase_if(pushes_, [&](const auto& kv) {
-      const std::string& e = kv.first;
-      return e != p.display_endpoint &&
-             std::none_of(p.regions.begin(), p.regions.end(), [&](const auto& r) { return r.endpoint == e; }) &&
-             std::none_of(work.swap.begin(), work.swap.end(), [&](const auto& s) { return s.endpoint == e; });
-    });
-  }
-
-  // A part for a compositor, a swap partner or the display. A receiver that stopped reading
-  // (its process dead or stopped, its link cut) lets this socket's own queue fill; the send
-  // then gives up after kDataSendTimeout and the part is dropped and counted, instead of
-  // blocking this renderer for good: the master re-issues the frame, and a replacement
-  // receiver has an endpoint of its own.
-  void sendTo(const std::string& endpoint, std::vector<std::byte>&& bytes) {
-    if (!sendBytes(socketFor(endpoint), std::move(bytes)))
-      unsent_.drop(0, fmt::format("part not sent to {}: the queue to it stayed full for {} ms", endpoint,
-                                  kDataSendTimeout.count()));
-  }
-
-  zmq::socket_t& socketFor(const std::string& endpoint) {
-    auto it = pushes_.find(endpoint);
-    if (it == pushes_.end()) {
-      it = pushes_.emplace(endpoint, connectDataSender(ctx_, endpoint, link_.dataIdentity())).first;
-    }
-    return it->second;
-  }
+  void sendTo(const std::string& endpoint, std::vector<std::byte>&& bytes) { outbox_.send(endpoint, std::move(bytes)); }
 
   const StageOptions& opt_;
   zmq::context_t& ctx_;
@@ -382,7 +354,7 @@ class Stage {
   std::unique_ptr<TileRenderer> tiles_;   // geometry scenes (sort-first)
   std::vector<std::byte> packed_;  // a piece's pixels before encoding, kept (see packPixels)
   Image8 band8_;                   // a binary swap's band, quantized (the frame's size: strips name screen rows)
-  std::map<std::string, zmq::socket_t> pushes_;  // to compositors, swap partners and the display
+  Outbox outbox_{ctx_, link_.dataIdentity()};  // to compositors, swap partners and the display
   std::unique_ptr<SwapExchange> swap_;  // volume scenes
   size_t swap_size_logged_ = 0;  // renderers in the swap, when last said
   std::string swap_endpoint_;  // what Hello tells the master
@@ -393,8 +365,7 @@ class Stage {
   uint64_t first_wanted_ = 0;  // frames below it were cancelled
   uint64_t frames_failed_ = 0;
   DropCounter drops_;
-  DropCounter unsent_;  // parts this renderer could not send (apart: drops_ counts by sender)
-  uint64_t dropped() const { return drops_.total() + unsent_.total(); }  // what Stats report
+  uint64_t dropped() const { return drops_.total() + outbox_.unsent(); }  // what Stats report
   std::optional<SwapFrame> rendering_;  // on the worker, or rendered and waiting for the rounds before it
   std::optional<SwapFrame> swapping_;   // its rounds in progress (swap_)
   RenderWorker worker_;  // last: destroyed first, after its job, while what the job uses lives

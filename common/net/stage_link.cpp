@@ -51,16 +51,17 @@ StageLink::~StageLink() {
 }
 
 bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
-  auto start = Clock::now();
-  auto waited = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
-  auto expired = [&] { return waited() > timeout_s; };
+  const auto start = Clock::now();
+  auto heard = start;  // the master's last probe: a master still reading its volume probes on
+  auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  auto expired = [&] { return since(heard) > timeout_s; };
   // Never silent: after 2 s, and every 10 s after that, say what this stage waits for.
   double next_notice = 2;
   auto notice = [&](const std::string& what) {
-    if (waited() < next_notice) return;
-    spdlog::info("{} waiting {:.0f} s for {} (giving up after {:.0f} s; is tessera-master running with "
-                 "TESSERA_ENDPOINTS={}?)",
-                 proto::roleName(role_), waited(), what, timeout_s, ep_.base);
+    if (since(start) < next_notice) return;
+    spdlog::info("{} waiting {:.0f} s for {} (giving up after {:.0f} s without a word from it; is tessera-master "
+                 "running with TESSERA_ENDPOINTS={}?)",
+                 proto::roleName(role_), since(start), what, timeout_s, ep_.base);
     next_notice += 10;
   };
   // 1. The master's probe proves our subscription is live before we announce ourselves.
@@ -75,14 +76,30 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
       break;
     }
   }
-  // 2. Hello until Welcome (the master may still be starting; Hello is idempotent per reply).
-  zmq::pollitem_t ctl_item[] = {{ctl_.handle(), 0, ZMQ_POLLIN, 0}};
-  sendBytes(ctl_, proto::encode(proto::Hello{role_, (uint32_t)getpid(), advertise_, farmRun()}, 0));
+  // 2. Hello until Welcome. A master reading a volume file for its range answers once it
+  // has it, however long that takes, and probes meanwhile: only its silence ends the wait.
+  // Hello is said again now and then (a master restarted meanwhile never got the first);
+  // the master answers a repeated one with the same Welcome.
+  const double hello_every = std::min(10.0, timeout_s / 4);
+  auto hello_at = Clock::now() - std::chrono::hours(1);
+  zmq::pollitem_t items[] = {{ctl_.handle(), 0, ZMQ_POLLIN, 0}, {sub_.handle(), 0, ZMQ_POLLIN, 0}};
   while (true) {
     if ((stop && *stop) || expired()) return false;
+    if (since(hello_at) > hello_every) {
+      sendBytes(ctl_, proto::encode(proto::Hello{role_, (uint32_t)getpid(), advertise_, farmRun()}, 0));
+      hello_at = Clock::now();
+    }
     notice("the master at " + ep_.masterControl() + " to answer its Hello");
-    pollFor(ctl_item, 1, std::chrono::milliseconds(100));
-    if (!(ctl_item[0].revents & ZMQ_POLLIN)) continue;
+    pollFor(items, 2, std::chrono::milliseconds(100));
+    for (int i = 0; i < 64 && (items[1].revents & ZMQ_POLLIN); ++i) {
+      zmq::message_t m;
+      if (!sub_.recv(m, zmq::recv_flags::dontwait)) break;
+      heard = Clock::now();
+      auto h = proto::decodeHeader(view(m));
+      // Anything else published before the Welcome is kept for receive(), in order.
+      if (!(h && h->type == proto::Type::Probe) && early_.size() < kEarlyKept) early_.push_back(std::move(m));
+    }
+    if (!(items[0].revents & ZMQ_POLLIN)) continue;
     zmq::message_t m;
     (void)ctl_.recv(m);
     if (auto refused = proto::decodeShutdown(view(m))) {  // the master will not have this stage
@@ -126,7 +143,12 @@ StageLink::Published StageLink::receive(DropCounter& drops, int max_messages) {
   Published out;
   for (int i = 0; i < max_messages; ++i) {
     zmq::message_t m;
-    if (!sub_.recv(m, zmq::recv_flags::dontwait)) break;
+    if (!early_.empty()) {
+      m = std::move(early_.front());
+      early_.pop_front();
+    } else if (!sub_.recv(m, zmq::recv_flags::dontwait)) {
+      break;
+    }
     last_heard_ = Clock::now();
     auto h = proto::decodeHeader(view(m));
     if (!h) {
@@ -164,6 +186,8 @@ std::optional<proto::Roster> StageLink::receiveRoster(DropCounter& drops, int ma
   for (int i = 0; i < max_messages; ++i) {
     zmq::message_t m;
     if (!ctl_.recv(m, zmq::recv_flags::dontwait)) break;
+    // The answer to a Hello said again while the master was busy (see join): nothing new.
+    if (auto w = proto::decodeWelcome(view(m)); w && w->role == role_ && w->rank == rank_) continue;
     auto r = proto::decodeRoster(view(m));
     if (!r) {
       drops.drop(~0u, "control: " + r.error());

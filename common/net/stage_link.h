@@ -9,6 +9,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <deque>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -29,7 +30,8 @@ class StageLink {
   StageLink(const StageLink&) = delete;
   StageLink& operator=(const StageLink&) = delete;
 
-  // False if `stop` was raised or no Welcome came within timeout_s.
+  // False if `stop` was raised, the master refused this stage, or nothing came from the
+  // master for timeout_s (its probes, while it prepares, keep the wait going).
   bool join(const std::atomic<bool>* stop, double timeout_s = 120);
   uint32_t rank() const { return rank_; }
   // The Welcome's volume_range ({0, 0}: the master gave none).
@@ -88,6 +90,8 @@ class StageLink {
   uint32_t waiting_for_ = proto::kNobody;
   std::chrono::steady_clock::time_point last_heard_ = std::chrono::steady_clock::now();
   std::thread heartbeat_;
+  std::deque<zmq::message_t> early_;  // published before the Welcome: receive() reads them first
+  static constexpr size_t kEarlyKept = 1024;
 };
 
 }  // namespace tessera
