@@ -29,6 +29,7 @@ namespace tessera {
 namespace {
 
 std::atomic<uint64_t> samples_read{0};
+std::atomic<uint64_t> bytes_inflated{0};  // what zlib decompressed, skipped bytes included
 
 [[noreturn]] void fail(const std::string& file, const std::string& what) {
   throw std::runtime_error(file + ": " + what);
@@ -245,7 +246,9 @@ class RawFile {
   // Windows are read in file order, so the stream only moves forward (zlib decompresses
   // what it skips); memory stays one piece.
   void readGzip(uint64_t at, unsigned char* dst, size_t bytes) {
-    if ((uint64_t)gztell(gz_) != at && gzseek(gz_, (z_off_t)at, SEEK_SET) < 0)
+    const uint64_t now = (uint64_t)gztell(gz_);
+    bytes_inflated += (at >= now ? at - now : at) + bytes;  // a seek back restarts the stream
+    if (now != at && gzseek(gz_, (z_off_t)at, SEEK_SET) < 0)
       fail(spec_.samples(), "compressed data ends before byte " + std::to_string(at));
     const int r = gzread(gz_, dst, (unsigned)bytes);
     if (r != (int)bytes) {
@@ -305,6 +308,7 @@ RawVolumeReader::RawVolumeReader(RawVolumeSpec spec) : open_(std::make_unique<Op
 RawVolumeReader::~RawVolumeReader() = default;
 
 uint64_t volumeSamplesRead() { return samples_read; }
+uint64_t volumeBytesInflated() { return bytes_inflated; }
 
 Volume loadRawVolume(const RawVolumeSpec& spec) {
   return loadRawVolume(spec, VoxelBox{{0, 0, 0}, spec.dims});

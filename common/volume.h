@@ -111,6 +111,9 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector
 // Bytes of samples this process read from volume files (decompressed bytes for a gzip
 // stream): a renderer says at exit that it read its bricks, not the file.
 uint64_t volumeSamplesRead();
+// Bytes zlib decompressed for gzip files, the bytes a read skips included: a gzip stream
+// read forwards once costs its samples once; one reopened for every window costs far more.
+uint64_t volumeBytesInflated();
 // The same file opened once for many windows, as loadRawVolume reads them. Windows read in
 // file order (slabs of planes front to back) cost one pass over the file in all: a gzip
 // stream is decoded once, not from its start for every window. With no declared range the

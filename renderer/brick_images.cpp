@@ -79,12 +79,14 @@ const BrickImages::Image& BrickImages::render(const proto::FrameParams& p, const
 }
 
 void BrickImages::prefetch(const std::deque<proto::FrameParams>& queued) {
-  // The steps the frames after the first will show, soonest first, then the one the master
-  // expects after the last.
+  // The steps the queued frames will show, soonest first, then the one the master expects
+  // after the last. The first frame's own step is among them (it is about to be shown): the
+  // prefetch thread reads steps in the order they are shown, which a gzip stream needs (a
+  // later step read first would make it start again from the file's beginning).
   std::vector<int> steps;
   for (const auto& p : queued)
     for (int s : {(int)p.step, (int)p.next_step})
-      if (s != (int)queued.front().step && std::find(steps.begin(), steps.end(), s) == steps.end()) steps.push_back(s);
+      if (std::find(steps.begin(), steps.end(), s) == steps.end()) steps.push_back(s);
   steps_.prefetch(steps);
 }
 

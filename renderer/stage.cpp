@@ -71,7 +71,8 @@ class Stage {
   void logSteps() {
     if (images_) images_->logSteps();
     if (std::holds_alternative<RawVolumeSpec>(scene_.volume))
-      spdlog::info("read {:.1f} MiB of volume samples", (double)volumeSamplesRead() / (1 << 20));
+      spdlog::info("read {:.1f} MiB of volume samples{}", (double)volumeSamplesRead() / (1 << 20),
+                   volumeBytesInflated() ? fmt::format(" ({:.2f} MiB decompressed)", (double)volumeBytesInflated() / (1 << 20)) : "");
   }
 
   int run(const std::atomic<bool>* stop) {

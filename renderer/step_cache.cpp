@@ -139,6 +139,7 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
     } catch (const std::exception& ex) {
       lock.lock();
       loading_ = -1;
+      changed_.notify_all();
       ++stats_.bad_steps;
       spdlog::error("step {}: {}; showing step {} instead (bad steps: {})", step, ex.what(), last_good_,
                     stats_.bad_steps);
@@ -148,6 +149,7 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
     }
     lock.lock();
     loading_ = -1;
+    changed_.notify_all();
     stats_.load_ms += ms;
     it = keep(step, std::move(e));
   }
@@ -167,6 +169,11 @@ void StepCache::prefetch(const std::vector<int>& steps) {
 void StepCache::prefetchLoop() {
   std::unique_lock lock(mu_);
   while (!stop_) {
+    // A gzip stream only moves forwards: no step is read ahead while get() reads the shown one.
+    if (stream_ && loading_ >= 0) {
+      changed_.wait(lock);
+      continue;
+    }
     // The soonest wanted step that is not held, if it fits without evicting a sooner one.
     int next = -1;
     for (int s : wanted_) {

@@ -133,6 +133,15 @@ TEST(FarmTime, AGzippedFourDFileSwingsThroughOneStreamAsOneProcessRendersIt) {
                             "gz_frame_" + std::to_string(k)));
   }
   EXPECT_EQ(r.output.find("instead (bad steps"), std::string::npos) << r.output;  // no step failed to read
+  // One stream: a renderer decompresses the file's 6 steps about once (the steps swung back
+  // to are in its cache). A stream opened for every step would decompress 0 + 1 + ... + 5
+  // steps before the ones it reads: 21 steps, 0.55 MiB.
+  const double file_mib = 6 * 24 * 24 * 24 * 2 / 1048576.0;
+  const std::regex line(R"(read [0-9.]+ MiB of volume samples \(([0-9.]+) MiB decompressed\))");
+  int renderers = 0;
+  for (auto it = std::sregex_iterator(r.output.begin(), r.output.end(), line); it != std::sregex_iterator(); ++it, ++renderers)
+    EXPECT_LE(std::stod((*it)[1].str()), 1.25 * file_mib + 0.005) << r.output;
+  EXPECT_EQ(renderers, 2) << r.output;
 }
 
 TEST(FarmTime, EachStepIsReadOnceWithinTheCacheBudget) {
