@@ -319,6 +319,12 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector
 }
 
 Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage, uint64_t shift) {
+  return read(box, std::move(storage), shift, true);
+}
+
+Volume RawVolumeReader::readValues(const VoxelBox& box) { return read(box, {}, 0, false); }
+
+Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage, uint64_t shift, bool map) {
   const RawVolumeSpec& spec = open_->spec;
   RawFile& file = open_->file;
   open_->spec.offset = open_->base + shift;
@@ -337,11 +343,11 @@ Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage, ui
   // The range to normalise with: declared, else the whole volume's (every window normalises
   // alike; streamed first), else, for the whole volume, its values' once read.
   std::array<double, 2> data{INFINITY, -INFINITY};
-  if (v.isWindow() && !spec.has_range) {
+  if (map && v.isWindow() && !spec.has_range) {
     if (!open_->scanned) open_->scanned = file.scanRange(), open_->scanned_shift = shift;
     data = *open_->scanned;
   }
-  const bool known = spec.has_range || v.isWindow();
+  const bool known = map && (spec.has_range || v.isWindow());
   // Like ParaView: with no declared range, colours and opacity span the data's own values.
   double lo = spec.has_range ? spec.range[0] : data[0], hi = spec.has_range ? spec.range[1] : data[1];
   float mn = INFINITY, mx = -INFINITY;
@@ -363,7 +369,7 @@ Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage, ui
     mn = lanes::hmin(vmn), mx = lanes::hmax(vmx);
     for (; i < count; ++i) {
       mn = std::min(mn, x[i]), mx = std::max(mx, x[i]);
-      x[i] = (float)std::clamp((x[i] - lo) * scale, 0.0, 1.0);
+      x[i] = normaliseSample(x[i], lo, hi);
     }
   };
   // Rows of the window; whole rows (and whole slices) are contiguous in the file and read at once.
@@ -380,7 +386,7 @@ Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage, ui
   if (!known) {  // the whole volume without a declared range: its own values set it
     for (float x : v.values) data[0] = std::min(data[0], (double)x), data[1] = std::max(data[1], (double)x);
     lo = data[0], hi = data[1];
-    normalise(v.values.data(), v.values.size());
+    if (map) normalise(v.values.data(), v.values.size());
   }
   v.data_range = spec.has_range ? std::array<double, 2>{mn, mx} : data;  // a declared range: the window's own values
   v.mapped_range = {lo, hi};

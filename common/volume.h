@@ -5,6 +5,7 @@
 // voxels): its values are the box's, `origin` is where the box starts in the whole
 // volume and `whole_dims` the whole volume's dims, which alone set the world box.
 #pragma once
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -111,6 +112,12 @@ Volume loadRawVolume(const RawVolumeSpec& spec, const VoxelBox& box, std::vector
 // Bytes of samples this process read from volume files (decompressed bytes for a gzip
 // stream): a renderer says at exit that it read its bricks, not the file.
 uint64_t volumeSamplesRead();
+// A file's sample normalised with the range lo..hi as every read normalises it: in double,
+// clamped to 0..1; lo == hi maps everything to 0.
+inline float normaliseSample(float x, double lo, double hi) {
+  const double scale = hi > lo ? 1.0 / (hi - lo) : 0.0;
+  return (float)std::clamp((x - lo) * scale, 0.0, 1.0);
+}
 // Bytes zlib decompressed for gzip files, the bytes a read skips included: a gzip stream
 // read forwards once costs its samples once; one reopened for every window costs far more.
 uint64_t volumeBytesInflated();
@@ -126,8 +133,14 @@ class RawVolumeReader {
   // `shift`: bytes past the spec's offset where the window's volume starts (a 4-D file's
   // step t lies t steps of samples further on).
   Volume read(const VoxelBox& box, std::vector<float> storage = {}, uint64_t shift = 0);
+  // The window's samples as the file holds them (after a header's scaling; non-finite ones
+  // refused), not normalised: data_range and mapped_range are their min..max. With no scan
+  // first, slabs read this way give a file's range and its blocks' in one pass (the master's
+  // summary: normalising is monotonic, so a block's normalised bounds are its bounds normalised).
+  Volume readValues(const VoxelBox& box);
 
  private:
+  Volume read(const VoxelBox& box, std::vector<float> storage, uint64_t shift, bool map);
   struct Open;
   std::unique_ptr<Open> open_;
 };

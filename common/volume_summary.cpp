@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <stdexcept>
 
 #include "common/bricks.h"
 
@@ -19,9 +21,15 @@ std::array<double, 2> fixVolumeRange(Scene& scene) {
   return probe.data_range;
 }
 
-VolumeSummary summarizeVolume(const Scene& original) {
-  Scene scene = original;
-  fixVolumeRange(scene);
+VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cancel) {
+  // A file without `range` is read once, in its own values: the blocks' bounds are normalised
+  // at the end with the range found on the way (normalising is monotonic, so they are the
+  // bounds of the normalised values the renderers will hold), not after a scan of its own.
+  const auto* declared = std::get_if<RawVolumeSpec>(&scene.volume);
+  std::optional<RawVolumeReader> values;
+  if (declared && !declared->has_range) values.emplace(std::get<RawVolumeSpec>(stepVolume(scene, 0)));
+  std::optional<VolumeReader> mapped;
+  if (!values) mapped.emplace(scene);  // one pass over the file (a gzip stream decoded once)
   VolumeSummary s;
   const std::array<int, 3> n = volumeDims(scene);
   while (s.edge > 1 && std::min({n[0], n[1], n[2]}) < 8 * s.edge) s.edge /= 2;
@@ -30,11 +38,12 @@ VolumeSummary summarizeVolume(const Scene& original) {
   s.lo.assign(count, INFINITY);
   s.hi.assign(count, -INFINITY);
   std::array<double, 2> data{INFINITY, -INFINITY};
-  VolumeReader reader(scene);  // one pass over the file (a gzip stream decoded once)
   for (int z0 = 0; z0 < n[2]; z0 += s.edge) {
-    const Volume slab = reader.read(VoxelBox{{0, 0, z0}, {n[0], n[1], std::min(n[2], z0 + s.edge)}});
+    if (cancel && *cancel) throw std::runtime_error("the volume's summary was cancelled");
+    const VoxelBox box{{0, 0, z0}, {n[0], n[1], std::min(n[2], z0 + s.edge)}};
+    const Volume slab = values ? values->readValues(box) : mapped->read(box);
     s.shape.spacing = slab.spacing;
-    s.shape.mapped_range = slab.mapped_range;  // every slab's: the range was fixed above
+    s.shape.mapped_range = slab.mapped_range;  // every slab's: the range is the scene's
     data[0] = std::min(data[0], slab.data_range[0]);
     data[1] = std::max(data[1], slab.data_range[1]);
     const size_t row = (size_t)s.blocks[0] * s.blocks[1] * (z0 / s.edge);
@@ -46,6 +55,11 @@ VolumeSummary summarizeVolume(const Scene& original) {
           s.lo[b] = std::min(s.lo[b], v);
           s.hi[b] = std::max(s.hi[b], v);
         }
+  }
+  if (values) {  // as fixVolumeRange fixes it: the data's min..max (a constant volume: one wide)
+    const double lo = data[0], hi = data[1] > data[0] ? data[1] : data[0] + 1;
+    for (size_t b = 0; b < count; ++b) s.lo[b] = normaliseSample(s.lo[b], lo, hi), s.hi[b] = normaliseSample(s.hi[b], lo, hi);
+    s.shape.mapped_range = {lo, hi};
   }
   s.shape.dims = n;
   s.shape.data_range = data;  // the slabs' own values: the whole volume's

@@ -5,6 +5,7 @@
 // that misses the data.
 #pragma once
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
@@ -24,7 +25,8 @@ struct VolumeSummary {
 
 // Blocks of 8 voxels, or fewer for a small volume so that every axis has at least 8 blocks
 // (bricks are cut on block faces). Throws as loadVolume does.
-VolumeSummary summarizeVolume(const Scene& scene);
+// `cancel`, when raised, ends the reading at the next slab with std::runtime_error.
+VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cancel = nullptr);
 // 1 for every block that may be visible under tf (some value of its range has opacity).
 std::vector<uint8_t> visibleBlocks(const VolumeSummary& s, const TransferFunction& tf);
 // n bricks cut on block faces, balanced by the blocks that may be visible.

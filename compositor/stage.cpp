@@ -45,7 +45,7 @@ class Stage {
                                {inbox_.socket().handle(), 0, ZMQ_POLLIN, 0}};
     while (!(stop && *stop)) {
       pollFor(items, 3, std::chrono::milliseconds(100));
-      if ((items[0].revents & ZMQ_POLLIN) && !readParams()) return 0;
+      if (((items[0].revents & ZMQ_POLLIN) || link_.pending()) && !readParams()) return 0;
       if (link_.masterLost()) return 1;
       // The roster before the pieces: a new renderer's first pieces may wait for it.
       if (items[1].revents & ZMQ_POLLIN)

@@ -47,7 +47,7 @@ class Stage {
       // A window that takes input is read every 4 ms. SDL stamps an event when it reads it, so
       // the wait for that read (<= 4 ms) is not in the input-to-present time.
       pollFor(items, 3, std::chrono::milliseconds(sink_ && sink_->interactive() ? 4 : 20));
-      if (items[0].revents & ZMQ_POLLIN) readParams();
+      if ((items[0].revents & ZMQ_POLLIN) || link_.pending()) readParams();
       if (link_.masterLost()) return 1;
       // The roster before the strips: a new sender's first strips may wait for it.
       if (items[1].revents & ZMQ_POLLIN)

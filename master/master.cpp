@@ -55,9 +55,13 @@ class Master {
   }
 
   int run(const std::atomic<bool>* stop) {
-    prepared_ = preparation_->await(stop, [this] { probe(); });  // Hellos wait meanwhile
-    if (!prepared_) return 0;
+    prepared_ = preparation_->await(stop, [this] { probe(), held_.hold(ctl_, drops_); });
+    if (!prepared_) {
+      shutdown("stopped while reading the volume");
+      return 1;  // as when stopped while gathering the stages
+    }
     plan_ = prepared_->plan.get();
+    for (const auto& [identity, hello] : held_.live(ctl_, drops_)) onHello(identity, hello);
     if (!gatherMembers(stop)) return 1;
     plan_->reassign(workers());
     started_ = true;
@@ -373,6 +377,7 @@ class Master {
   Membership members_;
   CreditWindow window_;
   std::unique_ptr<Preparation> preparation_;  // started once the sockets are bound
+  HeldHellos held_;  // while the volume is read
   std::unique_ptr<Prepared> prepared_;
   Plan* plan_ = nullptr;  // prepared_'s
   bool started_ = false, display_lost_ = false;

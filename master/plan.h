@@ -4,10 +4,12 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "common/scene.h"
+#include "common/volume_summary.h"
 #include "common/wire/protocol.h"
 
 namespace tessera::master {
@@ -39,7 +41,8 @@ class Plan {
 };
 
 // The scene's plan: sort-first for a mesh (the master needs no volume: renderers own the
-// mesh), else sort-last from a streamed summary of the volume.
-std::unique_ptr<Plan> makePlan(const Scene& scene, bool balance, int tiles_per_renderer, bool binary_swap);
+// mesh), else sort-last from the volume's summary (`volume`: streamed here when not given).
+std::unique_ptr<Plan> makePlan(const Scene& scene, bool balance, int tiles_per_renderer, bool binary_swap,
+                               std::optional<VolumeSummary> volume = {});
 
 }  // namespace tessera::master

@@ -1,30 +1,38 @@
 #include "master/preparation.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include <spdlog/spdlog.h>
 
 #include "common/clock.h"
+#include "common/net/transport.h"
 #include "common/volume_summary.h"
 
 namespace tessera::master {
 
 namespace {
-std::unique_ptr<Prepared> prepare(const MasterOptions& opt) {
+std::unique_ptr<Prepared> prepare(const MasterOptions& opt, const std::atomic<bool>* cancel) {
   auto out = std::make_unique<Prepared>();
   out->scene = opt.scene;
+  std::optional<VolumeSummary> summary;
   if (out->scene.has_volume && !out->scene.mesh) {
-    fixVolumeRange(out->scene);
-    if (const auto* raw = std::get_if<RawVolumeSpec>(&out->scene.volume)) out->volume_range = raw->range;
+    summary = summarizeVolume(out->scene, cancel);  // one pass over a file, which also finds a missing range
+    if (auto* raw = std::get_if<RawVolumeSpec>(&out->scene.volume)) {
+      if (!raw->has_range) raw->has_range = true, raw->range = summary->shape.mapped_range;
+      out->volume_range = raw->range;
+    }
   }
-  out->plan = makePlan(out->scene, opt.balance, opt.tiles_per_renderer, opt.binary_swap);
+  out->plan = makePlan(out->scene, opt.balance, opt.tiles_per_renderer, opt.binary_swap, std::move(summary));
   return out;
 }
 }  // namespace
 
-Preparation::Preparation(const MasterOptions& opt) : reading_(std::async(std::launch::async, prepare, std::cref(opt))) {}
+Preparation::Preparation(const MasterOptions& opt)
+    : reading_(std::async(std::launch::async, prepare, std::cref(opt), &cancel_)) {}
 
 Preparation::~Preparation() {
+  cancel_ = true;
   if (reading_.valid()) reading_.wait();
 }
 
@@ -34,7 +42,7 @@ std::unique_ptr<Prepared> Preparation::await(const std::atomic<bool>* stop, cons
   while (reading_.wait_for(std::chrono::milliseconds(100)) != std::future_status::ready) {
     meanwhile();
     if (stop && *stop) {
-      spdlog::info("stopping once the volume's reading ends");
+      cancel_ = true;
       return nullptr;
     }
     if (msSince(start) > next_note * 1000) {
@@ -44,6 +52,43 @@ std::unique_ptr<Prepared> Preparation::await(const std::atomic<bool>* stop, cons
     }
   }
   return reading_.get();
+}
+
+void HeldHellos::hold(zmq::socket_t& control, DropCounter& drops) {
+  for (int budget = 0; budget < 1000; ++budget) {
+    auto m = receiveRouted(control);
+    if (!m) break;
+    auto h = m->has_body ? proto::decodeHello(view(m->body)) : Result<proto::Hello>::fail("message without routing id");
+    if (!h) {
+      drops.drop(~0u, "while reading the volume: " + h.error());
+      continue;
+    }
+    auto it = held_.find(m->identity);
+    if (it == held_.end()) {
+      if (held_.size() >= kMost) {
+        drops.drop(~0u, "while reading the volume: Hellos from too many connections");
+        continue;
+      }
+      it = held_.emplace(m->identity, Held{Clock::now(), {}, {}}).first;
+    }
+    it->second.last = Clock::now(), it->second.hello = *h;
+  }
+}
+
+std::vector<std::pair<std::string, proto::Hello>> HeldHellos::live(zmq::socket_t& control, DropCounter& drops,
+                                                                   double silent_s) {
+  hold(control, drops);
+  std::vector<std::pair<Clock::time_point, std::pair<std::string, proto::Hello>>> live;
+  for (const auto& [identity, h] : held_)
+    if (msSince(h.last) < 1000 * silent_s) live.push_back({h.first, {identity, h.hello}});
+  if (live.size() < held_.size())
+    spdlog::info("{} stage(s) said Hello while the volume was read and fell silent since: not admitted",
+                 held_.size() - live.size());
+  held_.clear();
+  std::sort(live.begin(), live.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<std::pair<std::string, proto::Hello>> out;
+  for (auto& l : live) out.push_back(std::move(l.second));
+  return out;
 }
 
 }  // namespace tessera::master

@@ -8,9 +8,19 @@
 #include <atomic>
 #include <functional>
 #include <future>
+#include <map>
 #include <memory>
+#include <string>
+#include <utility>
+#include <vector>
 
+#include <zmq.hpp>
+
+#include "common/clock.h"
+#include "common/net/log.h"
+#include "common/net/stage_link.h"
 #include "common/scene.h"
+#include "common/wire/protocol.h"
 #include "master/master.h"
 #include "master/plan.h"
 
@@ -22,16 +32,37 @@ struct Prepared {
   std::array<double, 2> volume_range{0, 0};  // for the Welcome: {0, 0} none
 };
 
+// While the volume is read no stage can be welcomed (the Welcome carries its range): the
+// Hellos that come are held, the newest per connection, and anything else is dropped.
+class HeldHellos {
+ public:
+  void hold(zmq::socket_t& control, DropCounter& drops);  // reads what came, never waits
+  // Stages say Hello every StageLink::kHelloEveryS: one silent for twice that is gone (it
+  // died while the volume was read) and is left out. The others, first come first.
+  std::vector<std::pair<std::string, proto::Hello>> live(zmq::socket_t& control, DropCounter& drops,
+                                                        double silent_s = 2 * StageLink::kHelloEveryS);
+
+ private:
+  struct Held {
+    Clock::time_point first, last;
+    proto::Hello hello;
+  };
+  std::map<std::string, Held> held_;  // by the connection's routing id
+  static constexpr size_t kMost = 4096;
+};
+
 class Preparation {
  public:
   explicit Preparation(const MasterOptions& opt);  // starts reading; `opt` must outlive this
   ~Preparation();                                  // waits for the reading to end
 
   // Calls `meanwhile` every 100 ms until the reading ends, saying every 10 s how long it
-  // takes. Rethrows what the reading threw (a bad file); nullptr when stopped meanwhile.
+  // takes. Rethrows what the reading threw (a bad file); nullptr when stopped meanwhile
+  // (the reading is then cancelled: it ends at its next slab).
   std::unique_ptr<Prepared> await(const std::atomic<bool>* stop, const std::function<void()>& meanwhile);
 
  private:
+  std::atomic<bool> cancel_{false};
   std::future<std::unique_ptr<Prepared>> reading_;
 };
 

@@ -50,6 +50,15 @@ StageLink::~StageLink() {
   if (heartbeat_.joinable()) heartbeat_.join();
 }
 
+bool StageLink::shutDown(const zmq::message_t& published) const {
+  auto h = proto::decodeHeader(view(published));
+  if (!h || h->type != proto::Type::Shutdown) return false;
+  auto down = proto::decodeShutdown(view(published));
+  spdlog::error("the master at {} shut down before this {} joined: {}", ep_.masterPub(), proto::roleName(role_),
+                down ? down->reason : down.error());
+  return true;
+}
+
 bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   const auto start = Clock::now();
   auto heard = start;  // the master's last probe: a master still reading its volume probes on
@@ -73,6 +82,8 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
     if (sub_item[0].revents & ZMQ_POLLIN) {
       zmq::message_t m;
       (void)sub_.recv(m);
+      heard = Clock::now();
+      if (shutDown(m)) return false;
       break;
     }
   }
@@ -80,7 +91,7 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   // has it, however long that takes, and probes meanwhile: only its silence ends the wait.
   // Hello is said again now and then (a master restarted meanwhile never got the first);
   // the master answers a repeated one with the same Welcome.
-  const double hello_every = std::min(10.0, timeout_s / 4);
+  const double hello_every = std::min(kHelloEveryS, timeout_s / 4);
   auto hello_at = Clock::now() - std::chrono::hours(1);
   zmq::pollitem_t items[] = {{ctl_.handle(), 0, ZMQ_POLLIN, 0}, {sub_.handle(), 0, ZMQ_POLLIN, 0}};
   while (true) {
@@ -95,9 +106,11 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
       zmq::message_t m;
       if (!sub_.recv(m, zmq::recv_flags::dontwait)) break;
       heard = Clock::now();
-      auto h = proto::decodeHeader(view(m));
+      if (shutDown(m)) return false;
       // Anything else published before the Welcome is kept for receive(), in order.
-      if (!(h && h->type == proto::Type::Probe) && early_.size() < kEarlyKept) early_.push_back(std::move(m));
+      if (auto h = proto::decodeHeader(view(m)); h && h->type == proto::Type::Probe) continue;
+      if (early_.size() == kEarlyKept) early_.pop_front();
+      early_.push_back(std::move(m));
     }
     if (!(items[0].revents & ZMQ_POLLIN)) continue;
     zmq::message_t m;

@@ -30,8 +30,9 @@ class StageLink {
   StageLink(const StageLink&) = delete;
   StageLink& operator=(const StageLink&) = delete;
 
-  // False if `stop` was raised, the master refused this stage, or nothing came from the
-  // master for timeout_s (its probes, while it prepares, keep the wait going).
+  // False if `stop` was raised, the master refused this stage or shut down, or nothing came
+  // from the master for timeout_s (its probes, while it prepares, keep the wait going).
+  static constexpr double kHelloEveryS = 10;  // Hello is said again this often until the Welcome
   bool join(const std::atomic<bool>* stop, double timeout_s = 120);
   uint32_t rank() const { return rank_; }
   // The Welcome's volume_range ({0, 0}: the master gave none).
@@ -47,6 +48,9 @@ class StageLink {
     bool shutdown = false;
   };
   Published receive(DropCounter& drops, int max_messages = 256);
+  // Published before the Welcome and not read yet: receive() has them though the SUB socket
+  // does not poll readable.
+  bool pending() const { return !early_.empty(); }
   // The frame size this stage's buffers and message limits were made for (its own scene):
   // FrameParams for a larger frame are passed on, and the mismatch is logged once as an
   // error naming both sizes (a master started with another scene than this stage).
@@ -74,6 +78,7 @@ class StageLink {
   void clearWaiting() { setWaiting(0, proto::kNobody); }
 
  private:
+  bool shutDown(const zmq::message_t& published) const;  // a Shutdown before the Welcome: said
   int max_w_ = 0, max_h_ = 0;  // 0: no expected size
   bool size_logged_ = false;
   zmq::context_t& ctx_;
@@ -91,7 +96,7 @@ class StageLink {
   std::chrono::steady_clock::time_point last_heard_ = std::chrono::steady_clock::now();
   std::thread heartbeat_;
   std::deque<zmq::message_t> early_;  // published before the Welcome: receive() reads them first
-  static constexpr size_t kEarlyKept = 1024;
+  static constexpr size_t kEarlyKept = 256;  // the newest: only those just before the Welcome can be for this stage
 };
 
 }  // namespace tessera

@@ -103,5 +103,21 @@ TEST(StageJoin, AStageGivesUpOnAMasterThatFallsSilent) {
   EXPECT_LT(waited, 4s);
 }
 
+TEST(StageJoin, AStageEndsItsWaitWhenTheMasterShutsDownBeforeItsWelcome) {
+  FakeMaster m("join_shutdown");
+  zmq::context_t ctx;
+  StageLink link(ctx, m.ep, proto::Role::Compositor);
+  // A master stopped while it read its volume: probes, then says Shutdown.
+  auto master = std::async(std::launch::async, [&] {
+    int hellos = 0;
+    for (auto end = Clock::now() + 500ms; Clock::now() < end; std::this_thread::sleep_for(100ms)) m.probe(), m.hellos(&hellos);
+    for (int i = 0; i < 5; ++i) sendBytes(m.pub, proto::encode(proto::Shutdown{"stopped while reading the volume"}, kMaster));
+  });
+  const auto t0 = Clock::now();
+  EXPECT_FALSE(link.join(nullptr, 30.0));
+  master.get();
+  EXPECT_LT(Clock::now() - t0, 10s) << "not the 30 s wait";
+}
+
 }  // namespace
 }  // namespace tessera::test

@@ -55,6 +55,33 @@ TEST(VolumeSummary, ARawFileWithoutARangeIsSummarisedOverItsOwnValues) {
   expectBlocksOfWhole(s, whole);
 }
 
+// A file without range is read once: the blocks' bounds in its own values, normalised with
+// the range found on the way, are the bounds of the values a renderer normalises; a constant
+// file maps to 0 as loadVolume maps it.
+TEST(VolumeSummary, AFileWithoutARangeIsReadOnceAndNormalisedAsLoadVolumeDoes) {
+  test::TempDir t("summary_once");
+  const std::array<int, 3> n{40, 36, 33};
+  std::vector<float> data((size_t)n[0] * n[1] * n[2]);
+  for (size_t i = 0; i < data.size(); ++i) data[i] = -3.7f + 15.8f * (float)((i * 2654435761u) % 100003) / 100003.0f;
+  for (bool constant : {false, true}) {
+    if (constant) std::fill(data.begin(), data.end(), 2.5f);
+    Scene scene = defaultScene();
+    scene.volume = test::rawSpec(t.write(constant ? "c.raw" : "f.raw", data.data(), data.size() * 4), n,
+                                 VoxelType::Float32, {1, 1, 1}, false, {0, 0});
+    const uint64_t before = volumeSamplesRead();
+    const VolumeSummary s = summarizeVolume(scene);
+    EXPECT_EQ(volumeSamplesRead() - before, data.size() * 4) << "one pass over the file";
+    EXPECT_EQ(s.edge, 4);
+    Scene fixed = scene;
+    fixVolumeRange(fixed);  // what the renderers normalise with
+    EXPECT_EQ(s.shape.mapped_range, std::get<RawVolumeSpec>(fixed.volume).range);
+    const Volume whole = loadVolume(fixed);
+    EXPECT_EQ(s.shape.data_range, (std::array<double, 2>{*std::min_element(data.begin(), data.end()),
+                                                         *std::max_element(data.begin(), data.end())}));
+    expectBlocksOfWhole(s, whole);
+  }
+}
+
 TEST(VolumeSummary, BricksAreCutOnBlockFacesAndCoverTheVolumeOnce) {
   Scene scene = defaultScene();
   scene.volume = GeneratorSpec{"hollow-shell", 75, 1, {1, 1, 1}};
