@@ -44,18 +44,18 @@ TEST(HeldHellos, TheNewestHelloOfEachLiveConnectionFirstComeFirst) {
   hello(gone, 2);
   hello(late, 3);
   sendBytes(gone, std::vector<std::byte>(20, std::byte{7}));  // junk: dropped, counted
-  holdFor(900ms);
+  holdFor(2500ms);
   hello(early, 11);  // said again: the newest is kept, its place stays the first
   hello(late, 13);
   holdFor(150ms);
-  const auto live = held.live(router, drops, 0.6);  // `gone` has been silent for 0.9 s
+  const auto live = held.live(router, drops, 1.5);  // `gone` silent for 2.65 s, the others 0.15 s
   ASSERT_EQ(live.size(), 2u);
   EXPECT_EQ(live[0].first, std::string(16, 'e') + "c");
   EXPECT_EQ(live[0].second.pid, 11u);
   EXPECT_EQ(live[1].first, std::string(16, 'l') + "c");
   EXPECT_EQ(live[1].second.pid, 13u);
   EXPECT_EQ(drops.total(), 1u);
-  EXPECT_TRUE(held.live(router, drops, 0.6).empty()) << "taken once";
+  EXPECT_TRUE(held.live(router, drops, 1.5).empty()) << "taken once";
 }
 
 }  // namespace
