@@ -388,7 +388,8 @@ Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage, ui
     lo = data[0], hi = data[1];
     if (map) normalise(v.values.data(), v.values.size());
   }
-  v.data_range = spec.has_range ? std::array<double, 2>{mn, mx} : data;  // a declared range: the window's own values
+  // Mapped with a declared range: the window's own values, seen while normalising.
+  v.data_range = map && spec.has_range ? std::array<double, 2>{mn, mx} : data;
   v.mapped_range = {lo, hi};
   return v;
 }

@@ -27,9 +27,20 @@ VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cance
   // bounds of the normalised values the renderers will hold), not after a scan of its own.
   const auto* declared = std::get_if<RawVolumeSpec>(&scene.volume);
   std::optional<RawVolumeReader> values;
-  if (declared && !declared->has_range) values.emplace(std::get<RawVolumeSpec>(stepVolume(scene, 0)));
   std::optional<VolumeReader> mapped;
-  if (!values) mapped.emplace(scene);  // one pass over the file (a gzip stream decoded once)
+  if (!declared || declared->has_range) mapped.emplace(scene);  // one pass over the file (a gzip stream decoded once)
+  // Errors name the scene and its volume, as VolumeReader's do.
+  auto readSlab = [&](const VoxelBox& box) -> Volume {
+    if (mapped) return mapped->read(box);
+    try {
+      if (!values) values.emplace(std::get<RawVolumeSpec>(stepVolume(scene, 0)));
+      return values->readValues(box);
+    } catch (const SceneError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw SceneError((scene.path.empty() ? "<default scene>" : scene.path) + ": volume: " + e.what());
+    }
+  };
   VolumeSummary s;
   const std::array<int, 3> n = volumeDims(scene);
   while (s.edge > 1 && std::min({n[0], n[1], n[2]}) < 8 * s.edge) s.edge /= 2;
@@ -41,7 +52,7 @@ VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cance
   for (int z0 = 0; z0 < n[2]; z0 += s.edge) {
     if (cancel && *cancel) throw std::runtime_error("the volume's summary was cancelled");
     const VoxelBox box{{0, 0, z0}, {n[0], n[1], std::min(n[2], z0 + s.edge)}};
-    const Volume slab = values ? values->readValues(box) : mapped->read(box);
+    const Volume slab = readSlab(box);
     s.shape.spacing = slab.spacing;
     s.shape.mapped_range = slab.mapped_range;  // every slab's: the range is the scene's
     data[0] = std::min(data[0], slab.data_range[0]);
@@ -56,7 +67,7 @@ VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cance
           s.hi[b] = std::max(s.hi[b], v);
         }
   }
-  if (values) {  // as fixVolumeRange fixes it: the data's min..max (a constant volume: one wide)
+  if (!mapped) {  // as fixVolumeRange fixes it: the data's min..max (a constant volume: one wide)
     const double lo = data[0], hi = data[1] > data[0] ? data[1] : data[0] + 1;
     for (size_t b = 0; b < count; ++b) s.lo[b] = normaliseSample(s.lo[b], lo, hi), s.hi[b] = normaliseSample(s.hi[b], lo, hi);
     s.shape.mapped_range = {lo, hi};

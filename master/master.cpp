@@ -55,13 +55,18 @@ class Master {
   }
 
   int run(const std::atomic<bool>* stop) {
-    prepared_ = preparation_->await(stop, [this] { probe(), held_.hold(ctl_, drops_); });
+    try {
+      prepared_ = preparation_->await(stop, [this] { probe(), held_.hold(ctl_, drops_, refuser()); });
+    } catch (const std::exception& e) {  // a bad volume file: the waiting stages hear why now, not after 120 s
+      shutdown(std::string("the volume could not be read: ") + e.what());
+      throw;
+    }
     if (!prepared_) {
       shutdown("stopped while reading the volume");
       return 1;  // as when stopped while gathering the stages
     }
     plan_ = prepared_->plan.get();
-    for (const auto& [identity, hello] : held_.live(ctl_, drops_)) onHello(identity, hello);
+    for (const auto& [identity, hello] : held_.live(ctl_, drops_, refuser())) onHello(identity, hello);
     if (!gatherMembers(stop)) return 1;
     plan_->reassign(workers());
     started_ = true;
@@ -123,7 +128,7 @@ class Master {
       const std::string why = fmt::format("this farm is run '{}', the {} (pid {}) is of run '{}'", opt_.run,
                                           roleName(h.role), h.pid, h.run);
       refuse(why);
-      return sendTo(identity, proto::encode(proto::Shutdown{why + "; check TESSERA_ENDPOINTS"}, kMasterRank));
+      return sendTo(identity, proto::encode(proto::Shutdown{why + "; check TESSERA_ENDPOINTS", opt_.run}, kMasterRank));
     }
     bool joined = false;
     Member& m = members_.join(identity, h, Clock::now(), &joined);
@@ -330,6 +335,9 @@ class Master {
     metrics_.refused();
     drops_.drop(~0u, why);
   }
+  HeldHellos::Refuse refuser() {
+    return [this](const std::string& why) { refuse(why); };
+  }
 
   void onStats(const proto::StageStats& s) {
     window_.stats(s.role, s.rank, s.frame, s.epoch);
@@ -363,7 +371,7 @@ class Master {
                  drops_.total(), metrics_.refusedPeers(), metrics_.runSummary());
     // PUB is fire-and-forget: say it a few times so every subscriber hears it.
     for (int i = 0; i < 5; ++i) {
-      sendBytes(pub_, proto::encode(proto::Shutdown{reason}, kMasterRank));
+      sendBytes(pub_, proto::encode(proto::Shutdown{reason, opt_.run}, kMasterRank));
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   }

@@ -54,11 +54,19 @@ std::unique_ptr<Prepared> Preparation::await(const std::atomic<bool>* stop, cons
   return reading_.get();
 }
 
-void HeldHellos::hold(zmq::socket_t& control, DropCounter& drops) {
+void HeldHellos::hold(zmq::socket_t& control, DropCounter& drops, const Refuse& refuse) {
   for (int budget = 0; budget < 1000; ++budget) {
     auto m = receiveRouted(control);
     if (!m) break;
-    auto h = m->has_body ? proto::decodeHello(view(m->body)) : Result<proto::Hello>::fail("message without routing id");
+    if (auto header = m->has_body ? proto::decodeHeader(view(m->body)) : Result<proto::Header>::fail("message without routing id");
+        !header) {
+      drops.drop(~0u, "while reading the volume: " + header.error());
+      continue;
+    } else if (header->type != proto::Type::Hello) {
+      refuse(std::string("while reading the volume: unknown peer sent ") + proto::typeName(header->type));
+      continue;
+    }
+    auto h = proto::decodeHello(view(m->body));
     if (!h) {
       drops.drop(~0u, "while reading the volume: " + h.error());
       continue;
@@ -76,8 +84,8 @@ void HeldHellos::hold(zmq::socket_t& control, DropCounter& drops) {
 }
 
 std::vector<std::pair<std::string, proto::Hello>> HeldHellos::live(zmq::socket_t& control, DropCounter& drops,
-                                                                   double silent_s) {
-  hold(control, drops);
+                                                                   const Refuse& refuse, double silent_s) {
+  hold(control, drops, refuse);
   std::vector<std::pair<Clock::time_point, std::pair<std::string, proto::Hello>>> live;
   for (const auto& [identity, h] : held_)
     if (msSince(h.last) < 1000 * silent_s) live.push_back({h.first, {identity, h.hello}});

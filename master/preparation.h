@@ -33,13 +33,16 @@ struct Prepared {
 };
 
 // While the volume is read no stage can be welcomed (the Welcome carries its range): the
-// Hellos that come are held, the newest per connection, and anything else is dropped.
+// Hellos that come are held, the newest per connection. A malformed message is dropped; any
+// other message comes from a connection that is no member (none is yet): `refuse` is told.
 class HeldHellos {
  public:
-  void hold(zmq::socket_t& control, DropCounter& drops);  // reads what came, never waits
+  using Refuse = std::function<void(const std::string& why)>;
+  void hold(zmq::socket_t& control, DropCounter& drops, const Refuse& refuse);  // reads what came, never waits
   // Stages say Hello every StageLink::kHelloEveryS: one silent for twice that is gone (it
   // died while the volume was read) and is left out. The others, first come first.
   std::vector<std::pair<std::string, proto::Hello>> live(zmq::socket_t& control, DropCounter& drops,
+                                                        const Refuse& refuse,
                                                         double silent_s = 2 * StageLink::kHelloEveryS);
 
  private:

@@ -123,9 +123,19 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
   direction_ = current_ >= 0 && step < current_ ? -1 : current_ >= 0 && step > current_ ? 1 : direction_;
   current_ = step;
   makeRoom(0, 0);  // the step shown before now counts against the budget
-  changed_.wait(lock, [&] { return prefetching_ != step; });  // the prefetch thread is on it: wait, not load twice
+  // The prefetch thread is reading this step of this box: wait for it rather than read it
+  // twice. The frame waited for the file all the same: a miss, its wait the load time.
+  double waited_ms = -1;
+  if (prefetching_ == step && prefetch_generation_ == generation_) {
+    const auto t0 = Clock::now();
+    changed_.wait(lock, [&] { return prefetching_ != step || prefetch_generation_ != generation_; });
+    waited_ms = msSince(t0);
+  }
   auto it = held_.find(step);
-  if (it != held_.end()) {
+  if (it != held_.end() && waited_ms >= 0) {
+    ++stats_.misses;
+    stats_.load_ms += waited_ms;
+  } else if (it != held_.end()) {
     if (scene_.series.steps > 1) ++stats_.hits;
   } else {
     if (scene_.series.steps > 1) ++stats_.misses;
@@ -186,7 +196,7 @@ void StepCache::prefetchLoop() {
       continue;
     }
     prefetching_ = next;
-    const uint64_t generation = generation_;
+    const uint64_t generation = prefetch_generation_ = generation_;
     const VoxelBox box = box_;  // get() may move the bricks while this loads
     std::vector<float> storage = takeSpare();
     lock.unlock();

@@ -86,6 +86,7 @@ class StepCache {
   std::map<int, Entry> held_;
   int current_ = -1, direction_ = 1, last_good_ = -1;
   int loading_ = -1, prefetching_ = -1;  // the step being read by get() and by the prefetch thread
+  uint64_t prefetch_generation_ = 0;      // of the box the prefetch thread reads prefetching_ of
   std::vector<int> wanted_;
   std::vector<float> spare_;  // at most one window's samples: taken by the next load
   StepCacheStats stats_;

@@ -37,7 +37,7 @@ std::string StageLink::heartbeatIdentity(const std::string& control_identity) {
 
 StageLink::StageLink(zmq::context_t& ctx, const Endpoints& ep, proto::Role role, std::string advertise)
     : ctx_(ctx), ep_(ep), role_(role), advertise_(std::move(advertise)),
-      identity_(randomIdentity()), sub_(makeSocket(ctx, zmq::socket_type::sub)), ctl_(makeSocket(ctx, zmq::socket_type::dealer)) {
+      identity_(randomIdentity()), run_(farmRun()), sub_(makeSocket(ctx, zmq::socket_type::sub)), ctl_(makeSocket(ctx, zmq::socket_type::dealer)) {
   sub_.set(zmq::sockopt::subscribe, "");
   sub_.set(zmq::sockopt::rcvhwm, 0);  // FrameParams must never be dropped by the queue
   connectTo(sub_, ep_.masterPub());
@@ -50,13 +50,19 @@ StageLink::~StageLink() {
   if (heartbeat_.joinable()) heartbeat_.join();
 }
 
-bool StageLink::shutDown(const zmq::message_t& published) const {
+std::optional<std::string> StageLink::ourShutdown(const zmq::message_t& published, std::string* other) const {
   auto h = proto::decodeHeader(view(published));
-  if (!h || h->type != proto::Type::Shutdown) return false;
+  if (!h || h->type != proto::Type::Shutdown) return std::nullopt;
   auto down = proto::decodeShutdown(view(published));
-  spdlog::error("the master at {} shut down before this {} joined: {}", ep_.masterPub(), proto::roleName(role_),
-                down ? down->reason : down.error());
-  return true;
+  if (!down) {
+    if (other) *other = "Shutdown: " + down.error();
+    return std::nullopt;
+  }
+  if (down->run != run_) {
+    if (other) *other = fmt::format("Shutdown of run '{}' (this farm is run '{}')", down->run, run_);
+    return std::nullopt;
+  }
+  return down->reason;
 }
 
 bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
@@ -64,6 +70,10 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   auto heard = start;  // the master's last probe: a master still reading its volume probes on
   auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   auto expired = [&] { return since(heard) > timeout_s; };
+  auto shutDown = [&](const std::string& reason) {
+    spdlog::error("the master at {} shut down before this {} joined: {}", ep_.masterPub(), proto::roleName(role_), reason);
+    return false;
+  };
   // Never silent: after 2 s, and every 10 s after that, say what this stage waits for.
   double next_notice = 2;
   auto notice = [&](const std::string& what) {
@@ -82,8 +92,11 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
     if (sub_item[0].revents & ZMQ_POLLIN) {
       zmq::message_t m;
       (void)sub_.recv(m);
+      std::string other;
+      auto down = ourShutdown(m, &other);
+      if (!other.empty()) continue;  // not from this farm's master
+      if (down) return shutDown(*down);
       heard = Clock::now();
-      if (shutDown(m)) return false;
       break;
     }
   }
@@ -91,13 +104,19 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   // has it, however long that takes, and probes meanwhile: only its silence ends the wait.
   // Hello is said again now and then (a master restarted meanwhile never got the first);
   // the master answers a repeated one with the same Welcome.
+  // A Shutdown read now may have been said just after our Welcome, which travels on the other
+  // connection: the stage waits a moment for it, and if it comes, joins and reads the Shutdown
+  // in receive() like any stage (a spare welcomed as the run ends exits as the others do).
   const double hello_every = std::min(kHelloEveryS, timeout_s / 4);
   auto hello_at = Clock::now() - std::chrono::hours(1);
+  std::optional<std::string> down;
+  auto down_at = Clock::now();
   zmq::pollitem_t items[] = {{ctl_.handle(), 0, ZMQ_POLLIN, 0}, {sub_.handle(), 0, ZMQ_POLLIN, 0}};
   while (true) {
     if ((stop && *stop) || expired()) return false;
-    if (since(hello_at) > hello_every) {
-      sendBytes(ctl_, proto::encode(proto::Hello{role_, (uint32_t)getpid(), advertise_, farmRun()}, 0));
+    if (down && since(down_at) > kWelcomeGraceS) return shutDown(*down);
+    if (!down && since(hello_at) > hello_every) {
+      sendBytes(ctl_, proto::encode(proto::Hello{role_, (uint32_t)getpid(), advertise_, run_}, 0));
       hello_at = Clock::now();
     }
     notice("the master at " + ep_.masterControl() + " to answer its Hello");
@@ -105,8 +124,11 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
     for (int i = 0; i < 64 && (items[1].revents & ZMQ_POLLIN); ++i) {
       zmq::message_t m;
       if (!sub_.recv(m, zmq::recv_flags::dontwait)) break;
+      std::string other;
+      auto ours = ourShutdown(m, &other);
+      if (!other.empty()) continue;  // not from this farm's master
       heard = Clock::now();
-      if (shutDown(m)) return false;
+      if (ours && !down) down = ours, down_at = heard;
       // Anything else published before the Welcome is kept for receive(), in order.
       if (auto h = proto::decodeHeader(view(m)); h && h->type == proto::Type::Probe) continue;
       if (early_.size() == kEarlyKept) early_.pop_front();
@@ -125,6 +147,7 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
       spdlog::warn("ignoring unexpected control message while joining: {}", w ? "wrong role" : w.error());
       continue;
     }
+    if (down) spdlog::info("welcomed as the master shut down: {}", *down);
     rank_ = w->rank;
     volume_range_ = w->volume_range;
     last_heard_ = Clock::now();
@@ -168,8 +191,13 @@ StageLink::Published StageLink::receive(DropCounter& drops, int max_messages) {
       drops.drop(~0u, h.error());
       continue;
     }
-    if (h->type == proto::Type::Shutdown) out.shutdown = true;
-    if (h->type == proto::Type::Shutdown || h->type == proto::Type::Probe) continue;
+    if (h->type == proto::Type::Shutdown) {
+      std::string other;
+      if (ourShutdown(m, &other)) out.shutdown = true;
+      else drops.drop(h->sender, other);
+      continue;
+    }
+    if (h->type == proto::Type::Probe) continue;
     auto p = h->type == proto::Type::FrameParams
                  ? proto::decodeFrameParams(view(m))
                  : Result<proto::FrameParams>::fail(std::string("unexpected ") + proto::typeName(h->type) + " on SUB");

@@ -78,7 +78,11 @@ class StageLink {
   void clearWaiting() { setWaiting(0, proto::kNobody); }
 
  private:
-  bool shutDown(const zmq::message_t& published) const;  // a Shutdown before the Welcome: said
+  // Why this farm's master said Shutdown, or nothing: not a Shutdown, or one of another run (a
+  // master that used this endpoint just before ours), which `other` explains.
+  std::optional<std::string> ourShutdown(const zmq::message_t& published, std::string* other = nullptr) const;
+  // After the master's Shutdown during join, a Welcome it sent just before may still be on its way.
+  static constexpr double kWelcomeGraceS = 0.3;
   int max_w_ = 0, max_h_ = 0;  // 0: no expected size
   bool size_logged_ = false;
   zmq::context_t& ctx_;
@@ -86,6 +90,7 @@ class StageLink {
   proto::Role role_;
   std::string advertise_;
   std::string identity_;
+  const std::string run_;  // TESSERA_RUN
   zmq::socket_t sub_, ctl_;
   uint32_t rank_ = 0;
   std::array<double, 2> volume_range_{0, 0};

@@ -43,11 +43,11 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 12;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
+inline constexpr uint16_t kVersion = 13;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
   // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms); 5: time steps; 6: Stats
   // carry their FrameParams' epoch; 7: Piece pixels Up-filtered; 8: binary-swap plans in FrameParams; 9: swap
   // bands go to the display as Strips; 10: Strips strip-filtered, Heartbeats name the awaited swap partner;
-  // 11: Stats' wait_ms; 12: Welcome's volume_range
+  // 11: Stats' wait_ms; 12: Welcome's volume_range; 13: Shutdown's run
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -129,9 +129,11 @@ struct Roster {                                                            // ma
 struct Probe {                                                             // master -> all (PUB)
   bool operator==(const Probe&) const = default;
 };
-// Shutdown:   reason str 4+n
+// Shutdown:   reason str 4+n | run str 4+n
+//             run: the master's TESSERA_RUN; a stage skips another run's Shutdown (a master that
+//             used the same endpoint just before this farm's)
 struct Shutdown {                                                          // master -> all
-  std::string reason;
+  std::string reason; std::string run;
   bool operator==(const Shutdown&) const = default;
 };
 

@@ -77,11 +77,17 @@ Result<Probe> decodeProbe(std::span<const std::byte> msg) {
 }
 
 std::vector<std::byte> encode(const Shutdown& m, uint32_t sender) {
-  return encodeStructured(Type::Shutdown, 0, sender, [&](ByteWriter& w) { w.str(m.reason); });
+  return encodeStructured(Type::Shutdown, 0, sender, [&](ByteWriter& w) {
+    w.str(m.reason);
+    w.str(m.run);
+  });
 }
 Result<Shutdown> decodeShutdown(std::span<const std::byte> msg) {
   return decodeStructured<Shutdown>(msg, Type::Shutdown,
-                                    [](ByteReader& r, const Header&, Shutdown& m) { m.reason = r.str("reason"); });
+                                    [](ByteReader& r, const Header&, Shutdown& m) {
+    m.reason = r.str("reason");
+    m.run = r.str("run");
+  });
 }
 
 std::vector<std::byte> encode(const Roster& m, uint32_t sender) {

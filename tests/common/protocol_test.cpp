@@ -58,7 +58,7 @@ TEST(Protocol, EveryStructuredMessageRoundTrips) {
   expectRoundTrip(Heartbeat{Role::Renderer, 9}, encode(Heartbeat{Role::Renderer, 9}, 11), decodeHeartbeat, Type::Heartbeat);
   expectRoundTrip(Probe{}, encode(Probe{}, 11), decodeProbe, Type::Probe);
   EXPECT_EQ(encode(Probe{}, 11).size(), kHeaderSize) << "Probe carries no payload";
-  expectRoundTrip(Shutdown{"master exiting"}, encode(Shutdown{"master exiting"}, 11), decodeShutdown, Type::Shutdown);
+  expectRoundTrip(Shutdown{"master exiting", "run-7"}, encode(Shutdown{"master exiting", "run-7"}, 11), decodeShutdown, Type::Shutdown);
   Roster roster{7, {{Role::Renderer, 0, std::string(16, '\x5a') + "d"}, {Role::Compositor, 3, "x"}}};
   expectRoundTrip(roster, encode(roster, 11), decodeRoster, Type::Roster);
   for (const FrameParams& fp : {sampleParams(), sampleSortFirstParams()}) {
@@ -228,7 +228,7 @@ TEST(Protocol, PiecePixelCountMustMatchActiveArea) {
 }
 
 TEST(Protocol, StructuredMessagesMustUseCodecNone) {
-  Bytes m = encode(Shutdown{"bye"}, 1);
+  Bytes m = encode(Shutdown{"bye", ""}, 1);
   m[20] = std::byte{uint8_t(Codec::Lzo)};
   auto r = decodeShutdown(m);
   ASSERT_FALSE(r);

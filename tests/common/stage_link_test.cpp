@@ -111,12 +111,59 @@ TEST(StageJoin, AStageEndsItsWaitWhenTheMasterShutsDownBeforeItsWelcome) {
   auto master = std::async(std::launch::async, [&] {
     int hellos = 0;
     for (auto end = Clock::now() + 500ms; Clock::now() < end; std::this_thread::sleep_for(100ms)) m.probe(), m.hellos(&hellos);
-    for (int i = 0; i < 5; ++i) sendBytes(m.pub, proto::encode(proto::Shutdown{"stopped while reading the volume"}, kMaster));
+    for (int i = 0; i < 5; ++i) sendBytes(m.pub, proto::encode(proto::Shutdown{"stopped while reading the volume", ""}, kMaster));
   });
   const auto t0 = Clock::now();
   EXPECT_FALSE(link.join(nullptr, 30.0));
   master.get();
   EXPECT_LT(Clock::now() - t0, 10s) << "not the 30 s wait";
+}
+
+// The master welcomes a spare and ends the run at once: its Shutdown (PUB) can overtake the
+// Welcome (control connection). The stage joins and reads the Shutdown like every stage.
+TEST(StageJoin, AStageWelcomedAsTheMasterShutsDownJoinsAndReadsTheShutdown) {
+  FakeMaster m("join_welcome_shutdown");
+  zmq::context_t ctx;
+  StageLink link(ctx, m.ep, proto::Role::Renderer);
+  auto master = std::async(std::launch::async, [&] {
+    int hellos = 0;
+    std::string who;
+    for (auto end = Clock::now() + 3s; who.empty() && Clock::now() < end; std::this_thread::sleep_for(50ms))
+      m.probe(), who = m.hellos(&hellos);
+    sendBytes(m.pub, proto::encode(proto::Shutdown{"orbit done", ""}, kMaster));
+    std::this_thread::sleep_for(100ms);  // the Shutdown is read first
+    m.send(who, proto::encode(proto::Welcome{proto::Role::Renderer, 4, {0, 0}}, kMaster));
+  });
+  ASSERT_TRUE(link.join(nullptr, 5.0));
+  master.get();
+  EXPECT_EQ(link.rank(), 4u);
+  DropCounter drops;
+  EXPECT_TRUE(link.receive(drops).shutdown);
+  EXPECT_EQ(drops.total(), 0u);
+}
+
+// A master of another run that used this endpoint just before ours (its Shutdown said a few
+// times as it exits) neither ends a joining stage's wait nor a joined stage's run; the joined
+// stage counts it as a bad message.
+TEST(StageJoin, AnotherRunsShutdownEndsNothing) {
+  FakeMaster m("join_other_run");
+  zmq::context_t ctx;
+  StageLink link(ctx, m.ep, proto::Role::Renderer);
+  const auto old = proto::encode(proto::Shutdown{"orbit done", "yesterday"}, kMaster);
+  int hellos = 0;
+  auto master = std::async(std::launch::async, [&] {
+    for (int i = 0; i < 5; ++i) sendBytes(m.pub, std::vector<std::byte>(old)), std::this_thread::sleep_for(20ms);
+    busyThenWelcome(m, 300ms, &hellos);
+    sendBytes(m.pub, std::vector<std::byte>(old));
+  });
+  ASSERT_TRUE(link.join(nullptr, 5.0));
+  master.get();
+  std::this_thread::sleep_for(100ms);
+  DropCounter drops;
+  auto got = link.receive(drops);
+  EXPECT_FALSE(got.shutdown);
+  EXPECT_EQ(got.params.size(), 1u);
+  EXPECT_EQ(drops.total(), 1u);
 }
 
 }  // namespace

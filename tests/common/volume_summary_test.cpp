@@ -4,7 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <nifti2_io.h>
+
 #include <algorithm>
+#include <cstring>
+#include <tuple>
 #include <vector>
 
 #include "tests/common/raw_spec.h"
@@ -58,6 +62,19 @@ TEST(VolumeSummary, ARawFileWithoutARangeIsSummarisedOverItsOwnValues) {
 // A file without range is read once: the blocks' bounds in its own values, normalised with
 // the range found on the way, are the bounds of the values a renderer normalises; a constant
 // file maps to 0 as loadVolume maps it.
+void expectReadOnceAndNormalisedAsLoadVolume(const Scene& scene, uint64_t sample_bytes, std::array<double, 2> data,
+                                             int edge) {
+  const uint64_t before = volumeSamplesRead();
+  const VolumeSummary s = summarizeVolume(scene);
+  EXPECT_EQ(volumeSamplesRead() - before, sample_bytes) << "one pass over the file (its step 0)";
+  EXPECT_EQ(s.edge, edge);
+  Scene fixed = scene;
+  fixVolumeRange(fixed);  // what the renderers normalise with
+  EXPECT_EQ(s.shape.mapped_range, std::get<RawVolumeSpec>(fixed.volume).range);
+  EXPECT_EQ(s.shape.data_range, data);
+  expectBlocksOfWhole(s, loadVolume(fixed));
+}
+
 TEST(VolumeSummary, AFileWithoutARangeIsReadOnceAndNormalisedAsLoadVolumeDoes) {
   test::TempDir t("summary_once");
   const std::array<int, 3> n{40, 36, 33};
@@ -68,18 +85,51 @@ TEST(VolumeSummary, AFileWithoutARangeIsReadOnceAndNormalisedAsLoadVolumeDoes) {
     Scene scene = defaultScene();
     scene.volume = test::rawSpec(t.write(constant ? "c.raw" : "f.raw", data.data(), data.size() * 4), n,
                                  VoxelType::Float32, {1, 1, 1}, false, {0, 0});
-    const uint64_t before = volumeSamplesRead();
-    const VolumeSummary s = summarizeVolume(scene);
-    EXPECT_EQ(volumeSamplesRead() - before, data.size() * 4) << "one pass over the file";
-    EXPECT_EQ(s.edge, 4);
-    Scene fixed = scene;
-    fixVolumeRange(fixed);  // what the renderers normalise with
-    EXPECT_EQ(s.shape.mapped_range, std::get<RawVolumeSpec>(fixed.volume).range);
-    const Volume whole = loadVolume(fixed);
-    EXPECT_EQ(s.shape.data_range, (std::array<double, 2>{*std::min_element(data.begin(), data.end()),
-                                                         *std::max_element(data.begin(), data.end())}));
-    expectBlocksOfWhole(s, whole);
+    expectReadOnceAndNormalisedAsLoadVolume(
+        scene, data.size() * 4,
+        {*std::min_element(data.begin(), data.end()), *std::max_element(data.begin(), data.end())}, 4);
   }
+}
+
+// The same through nifticlib's files: a gzip stream decoded once with the header's scaling,
+// and a 4-D file whose range is its step 0's.
+TEST(VolumeSummary, ANiftiFileGzippedScaledOrFourDIsReadOnceToo) {
+  test::TempDir t("summary_once_nifti");
+  const int nx = 24, ny = 20, nz = 17, nt = 3;
+  std::vector<int16_t> v((size_t)nx * ny * nz * nt);
+  for (size_t i = 0; i < v.size(); ++i) v[i] = (int16_t)((int)((i * 2654435761u) % 3001) - 1000 + 500 * (int)(i / (v.size() / nt)));
+  const size_t step = v.size() / nt;
+  for (const auto& [name, steps, slope, inter] :
+       {std::tuple{"g.nii.gz", 1, 2.0, -5.0}, std::tuple{"s.nii", 1, 0.5, 7.0}, std::tuple{"t.nii", nt, 0.0, 0.0}}) {
+    const int64_t dims[8] = {steps > 1 ? 4 : 3, nx, ny, nz, steps, 1, 1, 1};
+    nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 1);
+    ASSERT_NE(nim, nullptr);
+    nim->scl_slope = slope, nim->scl_inter = inter;
+    std::memcpy(nim->data, v.data(), (size_t)steps * step * 2);
+    ASSERT_EQ(nifti_set_filenames(nim, t.file(name).c_str(), 0, 1), 0);
+    nifti_image_write(nim);
+    nifti_image_free(nim);
+    const auto [lo, hi] = std::minmax_element(v.begin(), v.begin() + (std::ptrdiff_t)step);
+    const double a = slope == 0 ? 1 : slope;
+    const std::array<double, 2> data{(float)(a * *lo + inter), (float)(a * *hi + inter)};
+    SCOPED_TRACE(name);
+    expectReadOnceAndNormalisedAsLoadVolume(parseScene(std::string("volume: {file: ") + name + "}\n", t.path.string(), "s.yaml"),
+                                            step * 2, data, 2);
+  }
+}
+
+// Read in its own values, a file with a declared range says what its values are.
+TEST(VolumeSummary, ValuesReadFromAFileWithADeclaredRangeSayTheirOwnRange) {
+  test::TempDir t("values_ranged");
+  const std::array<int, 3> n{9, 8, 7};
+  std::vector<uint16_t> data((size_t)n[0] * n[1] * n[2]);
+  for (size_t i = 0; i < data.size(); ++i) data[i] = (uint16_t)(300 + (i * 2654435761u) % 700);
+  RawVolumeReader reader(test::rawSpec(t.write("r.raw", data.data(), data.size() * 2), n, VoxelType::UInt16,
+                                       {1, 1, 1}, true, {0, 4095}));
+  const Volume v = reader.readValues(VoxelBox{{0, 0, 0}, n});
+  EXPECT_EQ(v.data_range, (std::array<double, 2>{(double)*std::min_element(data.begin(), data.end()),
+                                                 (double)*std::max_element(data.begin(), data.end())}));
+  EXPECT_EQ(v.values[5], data[5]) << "not normalised";
 }
 
 TEST(VolumeSummary, BricksAreCutOnBlockFacesAndCoverTheVolumeOnce) {

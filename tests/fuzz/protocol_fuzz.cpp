@@ -70,7 +70,7 @@ void writeSeeds(const std::string& dir) {
   writeSeed(dir, n, encode(Welcome{Role::Renderer, 2}, 1));
   writeSeed(dir, n, encode(Heartbeat{Role::Display, 0}, 1));
   writeSeed(dir, n, encode(Probe{}, 1));
-  writeSeed(dir, n, encode(Shutdown{"bye"}, 1));
+  writeSeed(dir, n, encode(Shutdown{"bye", "run-1"}, 1));
   writeSeed(dir, n, encode(Roster{3, {{Role::Renderer, 1, "0123456789abcdefd"}}}, 1));
   FrameParams fp;
   fp.width = 64;

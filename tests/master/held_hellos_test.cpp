@@ -33,9 +33,11 @@ TEST(HeldHellos, TheNewestHelloOfEachLiveConnectionFirstComeFirst) {
   };
   HeldHellos held;
   DropCounter drops;
+  std::vector<std::string> refused;
+  const HeldHellos::Refuse refuse = [&](const std::string& why) { refused.push_back(why); };
   auto holdFor = [&](std::chrono::milliseconds t) {
     for (auto end = std::chrono::steady_clock::now() + t; std::chrono::steady_clock::now() < end;) {
-      held.hold(router, drops);
+      held.hold(router, drops, refuse);
       std::this_thread::sleep_for(20ms);
     }
   };
@@ -44,18 +46,22 @@ TEST(HeldHellos, TheNewestHelloOfEachLiveConnectionFirstComeFirst) {
   hello(gone, 2);
   hello(late, 3);
   sendBytes(gone, std::vector<std::byte>(20, std::byte{7}));  // junk: dropped, counted
+  // A stage of no one's (none has joined yet): refused, not held.
+  sendBytes(gone, proto::encode(proto::Heartbeat{proto::Role::Renderer, 0}, 0));
   holdFor(2500ms);
   hello(early, 11);  // said again: the newest is kept, its place stays the first
   hello(late, 13);
   holdFor(150ms);
-  const auto live = held.live(router, drops, 1.5);  // `gone` silent for 2.65 s, the others 0.15 s
+  const auto live = held.live(router, drops, refuse, 1.5);  // `gone` silent for 2.65 s, the others 0.15 s
   ASSERT_EQ(live.size(), 2u);
   EXPECT_EQ(live[0].first, std::string(16, 'e') + "c");
   EXPECT_EQ(live[0].second.pid, 11u);
   EXPECT_EQ(live[1].first, std::string(16, 'l') + "c");
   EXPECT_EQ(live[1].second.pid, 13u);
   EXPECT_EQ(drops.total(), 1u);
-  EXPECT_TRUE(held.live(router, drops, 1.5).empty()) << "taken once";
+  ASSERT_EQ(refused.size(), 1u);
+  EXPECT_EQ(refused[0], "while reading the volume: unknown peer sent Heartbeat");
+  EXPECT_TRUE(held.live(router, drops, refuse, 1.5).empty()) << "taken once";
 }
 
 }  // namespace
