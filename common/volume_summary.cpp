@@ -10,13 +10,17 @@
 
 namespace tessera {
 
+namespace {
+// The range a file without one is mapped with: its values' min..max. Constant data (one
+// value c): [c, c + 1], which maps every voxel to 0 as normalising with [c, c] does.
+std::array<double, 2> rangeOfValues(double lo, double hi) { return {lo, hi > lo ? hi : lo + 1}; }
+}  // namespace
+
 std::array<double, 2> fixVolumeRange(Scene& scene) {
   const Volume probe = loadVolume(scene, VoxelBox{{0, 0, 0}, {1, 1, 1}});
   if (auto* raw = std::get_if<RawVolumeSpec>(&scene.volume); raw && !raw->has_range) {
     raw->has_range = true;
-    raw->range = probe.mapped_range;
-    // Constant data: any range containing the value maps every voxel to 0, as before.
-    if (!(raw->range[0] < raw->range[1])) raw->range[1] = raw->range[0] + 1;
+    raw->range = rangeOfValues(probe.mapped_range[0], probe.mapped_range[1]);
   }
   return probe.data_range;
 }
@@ -67,8 +71,8 @@ VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cance
           s.hi[b] = std::max(s.hi[b], v);
         }
   }
-  if (!mapped) {  // as fixVolumeRange fixes it: the data's min..max (a constant volume: one wide)
-    const double lo = data[0], hi = data[1] > data[0] ? data[1] : data[0] + 1;
+  if (!mapped) {  // as fixVolumeRange fixes it
+    const auto [lo, hi] = rangeOfValues(data[0], data[1]);
     for (size_t b = 0; b < count; ++b) s.lo[b] = normaliseSample(s.lo[b], lo, hi), s.hi[b] = normaliseSample(s.hi[b], lo, hi);
     s.shape.mapped_range = {lo, hi};
   }

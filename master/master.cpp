@@ -57,8 +57,11 @@ class Master {
   int run(const std::atomic<bool>* stop) {
     try {
       prepared_ = preparation_->await(stop, [this] { probe(), held_.hold(ctl_, drops_, refuser()); });
-    } catch (const std::exception& e) {  // a bad volume file: the waiting stages hear why now, not after 120 s
-      shutdown(std::string("the volume could not be read: ") + e.what());
+    } catch (const ReadingFailed& e) {  // a bad volume file: the waiting stages hear why now, not after 120 s
+      try {
+        shutdown(std::string("the volume could not be read: ") + e.what());
+      } catch (const std::exception&) {  // the reading's error is the one to report
+      }
       throw;
     }
     if (!prepared_) {

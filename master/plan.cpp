@@ -6,10 +6,9 @@
 namespace tessera::master {
 
 std::unique_ptr<Plan> makePlan(const Scene& scene, bool balance, int tiles_per_renderer, bool binary_swap,
-                               std::optional<VolumeSummary> volume) {
+                               VolumeSummary volume) {
   if (scene.mesh) return std::make_unique<SortFirstPlan>(balance, tiles_per_renderer);
-  return std::make_unique<SortLastPlan>(volume ? std::move(*volume) : summarizeVolume(scene), scene.tf, balance,
-                                        binary_swap);
+  return std::make_unique<SortLastPlan>(std::move(volume), scene.tf, balance, binary_swap);
 }
 
 }  // namespace tessera::master

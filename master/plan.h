@@ -41,8 +41,8 @@ class Plan {
 };
 
 // The scene's plan: sort-first for a mesh (the master needs no volume: renderers own the
-// mesh), else sort-last from the volume's summary (`volume`: streamed here when not given).
+// mesh; `volume` unused), else sort-last from the volume's summary.
 std::unique_ptr<Plan> makePlan(const Scene& scene, bool balance, int tiles_per_renderer, bool binary_swap,
-                               std::optional<VolumeSummary> volume = {});
+                               VolumeSummary volume);
 
 }  // namespace tessera::master

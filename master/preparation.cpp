@@ -15,11 +15,11 @@ namespace {
 std::unique_ptr<Prepared> prepare(const MasterOptions& opt, const std::atomic<bool>* cancel) {
   auto out = std::make_unique<Prepared>();
   out->scene = opt.scene;
-  std::optional<VolumeSummary> summary;
-  if (out->scene.has_volume && !out->scene.mesh) {
+  VolumeSummary summary;
+  if (!out->scene.mesh) {
     summary = summarizeVolume(out->scene, cancel);  // one pass over a file, which also finds a missing range
     if (auto* raw = std::get_if<RawVolumeSpec>(&out->scene.volume)) {
-      if (!raw->has_range) raw->has_range = true, raw->range = summary->shape.mapped_range;
+      if (!raw->has_range) raw->has_range = true, raw->range = summary.shape.mapped_range;
       out->volume_range = raw->range;
     }
   }
@@ -51,7 +51,11 @@ std::unique_ptr<Prepared> Preparation::await(const std::atomic<bool>* stop, cons
       next_note += 10;
     }
   }
-  return reading_.get();
+  try {
+    return reading_.get();
+  } catch (const std::exception& e) {
+    throw ReadingFailed(e.what());
+  }
 }
 
 void HeldHellos::hold(zmq::socket_t& control, DropCounter& drops, const Refuse& refuse) {

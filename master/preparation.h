@@ -10,6 +10,7 @@
 #include <future>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -54,13 +55,18 @@ class HeldHellos {
   static constexpr size_t kMost = 4096;
 };
 
+// What the reading threw (a bad volume file), as await() rethrows it.
+struct ReadingFailed : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 class Preparation {
  public:
   explicit Preparation(const MasterOptions& opt);  // starts reading; `opt` must outlive this
   ~Preparation();                                  // waits for the reading to end
 
   // Calls `meanwhile` every 100 ms until the reading ends, saying every 10 s how long it
-  // takes. Rethrows what the reading threw (a bad file); nullptr when stopped meanwhile
+  // takes. Throws ReadingFailed with what the reading threw (a bad file); nullptr when stopped meanwhile
   // (the reading is then cancelled: it ends at its next slab).
   std::unique_ptr<Prepared> await(const std::atomic<bool>* stop, const std::function<void()>& meanwhile);
 

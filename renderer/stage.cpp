@@ -78,7 +78,8 @@ class Stage {
   int run(const std::atomic<bool>* stop) {
     stop_ = stop;
     if (!link_.join(stop)) {
-      if (stop && *stop) return 0;  // stopped (Ctrl-C) while it waited: not a failure to join
+      // Stopped (Ctrl-C) while it waited, or the run ended first: not a failure to join.
+      if ((stop && *stop) || link_.runEnded()) return 0;
       spdlog::error("renderer could not join the master at {}", opt_.endpoints.masterControl());
       return 1;
     }

@@ -160,7 +160,7 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
     lock.lock();
     loading_ = -1;
     changed_.notify_all();
-    stats_.load_ms += ms;
+    stats_.load_ms += ms + std::max(waited_ms, 0.0);  // a prefetch waited for that failed: both
     it = keep(step, std::move(e));
   }
   if (!it->second.caster) it->second.caster = makeVolumeBackend(backend_, it->second.volume, scene_.tf, scene_.shading, scene_.light);
@@ -200,6 +200,7 @@ void StepCache::prefetchLoop() {
     const VoxelBox box = box_;  // get() may move the bricks while this loads
     std::vector<float> storage = takeSpare();
     lock.unlock();
+    if (before_prefetch) before_prefetch(next);
     Entry e;
     double ms = 0;
     bool ok = true;

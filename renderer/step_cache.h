@@ -6,6 +6,7 @@
 // A static volume is a series of one step: it is loaded once and kept.
 #pragma once
 #include <condition_variable>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -51,6 +52,9 @@ class StepCache {
   // held, as the budget allows, and forgets earlier wishes (steps playback has passed).
   void prefetch(const std::vector<int>& steps);
   StepCacheStats take();
+  // Called by the prefetch thread (unlocked) before it reads a step: lets a test hold a
+  // prefetch in progress. Set before the first prefetch().
+  std::function<void(int step)> before_prefetch;
 
  private:
   struct Entry {

@@ -71,7 +71,8 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   auto expired = [&] { return since(heard) > timeout_s; };
   auto shutDown = [&](const std::string& reason) {
-    spdlog::error("the master at {} shut down before this {} joined: {}", ep_.masterPub(), proto::roleName(role_), reason);
+    spdlog::info("the master at {} shut down before this {} joined: {}", ep_.masterPub(), proto::roleName(role_), reason);
+    run_ended_ = true;
     return false;
   };
   // Never silent: after 2 s, and every 10 s after that, say what this stage waits for.
@@ -185,7 +186,6 @@ StageLink::Published StageLink::receive(DropCounter& drops, int max_messages) {
     } else if (!sub_.recv(m, zmq::recv_flags::dontwait)) {
       break;
     }
-    last_heard_ = Clock::now();
     auto h = proto::decodeHeader(view(m));
     if (!h) {
       drops.drop(~0u, h.error());
@@ -194,9 +194,11 @@ StageLink::Published StageLink::receive(DropCounter& drops, int max_messages) {
     if (h->type == proto::Type::Shutdown) {
       std::string other;
       if (ourShutdown(m, &other)) out.shutdown = true;
-      else drops.drop(h->sender, other);
+      else drops.drop(h->sender, other);  // not our master's word: it proves nothing alive
+      if (other.empty()) last_heard_ = Clock::now();
       continue;
     }
+    last_heard_ = Clock::now();
     if (h->type == proto::Type::Probe) continue;
     auto p = h->type == proto::Type::FrameParams
                  ? proto::decodeFrameParams(view(m))

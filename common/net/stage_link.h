@@ -34,6 +34,9 @@ class StageLink {
   // from the master for timeout_s (its probes, while it prepares, keep the wait going).
   static constexpr double kHelloEveryS = 10;  // Hello is said again this often until the Welcome
   bool join(const std::atomic<bool>* stop, double timeout_s = 120);
+  // join() returned false because the master said Shutdown: the run ended before this stage
+  // joined (a spare started late), which is no failure of this stage.
+  bool runEnded() const { return run_ended_; }
   uint32_t rank() const { return rank_; }
   // The Welcome's volume_range ({0, 0}: the master gave none).
   std::array<double, 2> volumeRange() const { return volume_range_; }
@@ -91,6 +94,7 @@ class StageLink {
   std::string advertise_;
   std::string identity_;
   const std::string run_;  // TESSERA_RUN
+  bool run_ended_ = false;
   zmq::socket_t sub_, ctl_;
   uint32_t rank_ = 0;
   std::array<double, 2> volume_range_{0, 0};

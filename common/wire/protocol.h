@@ -293,7 +293,7 @@ struct StageStats {                            // renderer/compositor -> master,
   // Renderers: images (bricks or tiles) rendered this frame, and images reused from an
   // earlier frame because nothing that shapes them (camera, quality, size, brick) changed.
   uint32_t images_made = 0, images_reused = 0;
-  double load_ms = 0;  // renderers: reading (or generating) voxels on the render path (new bricks, a step not cached)
+  double load_ms = 0;  // renderers: reading (or generating) voxels on the render path (new bricks, a step not cached), or waiting for the prefetch of the step
   // Renderers of a time series: the step shown, whether its voxels were in the step cache
   // (hits, misses: cumulative), the file bytes read since the last Stats (loads and
   // prefetches) and the prefetch thread's time since then.

@@ -99,6 +99,7 @@ TEST(StageJoin, AStageGivesUpOnAMasterThatFallsSilent) {
   EXPECT_FALSE(link.join(nullptr, 1.0));
   const auto waited = Clock::now() - t0;
   master.get();
+  EXPECT_FALSE(link.runEnded());
   EXPECT_GT(waited, 2s);
   EXPECT_LT(waited, 4s);
 }
@@ -111,12 +112,13 @@ TEST(StageJoin, AStageEndsItsWaitWhenTheMasterShutsDownBeforeItsWelcome) {
   auto master = std::async(std::launch::async, [&] {
     int hellos = 0;
     for (auto end = Clock::now() + 500ms; Clock::now() < end; std::this_thread::sleep_for(100ms)) m.probe(), m.hellos(&hellos);
-    for (int i = 0; i < 5; ++i) sendBytes(m.pub, proto::encode(proto::Shutdown{"stopped while reading the volume", ""}, kMaster));
+    for (int i = 0; i < 5; ++i) sendBytes(m.pub, proto::encode(proto::Shutdown{"stopped while reading the volume", farmRun()}, kMaster));
   });
   const auto t0 = Clock::now();
   EXPECT_FALSE(link.join(nullptr, 30.0));
   master.get();
   EXPECT_LT(Clock::now() - t0, 10s) << "not the 30 s wait";
+  EXPECT_TRUE(link.runEnded()) << "the run ended: the stage exits as stopped, not as failed";
 }
 
 // The master welcomes a spare and ends the run at once: its Shutdown (PUB) can overtake the
@@ -130,7 +132,7 @@ TEST(StageJoin, AStageWelcomedAsTheMasterShutsDownJoinsAndReadsTheShutdown) {
     std::string who;
     for (auto end = Clock::now() + 3s; who.empty() && Clock::now() < end; std::this_thread::sleep_for(50ms))
       m.probe(), who = m.hellos(&hellos);
-    sendBytes(m.pub, proto::encode(proto::Shutdown{"orbit done", ""}, kMaster));
+    sendBytes(m.pub, proto::encode(proto::Shutdown{"orbit done", farmRun()}, kMaster));
     std::this_thread::sleep_for(100ms);  // the Shutdown is read first
     m.send(who, proto::encode(proto::Welcome{proto::Role::Renderer, 4, {0, 0}}, kMaster));
   });
@@ -149,15 +151,24 @@ TEST(StageJoin, AnotherRunsShutdownEndsNothing) {
   FakeMaster m("join_other_run");
   zmq::context_t ctx;
   StageLink link(ctx, m.ep, proto::Role::Renderer);
-  const auto old = proto::encode(proto::Shutdown{"orbit done", "yesterday"}, kMaster);
+  const auto old = proto::encode(proto::Shutdown{"orbit done", farmRun() + "-yesterday"}, kMaster);
   int hellos = 0;
   auto master = std::async(std::launch::async, [&] {
-    for (int i = 0; i < 5; ++i) sendBytes(m.pub, std::vector<std::byte>(old)), std::this_thread::sleep_for(20ms);
-    busyThenWelcome(m, 300ms, &hellos);
-    sendBytes(m.pub, std::vector<std::byte>(old));
+    // While the stage waits for its Welcome (it said Hello), between probes.
+    std::string who;
+    for (auto end = Clock::now() + 3s; who.empty() && Clock::now() < end; std::this_thread::sleep_for(20ms))
+      m.probe(), who = m.hellos(&hellos);
+    for (int i = 0; i < 5; ++i) sendBytes(m.pub, std::vector<std::byte>(old)), std::this_thread::sleep_for(20ms), m.probe();
+    std::this_thread::sleep_for(500ms);  // past the grace a Shutdown of its own run would start
+    sendBytes(m.pub, proto::encode(proto::test::sampleParams(), kMaster));
+    std::this_thread::sleep_for(50ms);
+    m.send(who, proto::encode(proto::Welcome{proto::Role::Renderer, 3, {0, 0}}, kMaster));
+    std::this_thread::sleep_for(50ms);
+    sendBytes(m.pub, std::vector<std::byte>(old));  // and once joined
   });
   ASSERT_TRUE(link.join(nullptr, 5.0));
   master.get();
+  EXPECT_FALSE(link.runEnded());
   std::this_thread::sleep_for(100ms);
   DropCounter drops;
   auto got = link.receive(drops);

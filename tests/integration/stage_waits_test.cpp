@@ -49,8 +49,9 @@ TEST(StageWaits, AWaitingRendererHearsWhyTheMastersVolumeCouldNotBeRead) {
   const std::string env = "env TESSERA_ENDPOINTS=" + base + " TESSERA_SCENE=" + scene.string() + " ";
   const auto t0 = std::chrono::steady_clock::now();
   // The renderer first, so it hears the master's probes while the master reads.
-  const auto r = runCommand("sh -c '" + env + bin("tessera-renderer") + " > " + (dir.path() / "renderer.log").string() +
-                                " 2>&1 & sleep 1; " + env + bin("tessera-master") + " --renderers 1; wait'",
+  const std::string log = (dir.path() / "renderer.log").string();
+  const auto r = runCommand("sh -c '(" + env + bin("tessera-renderer") + " > " + log + " 2>&1; echo renderer exit $? >> " +
+                                log + ") & sleep 1; " + env + bin("tessera-master") + " --renderers 1; wait'",
                             60);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::ifstream in(dir.path() / "renderer.log");
@@ -58,7 +59,9 @@ TEST(StageWaits, AWaitingRendererHearsWhyTheMastersVolumeCouldNotBeRead) {
   EXPECT_NE(r.output.find("non-finite value"), std::string::npos) << r.output;
   EXPECT_NE(renderer.find("shut down before this renderer joined: the volume could not be read: "), std::string::npos)
       << renderer << "\n" << r.output;
+  EXPECT_NE(renderer.find("nan.yaml: volume: "), std::string::npos) << "the scene is named\n" << renderer;
   EXPECT_NE(renderer.find("at voxel (511, 511, 1023)"), std::string::npos) << renderer;
+  EXPECT_NE(renderer.find("renderer exit 0"), std::string::npos) << "the run ended: no failure of the renderer\n" << renderer;
   EXPECT_LT(s, 30) << "the renderer waited for its Welcome";
 }
 

@@ -6,6 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <condition_variable>
+#include <future>
+#include <mutex>
 #include <thread>
 
 #include "common/clock.h"
@@ -13,41 +16,71 @@
 namespace tessera::renderer {
 namespace {
 
+using namespace std::chrono_literals;
+
 TEST(StepCache, AFrameThatWaitsForThePrefetchOfItsStepCountsAMissAndItsWait) {
-  // moving-blobs at 192^3: generating one step takes tens of milliseconds.
-  const Scene scene = parseScene("volume:\n  generator: {name: moving-blobs, size: 192, steps: 4}\n", ".", "s.yaml");
+  const Scene scene = parseScene("volume:\n  generator: {name: moving-blobs, size: 64, steps: 4}\n", ".", "s.yaml");
   StepCache cache(scene, BackendKind::Cpu, 1ull << 30);
-  const VoxelBox box{{0, 0, 0}, {192, 192, 192}};
+  // The test holds the prefetch of a step (of `held`) until it lets it go.
+  std::mutex mu;
+  std::condition_variable cv;
+  int held = -1, reading = -1;
+  cache.before_prefetch = [&](int step) {
+    std::unique_lock lock(mu);
+    reading = step;
+    cv.notify_all();
+    cv.wait(lock, [&] { return held != step; });
+  };
+  auto hold = [&](int step) {
+    std::lock_guard lock(mu);
+    held = step;
+  };
+  auto awaitReading = [&](int step) {
+    std::unique_lock lock(mu);
+    return cv.wait_for(lock, 10s, [&] { return reading == step; });
+  };
+  auto release = [&] {
+    std::lock_guard lock(mu);
+    held = -1;
+    cv.notify_all();
+  };
+  const VoxelBox box{{0, 0, 0}, {64, 64, 64}};
   ASSERT_TRUE(cache.get(box, 0).volume);
-  StepCacheStats s = cache.take();
-  EXPECT_EQ(s.misses, 1u);
+  EXPECT_EQ(cache.take().misses, 1u);
+  // Step 1's prefetch is in progress when the frame asks for it: the frame waits for it.
+  hold(1);
   cache.prefetch({1});
-  std::this_thread::sleep_for(std::chrono::milliseconds(5));  // the prefetch thread is reading step 1
+  ASSERT_TRUE(awaitReading(1));
   const auto t0 = Clock::now();
-  ASSERT_EQ(cache.get(box, 1).step, 1);
+  auto frame = std::async(std::launch::async, [&] { return cache.get(box, 1); });
+  std::this_thread::sleep_for(200ms);  // the frame reaches its wait
+  release();
+  ASSERT_EQ(frame.get().step, 1);
   const double waited = msSince(t0);
-  s = cache.take();
-  EXPECT_EQ(s.hits, 0u) << "waited " << waited << " ms";
+  StepCacheStats s = cache.take();
+  EXPECT_EQ(s.hits, 0u);
   EXPECT_EQ(s.misses, 2u);
-  EXPECT_GT(waited, 5) << "the step was ready: nothing to test";
-  EXPECT_GE(s.load_ms, 0.8 * waited);
+  EXPECT_GE(s.load_ms, 150) << "the frame waited " << waited << " ms";
+  EXPECT_LE(s.load_ms, waited);
   // A step the prefetch read before the frame asked is a hit, read in no time.
   cache.prefetch({2});
-  for (int i = 0; i < 200 && cache.take().prefetch_ms == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  for (int i = 0; i < 500 && cache.take().prefetch_ms == 0; ++i) std::this_thread::sleep_for(10ms);
   ASSERT_EQ(cache.get(box, 2).step, 2);
   s = cache.take();
   EXPECT_EQ(s.hits, 1u);
   EXPECT_EQ(s.load_ms, 0);
   // The bricks move while the prefetch reads a step of the old window: the frame does not
-  // wait for that read, it reads its own small window at once.
+  // wait for that read (held until the frame has its step), it reads its own window.
+  hold(3);
   cache.prefetch({3});
-  std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  const auto t1 = Clock::now();
-  const HeldStep small = cache.get(VoxelBox{{0, 0, 0}, {8, 8, 8}}, 3);
-  const double small_ms = msSince(t1);
+  ASSERT_TRUE(awaitReading(3));
+  auto moved = std::async(std::launch::async, [&] { return cache.get(VoxelBox{{0, 0, 0}, {8, 8, 8}}, 3); });
+  const bool waited_for_old = moved.wait_for(10s) != std::future_status::ready;
+  release();
+  EXPECT_FALSE(waited_for_old) << "waited for the old window's step";
+  const HeldStep small = moved.get();
   ASSERT_EQ(small.step, 3);
   EXPECT_EQ(small.volume->dims, (std::array<int, 3>{8, 8, 8}));
-  EXPECT_LT(small_ms, waited / 2) << "waited for the old window's step";
 }
 
 }  // namespace
