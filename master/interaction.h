@@ -11,4 +11,10 @@ namespace tessera::master {
 // Throws std::invalid_argument for non-finite values or zoom <= 0.
 Camera applyInput(const Camera& cam, const proto::Input& in);
 
+// What the master says as an interactive run starts: how to steer and stop it.
+inline constexpr const char* kSteeringNotice =
+    "interactive run: a frame is rendered when the display window sends input (drag: orbit, wheel: zoom, Space: play "
+    "a series, h: help); without a window only the first frame is rendered (a series plays on). Ctrl-C or closing the "
+    "window stops it";
+
 }  // namespace tessera::master

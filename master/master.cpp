@@ -12,6 +12,7 @@
 #include "common/net/curve.h"
 #include "common/net/log.h"
 #include "common/net/transport.h"
+#include "master/interaction.h"
 #include "master/membership.h"
 #include "master/metrics.h"
 #include "master/plan.h"
@@ -31,10 +32,10 @@ class Master {
  public:
   Master(const MasterOptions& opt, zmq::context_t& ctx)
       : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router, kMaxControlMessage)),
-        window_(opt.in_flight, opt.deadline),
+        window_(opt.in_flight, opt.deadline), total_frames_(opt.frames < 0 ? opt.scene.orbit.frames : opt.frames),
         refinement_(opt.scene.camera, opt.scene.quality, opt.scene.width, opt.scene.height, opt.scene.time,
                     opt.scene.series.steps),
-        metrics_(opt.metrics_path, opt.frames < 0 ? opt.scene.orbit.frames : opt.frames) {
+        metrics_(opt.metrics_path, total_frames_) {
     // No receive bound on the control socket: with makeSocket's 64, libzmq lost messages of a
     // peer that sent faster than the master read (a third of 300 junk messages, never counted;
     // Stats could be lost too). It is drained every loop (<= 50 ms); FarmFuzz bounds its memory.
@@ -42,21 +43,17 @@ class Master {
     bindTo(pub_, opt_.endpoints.bind(opt_.endpoints.masterPub()));
     bindTo(ctl_, opt_.endpoints.bind(opt_.endpoints.masterControl()));
     note_ = std::make_unique<FarmNote>(opt_.endpoints.base, fmt::format("run '{}', tessera-master pid {}", opt_.run, getpid()));
-    total_frames_ = opt_.frames < 0 ? opt_.scene.orbit.frames : opt_.frames;
     spdlog::info("master listening pub={} control={} renderers={} compositors={} frames={} in_flight={}{}",
                  opt_.endpoints.masterPub(), opt_.endpoints.masterControl(), opt_.renderers, opt_.compositors,
                  total_frames_ == 0 ? std::string("interactive") : std::to_string(total_frames_), opt_.in_flight,
-                 opt_.binary_swap && !sortFirst() ? " compositing=binary-swap" : "");
-    if (total_frames_ == 0)
-      spdlog::info("interactive run: a frame is rendered when the display window sends input (drag: orbit, wheel: zoom, "
-                   "Space: play a series, h: help); without a window only the first frame is rendered (a series plays on). "
-                   "Ctrl-C or closing the window stops it");
+                 opt_.binary_swap && !opt_.scene.mesh ? " compositing=binary-swap" : "");
+    if (total_frames_ == 0) spdlog::info(kSteeringNotice);
     preparation_ = std::make_unique<Preparation>(opt_);  // last: a throw above waits for no reading
   }
 
   int run(const std::atomic<bool>* stop) {
     try {
-      prepared_ = preparation_->await(stop, [this] { probe(), held_.hold(ctl_, drops_, refuser()); });
+      prepared_ = preparation_->await(stop, [this] { probe(), pollControl(0); });
     } catch (const ReadingFailed& e) {  // a bad volume file: the waiting stages hear why now, not after 120 s
       try {
         shutdown(std::string("the volume could not be read: ") + e.what());
@@ -69,7 +66,7 @@ class Master {
       return 1;  // as when stopped while gathering the stages
     }
     plan_ = prepared_->plan.get();
-    for (const auto& [identity, hello] : held_.live(ctl_, drops_, refuser())) onHello(identity, hello);
+    for (const auto& [identity, hello] : held_.live()) onHello(identity, hello);
     if (!gatherMembers(stop)) return 1;
     plan_->reassign(workers());
     started_ = true;
@@ -100,12 +97,8 @@ class Master {
   bool gatherMembers(const std::atomic<bool>* stop) {
     auto start = Clock::now(), last_probe = start - std::chrono::seconds(1), last_note = start - std::chrono::seconds(8);
     while (!(stop && *stop)) {
-      const auto missing = fmt::format("renderers {}/{} compositors {}/{} display {}/1", members_.count(Role::Renderer),
-                                       opt_.renderers, members_.count(Role::Compositor), opt_.compositors,
-                                       members_.count(Role::Display));
-      if (members_.count(Role::Renderer) >= opt_.renderers && members_.count(Role::Compositor) >= opt_.compositors &&
-          members_.count(Role::Display) >= 1)
-        return true;
+      const std::string missing = members_.missing(opt_.renderers, opt_.compositors);
+      if (missing.empty()) return true;
       if (msSince(last_probe) > 100) {
         probe();  // stages say Hello once this reaches them: their subscription is live
         last_probe = Clock::now();
@@ -132,6 +125,10 @@ class Master {
                                           roleName(h.role), h.pid, h.run);
       refuse(why);
       return sendTo(identity, proto::encode(proto::Shutdown{why + "; check TESSERA_ENDPOINTS", opt_.run}, kMasterRank));
+    }
+    if (!prepared_) {  // still reading the volume: answered once it is read (run)
+      if (!held_.hold(identity, h)) drops_.drop(~0u, "while reading the volume: Hellos from too many connections");
+      return;
     }
     bool joined = false;
     Member& m = members_.join(identity, h, Clock::now(), &joined);
@@ -219,7 +216,6 @@ class Master {
   }
 
   // ---- frames ---------------------------------------------------------------------------
-  bool sortFirst() const { return opt_.scene.mesh.has_value(); }
 
   void issueFrames() {
     Workers w = workers();
@@ -313,7 +309,9 @@ class Master {
         if (!s) return drops_.drop(key, s.error());
         if (!control || s->role != from->role || s->rank != from->rank)
           return drops_.drop(key, "Stats claiming another member");
-        return onStats(*s);
+        window_.stats(s->role, s->rank, s->frame, s->epoch);
+        plan_->stats(*s, workers());
+        return metrics_.stats(*s);
       }
       case proto::Type::FrameDone: {
         auto d = proto::decodeFrameDone(view(body));
@@ -337,15 +335,6 @@ class Master {
   void refuse(const std::string& why) {
     metrics_.refused();
     drops_.drop(~0u, why);
-  }
-  HeldHellos::Refuse refuser() {
-    return [this](const std::string& why) { refuse(why); };
-  }
-
-  void onStats(const proto::StageStats& s) {
-    window_.stats(s.role, s.rank, s.frame, s.epoch);
-    plan_->stats(s, workers());
-    metrics_.stats(s);
   }
 
   void onFrameDone(const proto::FrameDone& d, uint32_t key) {
@@ -394,7 +383,7 @@ class Master {
   bool started_ = false, display_lost_ = false;
   Clock::time_point last_stall_warning_;
   uint64_t next_frame_ = 0, first_wanted_ = 0;
-  int total_frames_ = 0;
+  const int total_frames_;  // 0: interactive
   Refinement refinement_;
   DropCounter drops_;
   Metrics metrics_;

@@ -83,6 +83,12 @@ int Membership::count(Role r) const {
   return n;
 }
 
+std::string Membership::missing(int renderers, int compositors) const {
+  const int r = count(Role::Renderer), c = count(Role::Compositor), d = count(Role::Display);
+  if (r >= renderers && c >= compositors && d >= 1) return "";
+  return fmt::format("renderers {}/{} compositors {}/{} display {}/1", r, renderers, c, compositors, d);
+}
+
 std::vector<const Member*> Membership::alive(Role r) const {
   std::vector<const Member*> out;
   for (const auto& [key, m] : members_)  // the map is ordered by (role, rank)

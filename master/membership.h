@@ -63,6 +63,9 @@ class Membership {
   void missedDeadline(Member& m, Clock::time_point now, const Member* named_by = nullptr);
 
   int count(proto::Role r) const;  // alive members of role r
+  // "" once the farm has `renderers`, `compositors` and a display alive, else who is there
+  // out of whom: "renderers 1/2 compositors 0/1 display 0/1".
+  std::string missing(int renderers, int compositors) const;
   std::vector<const Member*> alive(proto::Role r) const;  // by rank
   const Member* find(proto::Role r, uint32_t rank) const;
   Member* find(proto::Role r, uint32_t rank);

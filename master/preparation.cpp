@@ -6,7 +6,6 @@
 #include <spdlog/spdlog.h>
 
 #include "common/clock.h"
-#include "common/net/transport.h"
 #include "common/volume_summary.h"
 
 namespace tessera::master {
@@ -58,38 +57,17 @@ std::unique_ptr<Prepared> Preparation::await(const std::atomic<bool>* stop, cons
   }
 }
 
-void HeldHellos::hold(zmq::socket_t& control, DropCounter& drops, const Refuse& refuse) {
-  for (int budget = 0; budget < 1000; ++budget) {
-    auto m = receiveRouted(control);
-    if (!m) break;
-    if (auto header = m->has_body ? proto::decodeHeader(view(m->body)) : Result<proto::Header>::fail("message without routing id");
-        !header) {
-      drops.drop(~0u, "while reading the volume: " + header.error());
-      continue;
-    } else if (header->type != proto::Type::Hello) {
-      refuse(std::string("while reading the volume: unknown peer sent ") + proto::typeName(header->type));
-      continue;
-    }
-    auto h = proto::decodeHello(view(m->body));
-    if (!h) {
-      drops.drop(~0u, "while reading the volume: " + h.error());
-      continue;
-    }
-    auto it = held_.find(m->identity);
-    if (it == held_.end()) {
-      if (held_.size() >= kMost) {
-        drops.drop(~0u, "while reading the volume: Hellos from too many connections");
-        continue;
-      }
-      it = held_.emplace(m->identity, Held{Clock::now(), {}, {}}).first;
-    }
-    it->second.last = Clock::now(), it->second.hello = *h;
+bool HeldHellos::hold(const std::string& identity, const proto::Hello& hello) {
+  auto it = held_.find(identity);
+  if (it == held_.end()) {
+    if (held_.size() >= kMost) return false;
+    it = held_.emplace(identity, Held{Clock::now(), {}, {}}).first;
   }
+  it->second.last = Clock::now(), it->second.hello = hello;
+  return true;
 }
 
-std::vector<std::pair<std::string, proto::Hello>> HeldHellos::live(zmq::socket_t& control, DropCounter& drops,
-                                                                   const Refuse& refuse, double silent_s) {
-  hold(control, drops, refuse);
+std::vector<std::pair<std::string, proto::Hello>> HeldHellos::live(double silent_s) {
   std::vector<std::pair<Clock::time_point, std::pair<std::string, proto::Hello>>> live;
   for (const auto& [identity, h] : held_)
     if (msSince(h.last) < 1000 * silent_s) live.push_back({h.first, {identity, h.hello}});

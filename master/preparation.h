@@ -15,10 +15,8 @@
 #include <utility>
 #include <vector>
 
-#include <zmq.hpp>
 
 #include "common/clock.h"
-#include "common/net/log.h"
 #include "common/net/stage_link.h"
 #include "common/scene.h"
 #include "common/wire/protocol.h"
@@ -34,17 +32,15 @@ struct Prepared {
 };
 
 // While the volume is read no stage can be welcomed (the Welcome carries its range): the
-// Hellos that come are held, the newest per connection. A malformed message is dropped; any
-// other message comes from a connection that is no member (none is yet): `refuse` is told.
+// master handles its control messages as always (strangers refused, bad messages dropped)
+// and holds the Hellos of its run here, the newest per connection.
 class HeldHellos {
  public:
-  using Refuse = std::function<void(const std::string& why)>;
-  void hold(zmq::socket_t& control, DropCounter& drops, const Refuse& refuse);  // reads what came, never waits
+  // False, and nothing held, for a new connection past kMost.
+  bool hold(const std::string& identity, const proto::Hello& hello);
   // Stages say Hello every StageLink::kHelloEveryS: one silent for twice that is gone (it
   // died while the volume was read) and is left out. The others, first come first.
-  std::vector<std::pair<std::string, proto::Hello>> live(zmq::socket_t& control, DropCounter& drops,
-                                                        const Refuse& refuse,
-                                                        double silent_s = 2 * StageLink::kHelloEveryS);
+  std::vector<std::pair<std::string, proto::Hello>> live(double silent_s = 2 * StageLink::kHelloEveryS);
 
  private:
   struct Held {
