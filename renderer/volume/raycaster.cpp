@@ -17,6 +17,7 @@
 #include <string>
 #include <thread>
 
+#include "renderer/volume/depth_bounds.h"
 #include "renderer/volume/kernels.h"
 #include "renderer/volume/minmax.h"
 #include "renderer/volume/occupancy.h"
@@ -87,66 +88,6 @@ Raycaster::~Raycaster() = default;
 namespace {
 
 constexpr int kTile = 32;
-
-
-// Per 8x8-pixel cell, the ray parameters at which a ray through the cell can meet a
-// non-empty node: [lo, hi) bounds the distance from the eye to every non-empty node whose
-// footprint covers the cell (perspective rays start at the eye with unit directions, so t
-// is that distance). Node boxes carry the same half-voxel margin as the clip box. Rays of
-// a cell that no non-empty node covers sample nothing.
-struct DepthBounds {
-  static constexpr int kCell = 8;
-  int cols = 0;
-  std::vector<double> lo, hi;
-  size_t cell(int px, int py) const { return (size_t)(py / kCell) * cols + px / kCell; }
-};
-
-DepthBounds depthBounds(const RayGenerator& gen, const VolumeGeometry& g, const Vec3& eye, const MinMaxHierarchy& mm,
-                        const MinMaxHierarchy::Emptiness& e, const Brick& clip, int w, int h) {
-  DepthBounds d;
-  d.cols = (w + DepthBounds::kCell - 1) / DepthBounds::kCell;
-  const int rows = (h + DepthBounds::kCell - 1) / DepthBounds::kCell;
-  d.lo.assign((size_t)d.cols * rows, std::numeric_limits<double>::infinity());
-  d.hi.assign(d.lo.size(), -std::numeric_limits<double>::infinity());
-  // The finest level with at most 2^15 nodes keeps this well under a millisecond or two.
-  int level = 0;
-  auto count = [&](int l) { const auto n = mm.dims(l); return (int64_t)n[0] * n[1] * n[2]; };
-  while (level + 1 < mm.levels() && count(level) > (1 << 15)) ++level;
-  const int edge = MinMaxHierarchy::kBlock << level;
-  const auto n = mm.dims(level);
-  for (int z = 0; z < n[2]; ++z)
-    for (int y = 0; y < n[1]; ++y)
-      for (int x = 0; x < n[0]; ++x) {
-        if (e.empty[level][mm.index(level, x, y, z)]) continue;
-        const int q[3] = {x, y, z};
-        Brick b;
-        bool overlaps = true;
-        for (int a = 0; a < 3; ++a) {
-          b.lo[a] = std::max(clip.lo[a], q[a] * edge);
-          b.hi[a] = std::min(clip.hi[a], q[a] * edge + edge + 1);
-          overlaps = overlaps && b.lo[a] < b.hi[a];
-        }
-        if (!overlaps) continue;
-        const Rect r = brickFootprint(gen, g, b, w, h);
-        if (r.empty()) continue;
-        double near2 = 0, far2 = 0;
-        for (int a = 0; a < 3; ++a) {
-          const double p0 = g.plane(a, b.lo[a]), p1 = g.plane(a, b.hi[a]);
-          const double dn = std::max({p0 - eye[a], 0.0, eye[a] - p1});
-          const double df = std::max(std::fabs(eye[a] - p0), std::fabs(eye[a] - p1));
-          near2 += dn * dn, far2 += df * df;
-        }
-        // Relative slack far above double rounding of t and of the ray's unit length.
-        const double t_near = std::sqrt(near2) * (1 - 1e-9), t_far = std::sqrt(far2) * (1 + 1e-9) + 1e-12;
-        for (int cy = r.y / DepthBounds::kCell; cy <= (r.y + r.h - 1) / DepthBounds::kCell; ++cy)
-          for (int cx = r.x / DepthBounds::kCell; cx <= (r.x + r.w - 1) / DepthBounds::kCell; ++cx) {
-            const size_t i = (size_t)cy * d.cols + cx;
-            d.lo[i] = std::min(d.lo[i], t_near);
-            d.hi[i] = std::max(d.hi[i], t_far);
-          }
-      }
-  return d;
-}
 
 // The part of `brick` inside `box` (empty, lo == hi, on an axis where they do not meet).
 Brick clippedTo(const Brick& brick, const Brick& box) {
@@ -338,7 +279,8 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   // Perspective rays with skipping: per-cell depth bounds of the non-empty nodes.
   std::optional<DepthBounds> depth;
   if (clipping && !cam.orthographic && clip.lo[0] < clip.hi[0] && clip.lo[1] < clip.hi[1] && clip.lo[2] < clip.hi[2])
-    depth = depthBounds(gen, geom, cam.eye, impl_->accel->hierarchy, impl_->emptiness, clip, width, height);
+    depth = depthBounds(gen, geom, cam.eye, impl_->accel->hierarchy, impl_->emptiness, clip, width, height,
+                        threadCount(opt.threads, 1 << 30));
 
   const int tiles_x = (fp.w + kTile - 1) / kTile, tiles_y = (fp.h + kTile - 1) / kTile;
   const int tile_count = fp.empty() ? 0 : tiles_x * tiles_y;
