@@ -33,6 +33,7 @@ const Setting kSettings[] = {
     {"TESSERA_IN_FLIGHT", Kind::Int, 1, 64},
     {"TESSERA_TILES_PER_RENDERER", Kind::Int, 1, 64},
     {"TESSERA_THREADS", Kind::Int, 0, 1024},
+    {"TESSERA_CACHE_MB", Kind::Int, 0, 1 << 20, "", "MiB of a time series' steps a renderer holds besides the one shown"},
     {"TESSERA_CODEC", Kind::Word, 0, 0, "none|lzo|lz4|zstd"},
     {"TESSERA_FORMAT", Kind::Word, 0, 0, "rgba16f|rgba8|rgba32f"},
     {"TESSERA_TILING", Kind::Word, 0, 0, "balanced|static"},
