@@ -22,8 +22,9 @@ PKGS=(
 )
 # optional: python3-vtk9 python3-yaml for tests/bench/vtk_compare.py
 # Tests, fuzzing, benchmarks' plots, the window test under Xvfb, compose validation, the
-# one-host Slurm cluster of the Slurm tests.
-[ "${TESSERA_MINIMAL:-0}" = 1 ] || PKGS+=(gnuplot-nox xvfb x11-apps imagemagick clang docker-compose procps iproute2
+# one-host Slurm cluster of the Slurm tests. libclang-rt-14-dev holds the fuzzers' runtimes
+# (libFuzzer, ASan, UBSan): clang only recommends it, and recommends are not installed.
+[ "${TESSERA_MINIMAL:-0}" = 1 ] || PKGS+=(gnuplot-nox xvfb x11-apps imagemagick clang libclang-rt-14-dev docker-compose procps iproute2
   slurmctld slurmd slurm-client munge chromium curl)
 missing=()
 for p in "${PKGS[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
