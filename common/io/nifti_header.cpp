@@ -3,6 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -10,16 +13,33 @@
 #include "common/io/volume_files.h"
 
 namespace tessera {
+namespace {
+
+bool startsWithGzipMagic(const std::string& path) {
+  unsigned char m[2] = {0, 0};
+  std::ifstream in(path, std::ios::binary);
+  return in.read(reinterpret_cast<char*>(m), 2) && m[0] == 0x1f && m[1] == 0x8b;
+}
+
+}  // namespace
 
 RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps) {
   auto fail = [&](const std::string& what) -> RawVolumeSpec { throw std::runtime_error(path + ": " + what); };
   nifti_set_debug_level(0);  // its messages go to stderr; ours name the file and field
   std::unique_ptr<nifti_image, void (*)(nifti_image*)> nim(nifti_image_read(path.c_str(), 0), nifti_image_free);
-  if (!nim) return fail("not a readable NIfTI-1 or NIfTI-2 file (missing, cut short, or a bad header)");
+  if (!nim) {
+    // nifticlib decompresses by the name only: a gzipped file named .nii reads as a bad header.
+    if (startsWithGzipMagic(path) && !nifti_is_gzfile(path.c_str()))
+      return fail("gzip-compressed, but its name does not end in .gz (nifticlib goes by the name: rename it " +
+                  std::filesystem::path(path).filename().string() + ".gz)");
+    return fail("not a readable NIfTI-1 or NIfTI-2 file (missing, cut short, or a bad header)");
+  }
   RawVolumeSpec s;
   s.format = VolumeFormat::Nifti;
   s.file = path;
-  const int64_t n[3] = {nim->nx, nim->ny, nim->nz};
+  // Axes beyond dim[0] do not count (a 2-D file may leave dim[3] = 0): they are one voxel.
+  auto used = [&](int axis) { return axis <= nim->dim[0]; };
+  const int64_t n[3] = {used(1) ? nim->dim[1] : 1, used(2) ? nim->dim[2] : 1, used(3) ? nim->dim[3] : 1};
   for (int a = 0; a < 3; ++a) {
     if (n[a] < 1 || n[a] > 65536) fail("dim[" + std::to_string(a + 1) + "] = " + std::to_string(n[a]) + ", must be in 1..65536");
     s.dims[a] = (int)n[a];
@@ -51,7 +71,7 @@ RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps) {
       fail(std::string("datatype ") + std::to_string(nim->datatype) + " (" + nifti_datatype_string(nim->datatype) +
            ") is not a scalar type Tessera renders (uint8, int8, uint16, int16, uint32, int32, float32, float64)");
   }
-  const double d[3] = {nim->dx, nim->dy, nim->dz};
+  const double d[3] = {used(1) ? nim->dx : 1, used(2) ? nim->dy : 1, used(3) ? nim->dz : 1};
   for (int a = 0; a < 3; ++a) {
     // A spacing of 0 is common in hand-made headers; pixdim's sign belongs to orientation.
     // Checked by the scene parser, after the scene's volume.spacing (which may replace a bad one).
@@ -61,7 +81,11 @@ RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps) {
     s.slope = nim->scl_slope;
     s.inter = nim->scl_inter;
   }
-  if (nim->iname && path != nim->iname) s.data_file = nim->iname;  // .hdr + .img
+  if (nim->iname && path != nim->iname) {  // .hdr + .img: whichever of .img and .img.gz is there, as nifticlib looks
+    std::unique_ptr<char, void (*)(void*)> img(nifti_findimgname(path.c_str(), nim->nifti_type), std::free);
+    if (!img) fail("a header without its image file (" + std::string(nim->iname) + " or .img.gz)");
+    s.data_file = img.get();
+  }
   s.offset = (uint64_t)std::max<int64_t>(0, nim->iname_offset);
   s.big_endian = nim->byteorder == 2;  // MSB_FIRST (nifti1_io.h; nifti2_io.h lacks the name)
   s.gzip = nifti_is_gzfile(s.samples().c_str());

@@ -4,6 +4,7 @@
 // (.nhdr), raw or gzip-encoded.
 #include <algorithm>
 #include <charconv>
+#include <cstdlib>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -38,25 +39,60 @@ std::optional<VoxelType> nrrdType(const std::string& t) {
   return it == kNames.end() ? std::nullopt : std::optional<VoxelType>(it->second);
 }
 
+std::string lower(std::string v) {
+  std::transform(v.begin(), v.end(), v.begin(), [](unsigned char c) { return (char)std::tolower(c); });
+  return v;
+}
+
+// A spacing NRRD leaves unknown (nan, none, 0) is 1, as NIfTI's 0; the scene may replace it.
+double knownOrOne(double x) { return std::isfinite(x) && x != 0 ? std::fabs(x) : 1.0; }
+
 // "spacings: a b c", or "space directions: (x,y,z) (x,y,z) (x,y,z)" whose lengths are the
-// spacing (the rotation is not applied); neither: 1. False if present but unreadable.
+// spacing (the rotation is not applied; a vector has "space dimension" components, and an
+// axis that is not space is "none"); neither: 1. False if present but unreadable.
 bool readSpacing(std::map<std::string, std::string>& f, std::array<double, 3>& spacing) {
   if (f.count("spacings")) {
     std::istringstream sp(f["spacings"]);
-    for (double& x : spacing)
-      if (!(sp >> x) || !(std::fabs(x) > 0)) return false;
-    for (double& x : spacing) x = std::fabs(x);
-  } else if (f.count("space directions")) {
-    std::string d = f["space directions"];
-    std::replace_if(d.begin(), d.end(), [](char c) { return c == '(' || c == ')' || c == ','; }, ' ');
-    std::istringstream sd(d);
     for (double& x : spacing) {
-      double v[3];
-      if (!(sd >> v[0] >> v[1] >> v[2])) return false;
-      x = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+      std::string t;
+      if (!(sp >> t)) return false;
+      char* end = nullptr;
+      const double v = std::strtod(t.c_str(), &end);  // reads nan too
+      if (end != t.c_str() + t.size()) return false;
+      x = knownOrOne(v);
+    }
+  } else if (f.count("spacedirections")) {
+    const std::string& d = f["spacedirections"];
+    size_t i = 0;
+    for (double& x : spacing) {
+      i = d.find_first_not_of(" \t", i);
+      if (i == std::string::npos) return false;
+      if (lower(d.substr(i, 4)) == "none") {
+        x = 1, i += 4;
+        continue;
+      }
+      const size_t close = d.find(')', i);
+      if (d[i] != '(' || close == std::string::npos) return false;
+      std::string inner = d.substr(i + 1, close - i - 1);
+      std::replace(inner.begin(), inner.end(), ',', ' ');
+      std::istringstream v(inner);
+      double c = 0, sum = 0;
+      int n = 0;
+      while (v >> c) sum += c * c, ++n;
+      if (n == 0 || !v.eof()) return false;
+      x = knownOrOne(std::sqrt(sum));
+      i = close + 1;
     }
   }
   return true;
+}
+
+// Teem's spellings of a field name: "byte skip" is also "byteskip", and any case.
+std::string fieldKey(const std::string& name) {
+  std::string k;
+  for (unsigned char c : name)
+    if (c != ' ') k += (char)std::tolower(c);
+  return k;
 }
 
 }  // namespace
@@ -75,11 +111,12 @@ RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps) {
       blank_line = true;
       break;
     }
-    if (line[0] == '#' || line.find(":=") != std::string::npos) continue;  // comments, key/value pairs
-    const size_t colon = line.find(": ");
+    if (line[0] == '#') continue;
+    const size_t colon = line.find(": "), pair = line.find(":=");
+    if (pair != std::string::npos && (colon == std::string::npos || pair < colon)) continue;  // key:=value
     if (colon == std::string::npos) fail("header line '" + line + "' is not 'field: value'");
-    std::string key = line.substr(0, colon);
-    std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return (char)std::tolower(c); });
+    const std::string key = fieldKey(line.substr(0, colon));
+    if (f.count(key)) fail("field '" + line.substr(0, colon) + "' appears twice");
     f[key] = trim(line.substr(colon + 2));
   }
   RawVolumeSpec s;
@@ -89,7 +126,7 @@ RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps) {
     if (!f.count(key)) fail(std::string("the header has no '") + key + "' field");
     return f[key];
   };
-  if (auto t = nrrdType(need("type"))) s.type = *t;
+  if (auto t = nrrdType(lower(need("type")))) s.type = *t;
   else fail("type '" + f["type"] + "' is not a scalar type Tessera renders");
   const std::string dimension = need("dimension");
   if (dimension != "3" && !(dimension == "4" && time_steps))
@@ -105,30 +142,37 @@ RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps) {
     if (a < 3) s.dims[a] = (int)n;
     else steps = n;
   }
+  if (std::string more; sizes >> more) fail("sizes '" + f["sizes"] + "': expected " + dimension + " sizes");
   if (time_steps) *time_steps = (int)steps;
   if (f.count("kinds")) {  // RGB, vector or tensor axes hold a voxel's components, not space
     std::istringstream kinds(f["kinds"]);
     std::string k;
-    for (int a = 0; a < 3 && kinds >> k; ++a) {
-      const bool unknown = k == "???" || k == "none";  // NRRD's "says nothing"
-      if (k == "domain" || k == "space" || unknown || (axes == 3 && k == "time")) continue;
+    for (int a = 0; a < axes && kinds >> k; ++a) {
+      const std::string kl = lower(k);
+      const bool unknown = kl == "???" || kl == "none";  // NRRD's "says nothing"
+      // A 4-D file's last axis is its steps: time (or unnamed); vector, list or colour
+      // components are not time steps.
+      if (kl == "domain" || kl == "space" || unknown || ((axes == 3 || a == 3) && kl == "time")) continue;
       fail("kinds '" + f["kinds"] + "': axis " + std::to_string(a) + " is '" + k + "'; " +
            (axes == 4 ? "a 4-D volume needs 3 space axes then time" : "a volume's 3 axes must be space (domain)"));
     }
   }
-  if (!readSpacing(f, s.spacing)) fail("spacing '" + f["spacings"] + f["space directions"] + "'");
+  if (!readSpacing(f, s.spacing)) fail("spacing '" + f["spacings"] + f["spacedirections"] + "'");
   // Its range is checked by the scene parser, after the scene's volume.spacing (which may replace it).
-  const std::string enc = need("encoding");
+  const std::string enc = lower(need("encoding"));
   if (enc == "gzip" || enc == "gz") s.gzip = true;
   else if (enc != "raw") fail("encoding '" + enc + "': Tessera reads raw and gzip");
   if (voxelTypeSize(s.type) > 1) {
-    const std::string endian = need("endian");
+    const std::string endian = lower(need("endian"));
     if (endian != "little" && endian != "big") fail("endian '" + endian + "': expected little or big");
     s.big_endian = endian == "big";
   }
-  if (f.count("line skip") && f["line skip"] != "0") fail("line skip " + f["line skip"] + " is not supported");
-  const std::string data = f.count("data file") ? f["data file"] : f.count("datafile") ? f["datafile"] : "";
-  if (data.find(' ') != std::string::npos || data == "LIST") fail("data file '" + data + "': one file expected");
+  if (f.count("lineskip") && f["lineskip"] != "0") fail("line skip " + f["lineskip"] + " is not supported");
+  const std::string data = f.count("datafile") ? f["datafile"] : "";
+  // Several data files: "LIST", or a printf pattern with its numbers; any other name is one
+  // file, spaces and all.
+  if (data.rfind("LIST", 0) == 0 || (data.find('%') != std::string::npos && data.find(' ') != std::string::npos))
+    fail("data file '" + data + "': one file expected");
   if (data.empty()) {
     // Attached: right after the blank line (where a gzip stream starts, if encoded).
     const std::streamoff at = blank_line ? (std::streamoff)in.tellg() : -1;
@@ -139,8 +183,8 @@ RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps) {
     s.data_file = (p.is_relative() ? std::filesystem::path(path).parent_path() / p : p).lexically_normal().string();
   }
   long long skip = 0;
-  if (f.count("byte skip")) {
-    const std::string& v = f["byte skip"];
+  if (f.count("byteskip")) {
+    const std::string& v = f["byteskip"];
     const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), skip);
     if (ec != std::errc() || end != v.data() + v.size() || v.empty())
       fail("byte skip '" + v + "' is not an integer (bytes to skip, or -1: the data ends the file)");
@@ -152,11 +196,9 @@ RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps) {
     if (ec || size < bytes) fail("byte skip -1 but the data file is shorter than the data");
     s.offset = size - bytes;
   } else if (skip < 0) {
-    fail("byte skip " + f["byte skip"] + " is not supported with encoding " + enc);
-  } else if (s.gzip) {
-    if (skip) fail("byte skip with gzip encoding is not supported");
+    fail("byte skip " + f["byteskip"] + " is not supported with encoding " + enc);
   } else {
-    s.offset += (uint64_t)skip;
+    s.offset += (uint64_t)skip;  // with gzip, bytes of the decompressed stream (as teem skips them)
   }
   return s;
 }

@@ -8,7 +8,9 @@
 
 #include <algorithm>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <vector>
 
 #include "common/io/volume_files.h"
@@ -260,6 +262,121 @@ TEST(VolumeFiles, TheSceneReplacesABadHeaderSpacingAndShortFourDFilesAreSaidAtOn
                                          "data file: d4.raw\n";
   const std::string e = errorOf("volume: {file: short.nhdr}\n", t.path.string());
   EXPECT_NE(e.find("d4.raw has 8 bytes but 1000 time steps of 8 bytes need 8000"), std::string::npos) << e;
+}
+
+// Found by a review against nifticlib's and teem's sources: files other tools write, which
+// were refused or misread. Each handmade NRRD is also read by teem itself, so the test holds
+// the reader to teem's reading, not to ours.
+std::vector<int16_t> teemSamples(const std::string& path) {
+  Nrrd* n = nrrdNew();
+  std::vector<int16_t> v;
+  if (nrrdLoad(n, path.c_str(), nullptr) == 0 && n->type == nrrdTypeShort)
+    v.assign(static_cast<int16_t*>(n->data), static_cast<int16_t*>(n->data) + nrrdElementNumber(n));
+  nrrdNuke(n);
+  return v;
+}
+
+void gzipFile(const std::string& from, const std::string& to, const std::string& prefix = "") {
+  std::ifstream in(from, std::ios::binary);
+  const std::string bytes = prefix + std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  gzFile z = gzopen(to.c_str(), "wb");
+  ASSERT_NE(z, nullptr);
+  ASSERT_EQ(gzwrite(z, bytes.data(), (unsigned)bytes.size()), (int)bytes.size());
+  gzclose(z);
+}
+
+TEST(VolumeFiles, FilesOtherToolsWriteLoadAsTheRawFile) {
+  TempDir t("other-tools");
+  const Volume ref = rawReference(t);
+  // NIfTI: a .hdr whose .img was gzipped afterwards; a gzipped .nii named .nii.
+  writeNifti(t.file("p.hdr"));
+  gzipFile(t.file("p.img"), t.file("p.img.gz"));
+  std::filesystem::remove(t.file("p.img"));
+  expectSameVolume(fromScene("volume: {file: p.hdr}\n", t.path.string()), ref);
+  // nifticlib decompresses by the name, so a gzipped file named .nii is refused; said so.
+  writeNifti(t.file("g.nii.gz"));
+  std::filesystem::rename(t.file("g.nii.gz"), t.file("g.nii"));
+  const std::string gz = errorOf("volume: {file: g.nii}\n", t.path.string());
+  EXPECT_NE(gz.find("g.nii: gzip-compressed, but its name does not end in .gz"), std::string::npos) << gz;
+
+  // NRRD: teem's other spellings of field names, upper-case values, spaces inside a vector
+  // and in a file name, a byte skip, vectors of a 4-D space, unknown spacings.
+  const auto v = samples();
+  const std::string junk = "12345";
+  t.write("my scan.raw", (junk + std::string(reinterpret_cast<const char*>(v.data()), v.size() * 2)).data(),
+          junk.size() + v.size() * 2);
+  std::ofstream(t.file("spell.nhdr")) << "NRRD0004\ntype: SHORT\ndimension: 3\nsizes: 13 11 7\nspace: 3D-right-handed\n"
+                                         "spacedirections: (0.75,0,0) (0, 1.25, 0) (0,0,2.5)\nencoding: RAW\n"
+                                         "endian: LITTLE\nbyteskip: 5\ndatafile: my scan.raw\n";
+  std::ofstream(t.file("space4.nhdr")) << "NRRD0005\ntype: short\ndimension: 3\nsizes: 13 11 7\nspace dimension: 4\n"
+                                          "space directions: (0.75,0,0,0) (0,1.25,0,0) (0,0,2.5,0)\nencoding: raw\n"
+                                          "endian: little\nbyte skip: 5\ndata file: my scan.raw\n";
+  gzipFile(t.file("ref.raw"), t.file("skip.raw.gz"), junk);
+  std::ofstream(t.file("gzskip.nhdr")) << "NRRD0004\ntype: short\ndimension: 3\nsizes: 13 11 7\n"
+                                          "spacings: 0.75 1.25 2.5\nencoding: gzip\nendian: little\nbyte skip: 5\n"
+                                          "data file: skip.raw.gz\n";
+  for (const char* name : {"spell.nhdr", "space4.nhdr", "gzskip.nhdr"}) {
+    EXPECT_EQ(teemSamples(t.file(name)), v) << name << ": teem reads it otherwise";
+    expectSameVolume(fromScene(std::string("volume: {file: '") + name + "'}\n", t.path.string()), ref);
+  }
+  std::ofstream(t.file("nan.nhdr")) << "NRRD0004\ntype: short\ndimension: 3\nsizes: 13 11 7\nspacings: 0.75 1.25 nan\n"
+                                       "encoding: raw\nendian: little\ndata file: ref.raw\n";
+  EXPECT_EQ(readVolumeHeader(t.file("nan.nhdr")).spacing, (std::array<double, 3>{0.75, 1.25, 1}));
+  expectSameVolume(fromScene("volume: {file: nan.nhdr, spacing: [0.75, 1.25, 2.5]}\n", t.path.string()), ref);
+}
+
+TEST(VolumeFiles, TwoDimensionalNiftiIsOneSliceThick) {
+  // dim[0] = 2 with dim[3] = 0, as some writers leave the axes beyond dim[0].
+  TempDir t("nifti-2d");
+  nifti_1_header h{};
+  h.sizeof_hdr = 348;
+  h.dim[0] = 2, h.dim[1] = 5, h.dim[2] = 4;
+  h.datatype = DT_UINT8, h.bitpix = 8;
+  h.pixdim[1] = 0.5f, h.pixdim[2] = 0.25f;
+  h.vox_offset = 352;
+  std::memcpy(h.magic, "n+1\0", 4);
+  std::string bytes(reinterpret_cast<const char*>(&h), sizeof h);
+  bytes += std::string(4, '\0');
+  for (int i = 0; i < 20; ++i) bytes += (char)(i * 10);
+  t.write("flat.nii", bytes.data(), bytes.size());
+  const RawVolumeSpec s = readVolumeHeader(t.file("flat.nii"));
+  EXPECT_EQ(s.dims, (std::array<int, 3>{5, 4, 1}));
+  EXPECT_EQ(s.spacing, (std::array<double, 3>{0.5, 0.25, 1}));
+  const Volume vol = fromScene("volume: {file: flat.nii}\n", t.path.string());
+  EXPECT_EQ(vol.dims, (std::array<int, 3>{5, 4, 1}));
+  EXPECT_FLOAT_EQ(vol.values[19], 1.0f);
+}
+
+TEST(VolumeFiles, InconsistentNrrdHeadersAreNamed) {
+  TempDir t("nrrd-inconsistent");
+  const std::string head = "NRRD0004\ntype: uchar\nencoding: raw\ndata file: d.raw\n";
+  const char bytes[24] = {};
+  t.write("d.raw", bytes, sizeof bytes);
+  auto error = [&](const std::string& name, const std::string& fields, bool series = false) {
+    std::ofstream(t.file(name)) << head << fields;
+    try {
+      int steps = 0;
+      readVolumeHeader(t.file(name), series ? &steps : nullptr);
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string("<no error>");
+  };
+  EXPECT_NE(error("extra.nhdr", "dimension: 3\nsizes: 2 2 2 3\n").find("extra.nhdr: sizes '2 2 2 3': expected 3 sizes"),
+            std::string::npos);
+  EXPECT_NE(error("twice.nhdr", "dimension: 3\nsizes: 2 2 2\nType: short\n").find("twice.nhdr: field 'Type' appears twice"),
+            std::string::npos);
+  const std::string vec = error("vec.nhdr", "dimension: 4\nsizes: 2 2 2 3\nkinds: space space space vector\n", true);
+  EXPECT_NE(vec.find("vec.nhdr: kinds 'space space space vector': axis 3 is 'vector'"), std::string::npos) << vec;
+  EXPECT_EQ(error("time.nhdr", "dimension: 4\nsizes: 2 2 2 3\nkinds: space space space time\n", true), "<no error>");
+  std::ofstream(t.file("many.nhdr")) << "NRRD0004\ntype: uchar\nencoding: raw\ndimension: 3\nsizes: 2 2 2\n"
+                                        "data file: d%03d.raw 1 3 1\n";
+  try {
+    readVolumeHeader(t.file("many.nhdr"));
+    ADD_FAILURE() << "a data file pattern was taken for one file";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("data file 'd%03d.raw 1 3 1': one file expected"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
