@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <charconv>
+#include <filesystem>
 
 #include "common/scene.h"
 
@@ -29,14 +30,18 @@ void list(YAML::Emitter& e, const std::array<T, N>& a) {
   e << YAML::EndSeq;
 }
 
+// Absolute: the printed scene is saved anywhere (a path relative to the folder it was read
+// from named another file once saved beside it).
+std::string absolutePath(const std::string& p) { return std::filesystem::absolute(p).lexically_normal().string(); }
+
 void volume(YAML::Emitter& e, const Scene& s) {
   e << YAML::Key << "volume" << YAML::Value << YAML::BeginMap;
   if (const auto* raw = std::get_if<RawVolumeSpec>(&s.volume)) {
     if (s.series.files.empty()) {
-      e << YAML::Key << "file" << YAML::Value << raw->file;
+      e << YAML::Key << "file" << YAML::Value << absolutePath(raw->file);
     } else {  // as a list: a pattern or a .series file lists the same names
       e << YAML::Key << "series" << YAML::Value << YAML::BeginSeq;
-      for (const auto& f : s.series.files) e << f;
+      for (const auto& f : s.series.files) e << absolutePath(f);
       e << YAML::EndSeq;
     }
     if (raw->format == VolumeFormat::Raw) {  // a NIfTI or NRRD header gives them

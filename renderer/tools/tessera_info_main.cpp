@@ -16,6 +16,7 @@
 #include "common/bricks.h"
 #include "common/image.h"
 #include "common/io/image_io.h"
+#include "common/io/volume_files.h"
 #include "common/scene.h"
 #include "common/volume_summary.h"
 #include "renderer/tools/tool_main.h"
@@ -24,14 +25,9 @@ namespace {
 
 using namespace tessera;
 
-// Files whose header says what they hold: a scene of one line is all they need.
-bool isVolumeFile(const std::string& path) {
-  std::string p = path;
-  std::transform(p.begin(), p.end(), p.begin(), [](unsigned char c) { return (char)std::tolower(c); });
-  for (const char* ext : {".nii", ".nii.gz", ".hdr", ".nrrd", ".nhdr"})
-    if (p.size() >= std::strlen(ext) && p.compare(p.size() - std::strlen(ext), std::string::npos, ext) == 0) return true;
-  return false;
-}
+// Files whose header says what they hold (every name the scene's `volume.file` reads as
+// NIfTI or NRRD): a scene of one line is all they need.
+bool isVolumeFile(const std::string& path) { return volumeFormatOf(path) != VolumeFormat::Raw; }
 
 Scene volumeScene(const std::string& path) {
   const std::filesystem::path abs = std::filesystem::absolute(path);

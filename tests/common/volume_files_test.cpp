@@ -131,6 +131,14 @@ TEST(VolumeFiles, NiftiScalingIsApplied) {
   EXPECT_EQ(yaml.find("dims:"), std::string::npos) << yaml;
   EXPECT_EQ(std::get<RawVolumeSpec>(parseScene(yaml, t.path.string(), "again.yaml").volume).dims,
             (std::array<int, 3>{kNx, kNy, kNz}));
+  // Read through a relative folder (tessera-info data/head.yaml), the file is printed with its
+  // absolute path, so the printed scene saved anywhere names the same file.
+  const std::string rel = std::filesystem::relative(t.path).string();
+  const std::string printed = sceneYaml(parseScene("volume: {file: s.nii}\n", rel, "r.yaml"));
+  std::filesystem::create_directories(t.path / "elsewhere");
+  EXPECT_EQ(std::get<RawVolumeSpec>(parseScene(printed, (t.path / "elsewhere").string(), "e.yaml").volume).dims,
+            (std::array<int, 3>{kNx, kNy, kNz}))
+      << printed;
 }
 
 void writeNrrd(const std::string& path, bool gzip, bool detached) {

@@ -238,6 +238,15 @@ TEST(FirstContact, TesseraInfoReportsTheValuesAndTheirHistogramExactly) {
   EXPECT_NE(n.output.find("volume: 8 x 8 x 8 voxels, uint8"), std::string::npos) << n.output;
   const std::vector<unsigned long long> from_nifti = histogramCounts(n.output);
   EXPECT_EQ(from_nifti, counts) << n.output;
+  // And as a .hdr + .img pair named by its image (tessera-info took a .img for a scene file).
+  std::vector<char> hdr(nii.begin(), nii.begin() + 348);
+  std::memcpy(hdr.data() + 108, "\0\0\0\0", 4);  // vox_offset 0
+  std::memcpy(hdr.data() + 344, "ni1", 4);
+  std::ofstream(dir.path() / "p.hdr", std::ios::binary).write(hdr.data(), (std::streamsize)hdr.size());
+  std::ofstream(dir.path() / "p.img", std::ios::binary).write(reinterpret_cast<const char*>(v.data()), (std::streamsize)v.size());
+  const auto pair = runCommand(bin("tessera-info") + " " + (dir.path() / "p.img").string() + " --bins 4", 60);
+  ASSERT_EQ(pair.exit_code, 0) << pair.output;
+  EXPECT_EQ(histogramCounts(pair.output), counts) << pair.output;
 }
 
 // tessera-info streams the volume in slabs (found by review: it loaded the whole volume, so
