@@ -15,7 +15,6 @@
 #include <utility>
 #include <vector>
 
-
 #include "common/clock.h"
 #include "common/net/stage_link.h"
 #include "common/scene.h"

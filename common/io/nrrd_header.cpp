@@ -4,8 +4,8 @@
 // (.nhdr), raw or gzip-encoded.
 #include <algorithm>
 #include <charconv>
-#include <cstdlib>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -89,9 +89,8 @@ bool readSpacing(std::map<std::string, std::string>& f, std::array<double, 3>& s
 
 // Teem's spellings of a field name: "byte skip" is also "byteskip", and any case.
 std::string fieldKey(const std::string& name) {
-  std::string k;
-  for (unsigned char c : name)
-    if (c != ' ') k += (char)std::tolower(c);
+  std::string k = lower(name);
+  k.erase(std::remove(k.begin(), k.end(), ' '), k.end());
   return k;
 }
 
