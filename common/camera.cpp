@@ -1,6 +1,7 @@
 // Camera validation, orbiting and per-pixel ray generation (docs/DESIGN.md "Camera").
 #include "common/camera.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -86,10 +87,12 @@ bool RayGenerator::project(const Vec3& p, double& sx, double& sy) const {
   return !cam_.orthographic || z >= 0;
 }
 
-Camera fittedCamera(const Vec3& half_extent) {
+Camera fittedCamera(const Vec3& half_extent, double aspect) {
   Camera c;
   const double radius = length(half_extent);  // the box's bounding sphere
-  const double distance = 1.05 * radius / std::sin(c.fov / 2 * std::numbers::pi / 180);
+  // The fov is vertical; a portrait image sees less across (tan scales with the aspect).
+  const double half_angle = std::atan(std::min(1.0, aspect) * std::tan(c.fov / 2 * std::numbers::pi / 180));
+  const double distance = 1.05 * radius / std::sin(half_angle);
   c.eye = normalize(Vec3{0, 0.3, 1}) * distance;
   c.target = {0, 0, 0};
   return c;

@@ -20,8 +20,9 @@ struct Camera {
 
 // The camera ParaView's Reset Camera gives: looking at the centre of a box with these half
 // extents from the front and a little above (+z, +y), far enough that the whole box fits
-// the 30-degree view with a margin.
-Camera fittedCamera(const Vec3& half_extent);
+// the 30-degree view with a margin, across the narrower of the image's two sides
+// (aspect = width / height).
+Camera fittedCamera(const Vec3& half_extent, double aspect = 1.0);
 
 struct Ray {
   Vec3 origin, dir;  // dir normalized

@@ -190,8 +190,6 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
   if (root["antialiasing"]) s.antialiasing = p.antialiasing(root["antialiasing"]);
   if (root["shading"] && is_mesh) p.fail("shading", "shades volume samples; a mesh is lit by `light` alone");
   if (root["shading"]) s.shading = p.shading(root["shading"]);
-  // Left out: fitted to the volume's box (a mesh is fitted to the unit box).
-  s.camera = root["camera"] ? p.camera(root["camera"]) : fittedCamera(sceneHalfExtent(s));
   if (root["image"]) {
     YAML::Node im = root["image"];
     if (!im.IsSequence() || im.size() != 2) p.fail("image", "expected [width, height], got " + detail::Parser::describe(im));
@@ -199,6 +197,9 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
     s.height = (int)p.integer(im[1], "image[1]", 1, 16384);
     if (std::string m = imageSizeProblem(s.width, s.height); !m.empty()) p.fail("image", m);
   }
+  // Left out: fitted to the volume's box (a mesh is fitted to the unit box) and the image.
+  s.camera = root["camera"] ? p.camera(root["camera"])
+                            : fittedCamera(sceneHalfExtent(s), (double)s.width / s.height);
   if (root["quality"]) s.quality = p.quality(root["quality"]);
   if (root["orbit"]) s.orbit = p.orbit(root["orbit"]);
   if (root["time"] && is_mesh) p.fail("time", "plays a volume's time steps; a mesh scene has none");

@@ -47,7 +47,9 @@ VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cance
   };
   VolumeSummary s;
   const std::array<int, 3> n = volumeDims(scene);
-  while (s.edge > 1 && std::min({n[0], n[1], n[2]}) < 8 * s.edge) s.edge /= 2;
+  // Bricks are cut across the longest axis first, so it needs the blocks; a thin axis (a few
+  // slices) must not shrink every block to a voxel (8192 x 8192 x 4: 2 GiB of bounds).
+  while (s.edge > 1 && std::max({n[0], n[1], n[2]}) < 8 * s.edge) s.edge /= 2;
   for (int a = 0; a < 3; ++a) s.blocks[a] = (n[a] + s.edge - 1) / s.edge;
   const size_t count = (size_t)s.blocks[0] * s.blocks[1] * s.blocks[2];
   s.lo.assign(count, INFINITY);

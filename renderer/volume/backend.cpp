@@ -1,6 +1,7 @@
 // Backend selection by name (see backend.h).
 #include "renderer/volume/backend.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -38,6 +39,13 @@ void checkRenderArguments(const char* who, const Volume& v, int width, int heigh
       throw std::invalid_argument(name + ": brick outside the volume or empty on axis " + std::to_string(a));
   if (!(q.step > 0) || !std::isfinite(q.step))
     throw std::invalid_argument(name + ": quality.step must be positive and finite");
+}
+
+Quality samplingQuality(const Quality& q, const Volume& v) {
+  const Vec3 h = v.halfExtent();
+  Quality sampled = q;
+  sampled.step = std::min(q.step, std::min({h.x, h.y, h.z}));  // half extents: half the sides
+  return sampled;
 }
 
 BackendKind parseBackend(const std::string& name) {

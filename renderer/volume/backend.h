@@ -54,6 +54,11 @@ ImageF takeRecycled(int width, int height, ImageF&& recycled);
 void checkRenderArguments(const char* who, const Volume& v, int width, int height, const Brick& brick,
                           const Quality& q);
 
+// The quality a backend samples with: `q`, its step at most half the whole volume's thinnest
+// side, so that a volume of a slice or a few is sampled twice across (at the named steps a
+// 1024 x 1024 x 1 slice is a quarter of a step thick and most rays would miss it).
+Quality samplingQuality(const Quality& q, const Volume& v);
+
 enum class BackendKind { Cpu, Osmesa };
 // "cpu" | "osmesa"; throws std::invalid_argument naming the value otherwise.
 BackendKind parseBackend(const std::string& name);

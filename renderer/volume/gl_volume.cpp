@@ -275,8 +275,8 @@ ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const 
   const auto start = std::chrono::steady_clock::now();
   Impl& m = *impl_;
   const Volume& v = *m.volume;
-  const Quality& q = opt.quality;
-  checkRenderArguments("GlVolumeRenderer::render", v, width, height, brick, q);
+  checkRenderArguments("GlVolumeRenderer::render", v, width, height, brick, opt.quality);
+  const Quality q = samplingQuality(opt.quality, v);
   std::lock_guard lock(m.mu);
   if (q.reference) {
     // The reference is defined in double precision; GLSL floats cannot give it.

@@ -244,8 +244,8 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
                          RenderStats* stats, Rect* active, ImageF recycled) const {
   const auto start = std::chrono::steady_clock::now();
   const Volume& v = *impl_->volume;
-  const Quality& q = opt.quality;
-  checkRenderArguments("Raycaster::render", v, width, height, brick, q);
+  checkRenderArguments("Raycaster::render", v, width, height, brick, opt.quality);
+  const Quality q = samplingQuality(opt.quality, v);
 
   const RayGenerator gen(cam, width, height);  // validates the camera
   const VolumeGeometry geom(v);

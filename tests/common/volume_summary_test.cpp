@@ -53,7 +53,7 @@ TEST(VolumeSummary, ARawFileWithoutARangeIsSummarisedOverItsOwnValues) {
   scene.volume = test::rawSpec(t.write("s.raw", data.data(), data.size() * 2), n, VoxelType::UInt16, {1, 1, 1}, false, {0, 0});
   const VolumeSummary s = summarizeVolume(scene);
   const Volume whole = loadVolume(scene);
-  EXPECT_EQ(s.edge, 1);  // 12 < 16: blocks of one voxel keep 12 cuts on the shortest axis
+  EXPECT_EQ(s.edge, 2);  // 16 <= 21 < 32: the longest axis has 8 or more blocks of 2
   EXPECT_EQ(s.shape.data_range, whole.data_range);
   EXPECT_EQ(s.shape.mapped_range, whole.mapped_range);
   expectBlocksOfWhole(s, whole);
@@ -148,6 +148,28 @@ TEST(VolumeSummary, BricksAreCutOnBlockFacesAndCoverTheVolumeOnce) {
         if (a == 2) voxels += (long long)(b.hi[0] - b.lo[0]) * (b.hi[1] - b.lo[1]) * (b.hi[2] - b.lo[2]);
       }
     EXPECT_EQ(voxels, 75LL * 75 * 75) << "n=" << n;  // disjoint boxes of a k-d split: sizes add up
+  }
+}
+
+// A few slices of a big image: blocks of 8 on the long axes (one block across the thin one),
+// not of one voxel, and bricks still split it (across the long axes).
+TEST(VolumeSummary, AThinVolumeKeepsBlocksOfEight) {
+  test::TempDir t("summary_thin");
+  const std::array<int, 3> n{300, 280, 3};
+  std::vector<uint8_t> data((size_t)n[0] * n[1] * n[2]);
+  for (size_t i = 0; i < data.size(); ++i) data[i] = (uint8_t)((i * 2654435761u) >> 24);
+  Scene scene = defaultScene();
+  scene.volume = test::rawSpec(t.write("thin.raw", data.data(), data.size()), n, VoxelType::UInt8, {1, 1, 1}, false, {0, 0});
+  const VolumeSummary s = summarizeVolume(scene);
+  EXPECT_EQ(s.edge, 8);
+  EXPECT_EQ(s.blocks, (std::array<int, 3>{38, 35, 1}));
+  expectBlocksOfWhole(s, loadVolume(scene));
+  for (int count : {2, 4, 8}) {
+    const BrickTree tree = splitBricks(s, count, scene.tf);
+    ASSERT_EQ((int)tree.bricks.size(), count);
+    long long voxels = 0;
+    for (const BrickBox& b : tree.bricks) voxels += (long long)(b.hi[0] - b.lo[0]) * (b.hi[1] - b.lo[1]) * (b.hi[2] - b.lo[2]);
+    EXPECT_EQ(voxels, 300LL * 280 * 3) << count;
   }
 }
 

@@ -85,6 +85,17 @@ TEST(GlVolume, MatchesCpuBackendAndReference) {
   }
 }
 
+// A slice far thinner than the step is sampled across as the CPU ray caster samples it.
+TEST(GlVolume, ASliceIsSampledAsTheCpuSamplesIt) {
+  auto vol = test::slice();
+  const Raycaster cpu(vol, test::opaqueTf());
+  const GlVolumeRenderer glr(vol, test::opaqueTf());
+  const ImageF g = glr.render(defaultCamera(), kW, kH, wholeVolume(*vol), options("default"));
+  const ImageF f = cpu.render(defaultCamera(), kW, kH, wholeVolume(*vol), options("default"));
+  ASSERT_GT(activeRegion(g).area(), 1000) << "the slice was not sampled";
+  EXPECT_LE(maxDiff8(g, f), 1) << test::dumpImages("gl_vs_cpu_slice", f, g);
+}
+
 TEST(GlVolume, SkippingChangesNoBit) {
   for (const Case& c : cases()) {
     SCOPED_TRACE(c.generator);

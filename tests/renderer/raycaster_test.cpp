@@ -171,6 +171,33 @@ TEST(Skipping, IdenticalImageAndSkipsSamples) {
   }
 }
 
+// A slice far thinner than the step: the named qualities sample it twice across (at their
+// own step most rays would pass it between two samples and the image would be empty), as
+// the reference does, and bricks of it composite to the whole.
+TEST(ThinVolume, ASliceIsSampledAcrossAndMatchesTheReference) {
+  auto vol = test::slice();
+  const Raycaster rc(vol, test::opaqueTf());
+  for (const char* quality : {"default", "fast"}) {
+    const ImageF img = rc.render(defaultCamera(), 64, 48, wholeVolume(*vol), options(quality));
+    const ImageF ref = rc.render(defaultCamera(), 64, 48, wholeVolume(*vol), options("reference"));
+    ASSERT_GT(activeRegion(ref).area(), 1000);
+    ASSERT_GT(activeRegion(img).area(), 1000) << quality << ": the slice was not sampled";
+    const ImageError e = compare(img, ref);
+    EXPECT_GE(e.psnr, 40.0) << quality << " max_abs " << e.max_abs << " see "
+                            << test::dumpImages(std::string("thin_") + quality, ref, img);
+  }
+  const ImageF whole = rc.render(defaultCamera(), 64, 48, wholeVolume(*vol), options("default"));
+  const TransferFunction tf = test::opaqueTf();
+  const BrickTree tree = splitBricks(*vol, 3, &tf);
+  ImageF out(64, 48);
+  for (int leaf : tree.visibilityOrder(*vol, defaultCamera())) {
+    Rect act;
+    const ImageF part = rc.render(defaultCamera(), 64, 48, tree.bricks[leaf], options("default"), nullptr, &act);
+    if (!act.empty()) compositeOver(out, part, act);
+  }
+  EXPECT_LE(compare(out, whole).max_abs, 1.0 / 255);
+}
+
 TEST(Threads, ResultIndependentOfThreadCount) {
   auto vol = generated("noise-cloud", 32);
   const Raycaster rc(vol, defaultTf());

@@ -29,6 +29,18 @@ inline std::shared_ptr<const Volume> constant(std::array<int, 3> dims, float val
   return v;
 }
 
+// One slice, 48 x 40, a hundredth of a step thick (spacing 0.05 across): values rise along x.
+inline std::shared_ptr<const Volume> slice() {
+  auto v = std::make_shared<Volume>();
+  v->dims = {48, 40, 1};
+  v->spacing = {1, 1, 0.05};
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 48; ++x) v->values.push_back(0.2f + 0.8f * x / 47 * (0.5f + 0.5f * (y % 8 < 4)));
+  return v;
+}
+// Opaque at the top of the range, so a slice shows.
+inline TransferFunction opaqueTf() { return TransferFunction({{0, 0, 0, 1, 0}, {1, 1, 0.3, 0, 1}}); }
+
 inline TransferFunction defaultTf() { return defaultScene().tf; }
 inline Camera defaultCamera() { return defaultScene().camera; }
 
