@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 
 #include "common/clock.h"
+#include "common/scene_warnings.h"
 #include "common/volume_summary.h"
 
 namespace tessera::master {
@@ -17,6 +18,7 @@ std::unique_ptr<Prepared> prepare(const MasterOptions& opt, const std::atomic<bo
   VolumeSummary summary;
   if (!out->scene.mesh) {
     summary = summarizeVolume(out->scene, cancel);  // one pass over a file, which also finds a missing range
+    for (const std::string& w : volumeWarnings(opt.scene, summary.shape)) spdlog::warn("{}", w);  // said once
     if (auto* raw = std::get_if<RawVolumeSpec>(&out->scene.volume)) {
       if (!raw->has_range) raw->has_range = true, raw->range = summary.shape.mapped_range;
       out->volume_range = raw->range;

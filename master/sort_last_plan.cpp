@@ -10,10 +10,7 @@
 namespace tessera::master {
 
 SortLastPlan::SortLastPlan(VolumeSummary volume, const TransferFunction& tf, bool balance, bool binary_swap)
-    : volume_(std::move(volume)), tf_(tf), balance_(balance), binary_swap_(binary_swap) {
-  // Said once, by the master: a range that misses the data makes every frame empty or uniform.
-  if (std::string why = rangeProblem(volume_.shape); !why.empty()) spdlog::warn("volume: {}", why);
-}
+    : volume_(std::move(volume)), tf_(tf), balance_(balance), binary_swap_(binary_swap) {}
 
 // Bricks are sticky: a renderer keeps its bricks (and the voxels it loaded for them) for
 // the whole run. A renderer that joins gets a new split for everyone (balance needs it);

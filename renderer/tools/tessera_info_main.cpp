@@ -16,6 +16,8 @@
 #include "common/io/image_io.h"
 #include "common/io/volume_files.h"
 #include "common/scene.h"
+#include "common/scene_warnings.h"
+#include "common/value_histogram.h"
 #include "common/volume_summary.h"
 #include "renderer/tools/tool_main.h"
 
@@ -33,11 +35,6 @@ Scene volumeScene(const std::string& path) {
                     path);
 }
 
-struct Histogram {
-  double lo = 0, hi = 0;          // in the file's units
-  std::vector<uint64_t> counts;   // equal-width bins over [lo, hi]; the last includes hi
-};
-
 // A volume read front to back in slabs of whole planes (about 64 MiB of floats each): the
 // tool holds one slab, never the volume, which may be bigger than this machine's memory.
 template <class F>
@@ -48,17 +45,17 @@ void forEachSlab(const Scene& scene, F&& f) {
   for (int z = 0; z < n[2]; z += depth) f(reader.read(VoxelBox{{0, 0, z}, {n[0], n[1], std::min(n[2], z + depth)}}));
 }
 
-// Equal-width bins over the data's values `data` in file units. `scene` maps a fixed range
-// (a raw file's: the data's own) to 0..1, so each value is found again from its slab's.
-Histogram histogram(const Scene& scene, std::array<double, 2> data, int bins) {
-  Histogram h{data[0], data[1], std::vector<uint64_t>(bins, 0)};
-  const double width = (h.hi - h.lo) / bins;
+// Equal-width bins over the data's values `data` in file units, `bins` of them and a fine
+// 4096 for the suggested range, in one pass. `scene` maps a fixed range (a raw file's: the
+// data's own) to 0..1, so each value is found again from its slab's.
+std::array<ValueHistogram, 2> histograms(const Scene& scene, std::array<double, 2> data, int bins, bool integral) {
+  std::array<ValueHistogram, 2> h{ValueHistogram(data[0], data[1], bins, integral),
+                                  ValueHistogram(data[0], data[1], 4096, integral)};
   forEachSlab(scene, [&](const Volume& slab) {
     const double lo = slab.mapped_range[0], span = slab.mapped_range[1] - slab.mapped_range[0];
     for (float x : slab.values) {
       const double raw = lo + x * span;
-      const int b = width > 0 ? (int)std::floor((raw - h.lo) / width) : 0;
-      ++h.counts[std::clamp(b, 0, bins - 1)];
+      h[0].add(raw), h[1].add(raw);
     }
   });
   return h;
@@ -91,19 +88,18 @@ void printRendererMemory(const std::array<int, 3>& dims, bool shaded) {
   std::printf("%s renderers\n", line.c_str());
 }
 
-void printHistogram(const Histogram& h) {
+void printHistogram(const ValueHistogram& h) {
   const uint64_t peak = *std::max_element(h.counts.begin(), h.counts.end());
-  const double width = (h.hi - h.lo) / h.counts.size();
   std::printf("histogram (%zu bins; bars on a log scale):\n", h.counts.size());
   for (size_t b = 0; b < h.counts.size(); ++b) {
     const int bar = h.counts[b] ? (int)std::lround(40 * std::log1p((double)h.counts[b]) / std::log1p((double)peak)) : 0;
-    std::printf("  %12.6g .. %-12.6g %12llu %s\n", h.lo + b * width, h.lo + (b + 1) * width,
+    std::printf("  %12.6g .. %-12.6g %12llu %s\n", h.edge(b), h.edge(b + 1),
                 (unsigned long long)h.counts[b], std::string(bar, '#').c_str());
   }
 }
 
 // Bars on a log scale, 4 pixels a bin, on a dark background.
-void plotHistogram(const Histogram& h, const std::string& path) {
+void plotHistogram(const ValueHistogram& h, const std::string& path) {
   const int bar_w = 4, height = 200, width = bar_w * (int)h.counts.size();
   Image8 img(width, height);
   const double peak = std::log1p((double)*std::max_element(h.counts.begin(), h.counts.end()));
@@ -153,8 +149,14 @@ int run(int argc, char** argv) {
   std::printf("values: %.9g .. %.9g; mapped to the transfer function: %.9g .. %.9g%s\n", shape.data_range[0],
               shape.data_range[1], shape.mapped_range[0], shape.mapped_range[1],
               raw && !raw->has_range ? " (no range given: the data's own)" : "");
-  if (std::string why = rangeProblem(shape); !why.empty()) std::printf("warning: %s\n", why.c_str());
-  const Histogram h = histogram(unclipped, shape.data_range, bins);
+  if (scene.series.steps > 1)
+    std::printf("time steps: %d; the values, warnings and histogram here are step 0's, and so is the range every step "
+                "is mapped with unless the scene gives `range`\n",
+                scene.series.steps);
+  for (const std::string& w : volumeWarnings(scene, shape)) std::printf("warning: %s\n", w.c_str());
+  const bool integral = raw && raw->type != VoxelType::Float32 && raw->type != VoxelType::Float64;
+  const auto [h, fine] = histograms(unclipped, shape.data_range, bins, integral);
+  if (std::string advice = rangeSuggestion(scene, fine); !advice.empty()) std::printf("warning: %s\n", advice.c_str());
   printHistogram(h);
   if (!plot.empty()) {
     plotHistogram(h, plot);

@@ -20,6 +20,7 @@
 #include "common/cpu.h"
 #include "common/io/image_io.h"
 #include "common/scene.h"
+#include "common/scene_warnings.h"
 #include "common/volume_summary.h"
 #include "renderer/volume/backend.h"
 #include "renderer/tools/mesh_render_tool.h"
@@ -125,7 +126,7 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   if (scene.series.steps > 1) fixVolumeRange(fixed);
   const int step = a.step >= 0 ? a.step : scene.time.stepAt(a.frame, scene.series.steps);
   auto vol = std::make_shared<const Volume>(loadVolume(fixed, VoxelBox{{0, 0, 0}, volumeDims(scene)}, step));
-  if (std::string why = rangeProblem(*vol); !why.empty()) std::fprintf(stderr, "tessera-render: warning: %s\n", why.c_str());
+  for (const std::string& said : volumeWarnings(scene, *vol)) std::fprintf(stderr, "tessera-render: warning: %s\n", said.c_str());
   auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, scene.tf, scene.shading, scene.light);
   // Split once, outside the timed renders, as the farm's master does once per run (no tree:
   // the whole volume, and no classification of every voxel for it).

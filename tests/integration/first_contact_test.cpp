@@ -113,7 +113,8 @@ TEST(FirstContact, ARangeOutsideTheDataIsSaidWithTheDataValues) {
                                 (dir.path() / "ball.png").string(),
                             120);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("warning: range [5000, 6000] lies above every value (the data's values run 0 .. 1000)"),
+  EXPECT_NE(r.output.find("ball.yaml: volume.range: range [5000, 6000] lies above every value (the data's values "
+                          "run 0 .. 1000)"),
             std::string::npos)
       << r.output;
 }
@@ -293,7 +294,7 @@ TEST(FirstContact, TesseraInfoOnAGeneratorAConstantFileAndADeclaredRange) {
                             60);
   ASSERT_EQ(c.exit_code, 0) << c.output;
   EXPECT_NE(c.output.find("values: 7 .. 7;"), std::string::npos) << c.output;
-  EXPECT_NE(c.output.find("warning: every voxel has the value 7"), std::string::npos) << c.output;
+  EXPECT_NE(c.output.find("c.yaml: volume: every voxel has the value 7"), std::string::npos) << c.output;
   EXPECT_EQ(histogramCounts(c.output), (std::vector<unsigned long long>{64, 0})) << c.output;
 
   std::vector<uint8_t> k(8 * 8 * 8, 0);  // as in TesseraInfoReportsTheValuesAndTheirHistogramExactly

@@ -1,0 +1,60 @@
+// Warnings about a scene's volume (see scene_warnings.h).
+#include "common/scene_warnings.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "common/transfer_function.h"
+
+namespace tessera {
+
+namespace {
+
+// Opacity counts per L0 (1/256 of the box's largest side), so a volume a few L0 thick gathers
+// little of it on a ray straight across: a slice at the presets' 0.02 shows 2%.
+std::string thinProblem(const Scene& scene, const Volume& shape) {
+  const Vec3 h = shape.halfExtent();
+  const double half[3] = {h.x, h.y, h.z};
+  const int axis = (int)(std::min_element(half, half + 3) - half);
+  const double thickness = 2 * half[axis] / kL0;  // in L0
+  const double alpha = scene.tf.maxAlpha(0, 1);
+  const double across = 1 - std::pow(1 - std::min(alpha, 1.0), thickness);
+  if (thickness >= 8 || across >= 0.5) return "";
+  char b[400];
+  std::snprintf(b, sizeof b,
+                "volume: %d voxel%s thick along %c, %.3g/256 of the box's largest side: opacity counts per 1/256 of "
+                "that side, so a ray straight across gathers at most %.0f%% (the transfer function's highest opacity "
+                "is %g) and the image is faint; give transfer_function points more opacity (`a` up to 1)",
+                shape.dims[axis], shape.dims[axis] == 1 ? "" : "s", "xyz"[axis], thickness, 100 * across, alpha);
+  return b;
+}
+
+}  // namespace
+
+std::string rangeSuggestion(const Scene& scene, const ValueHistogram& fine) {
+  const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume);
+  if (!raw || raw->has_range) return "";
+  const auto advice = suggestedRange(fine);
+  if (!advice) return "";
+  char b[600];
+  std::snprintf(b, sizeof b,
+                "%s: volume: %s; with no `range` the transfer function spans the data's whole %g .. %g: "
+                "`range: [%g, %g]` (%.6g%% of the voxels) spends it on the rest (values outside clamp to its ends)",
+                scene.path.empty() ? "<default scene>" : scene.path.c_str(), advice->why.c_str(), fine.lo, fine.hi,
+                advice->range[0], advice->range[1], 100 * advice->inside);
+  return b;
+}
+
+std::vector<std::string> volumeWarnings(const Scene& scene, const Volume& shape) {
+  const std::string where = (scene.path.empty() ? std::string("<default scene>") : scene.path) + ": ";
+  std::vector<std::string> out;
+  if (std::string why = rangeProblem(shape); !why.empty()) {
+    const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume);
+    out.push_back(where + (raw && raw->has_range ? "volume.range: " : "volume: ") + why);
+  }
+  if (std::string why = thinProblem(scene, shape); !why.empty()) out.push_back(where + why);
+  return out;
+}
+
+}  // namespace tessera

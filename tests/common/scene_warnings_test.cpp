@@ -1,0 +1,81 @@
+// Warnings about a scene's volume: they name the scene and the key, and say what to do.
+#include "common/scene_warnings.h"
+
+#include <gtest/gtest.h>
+
+#include "common/transfer_function.h"
+#include "tests/common/raw_spec.h"
+
+namespace tessera {
+namespace {
+
+Volume shape(std::array<int, 3> dims, std::array<double, 3> spacing = {1, 1, 1}) {
+  Volume v;
+  v.dims = dims;
+  v.spacing = spacing;
+  v.data_range = v.mapped_range = {0, 1000};
+  return v;
+}
+
+// A raw file's scene (the file need not exist: nothing is read) with the default colour map.
+Scene sceneOf(bool has_range, std::array<double, 2> range = {0, 0}) {
+  Scene s = defaultScene();
+  s.path = "data/slice.yaml";
+  s.volume = test::rawSpec("a.raw", {32, 32, 32}, VoxelType::UInt16, {1, 1, 1}, has_range, range);
+  s.tf = transferFunctionPreset("cool-to-warm");
+  return s;
+}
+
+TEST(VolumeWarnings, ARangeThatMissesTheDataNamesTheSceneAndTheKey) {
+  const Scene s = sceneOf(true, {5000, 6000});
+  Volume v = shape({32, 32, 32});
+  v.mapped_range = {5000, 6000};
+  const auto w = volumeWarnings(s, v);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_EQ(w[0].rfind("data/slice.yaml: volume.range: range [5000, 6000] lies above every value", 0), 0u) << w[0];
+  // Without `range` in the scene, a constant volume is the volume's fault, not the key's.
+  Volume flat = shape({32, 32, 32});
+  flat.data_range = {7, 7};
+  flat.mapped_range = {7, 8};
+  const auto c = volumeWarnings(sceneOf(false), flat);
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c[0].rfind("data/slice.yaml: volume: every voxel has the value 7", 0), 0u) << c[0];
+}
+
+// One slice of 256 x 256 is 1/256 of the box thick: at the presets' opacity (0.02 per 1/256)
+// a ray straight across gathers 2%, which the user must hear about; an opaque transfer
+// function shows it, and a volume of 64 slices is no thin volume.
+TEST(VolumeWarnings, AVolumeTooThinForItsOpacityIsSaid) {
+  const Scene preset = sceneOf(false);
+  const auto w = volumeWarnings(preset, shape({256, 256, 1}));
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_EQ(w[0],
+            "data/slice.yaml: volume: 1 voxel thick along z, 1/256 of the box's largest side: opacity counts per 1/256 "
+            "of that side, so a ray straight across gathers at most 2% (the transfer function's highest opacity is "
+            "0.02) and the image is faint; give transfer_function points more opacity (`a` up to 1)");
+  // Along y, three voxels of spacing 0.5 in a 300-wide box.
+  const auto y = volumeWarnings(preset, shape({300, 3, 200}, {1, 0.5, 1}));
+  ASSERT_EQ(y.size(), 1u);
+  EXPECT_NE(y[0].find("3 voxels thick along y, 1.28/256"), std::string::npos) << y[0];
+  Scene opaque = sceneOf(false);
+  opaque.tf = TransferFunction({{0, 0, 0, 0, 0}, {1, 1, 1, 1, 0.9}});
+  EXPECT_TRUE(volumeWarnings(opaque, shape({256, 256, 1})).empty());
+  EXPECT_TRUE(volumeWarnings(preset, shape({256, 256, 64})).empty());
+}
+
+// tessera-info's advice names what lies apart and the `range` to give, only when the scene
+// gives none.
+TEST(VolumeWarnings, ARangeIsSuggestedForCtPaddingUnlessTheSceneGivesOne) {
+  ValueHistogram h(-3024, 1500, 4096, true);  // bins of 1.1 values: the first may hold -3023 too
+  h.counts[0] = 200000;
+  for (int v = -1024; v <= 1500; ++v)
+    for (int k = 0; k < 300; ++k) h.add(v);
+  EXPECT_EQ(rangeSuggestion(sceneOf(false), h),
+            "data/slice.yaml: volume: 21% of the voxels lie apart below the rest, at -3024 .. -3023; with no `range` the "
+            "transfer function spans the data's whole -3024 .. 1500: `range: [-1024, 1500]` (79.1123% of the voxels) "
+            "spends it on the rest (values outside clamp to its ends)");
+  EXPECT_EQ(rangeSuggestion(sceneOf(true, {-1000, 1000}), h), "");
+}
+
+}  // namespace
+}  // namespace tessera
