@@ -198,6 +198,7 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
     if (std::string m = imageSizeProblem(s.width, s.height); !m.empty()) p.fail("image", m);
   }
   // Left out: fitted to the volume's box (a mesh is fitted to the unit box) and the image.
+  s.camera_fitted = !root["camera"];
   s.camera = root["camera"] ? p.camera(root["camera"])
                             : fittedCamera(sceneHalfExtent(s), (double)s.width / s.height);
   if (root["quality"]) s.quality = p.quality(root["quality"]);

@@ -76,6 +76,7 @@ struct Scene {
   Antialiasing antialiasing;
   TransferFunction tf;
   Camera camera;
+  bool camera_fitted = false;  // no `camera` key: fitted to the box and the image (fittedCamera)
   int width = 512, height = 512;
   Quality quality;
   Orbit orbit;

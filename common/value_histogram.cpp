@@ -18,13 +18,18 @@ void ValueHistogram::add(double v) {
   ++counts[std::clamp(b, 0LL, bins - 1)];
 }
 
+bool storesIntegers(const RawVolumeSpec& s) {
+  return s.type != VoxelType::Float32 && s.type != VoxelType::Float64 && s.slope == std::round(s.slope) &&
+         s.inter == std::round(s.inter);
+}
+
 uint64_t ValueHistogram::total() const { return std::accumulate(counts.begin(), counts.end(), uint64_t{0}); }
 
 namespace {
 
 std::string number(double x) {
   char b[32];
-  std::snprintf(b, sizeof b, "%g", x);
+  std::snprintf(b, sizeof b, "%.9g", x);
   return b;
 }
 

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "common/volume.h"
+
 namespace tessera {
 
 struct ValueHistogram {
@@ -23,6 +25,10 @@ struct ValueHistogram {
   uint64_t total() const;
   double edge(size_t bin) const { return lo + (hi - lo) * (double)bin / counts.size(); }
 };
+
+// Whether a file's values are integers: an integer type scaled by an integer slope and
+// intercept (a NIfTI scl_slope of 0.01 makes an int16 file's values decimals).
+bool storesIntegers(const RawVolumeSpec& s);
 
 struct RangeAdvice {
   std::array<double, 2> range;  // what `range:` could say

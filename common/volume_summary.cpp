@@ -47,9 +47,10 @@ VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cance
   };
   VolumeSummary s;
   const std::array<int, 3> n = volumeDims(scene);
-  // Bricks are cut across the longest axis first, so it needs the blocks; a thin axis (a few
-  // slices) must not shrink every block to a voxel (8192 x 8192 x 4: 2 GiB of bounds).
-  while (s.edge > 1 && std::max({n[0], n[1], n[2]}) < 8 * s.edge) s.edge /= 2;
+  // At least 8^3 blocks to split into bricks (a small volume gets smaller blocks), but a thin
+  // axis (a few slices) must not shrink every block to a voxel (8192 x 8192 x 4: 2 GiB).
+  auto blocks = [&](int e) { return (long long)((n[0] + e - 1) / e) * ((n[1] + e - 1) / e) * ((n[2] + e - 1) / e); };
+  while (s.edge > 1 && blocks(s.edge) < 512) s.edge /= 2;
   for (int a = 0; a < 3; ++a) s.blocks[a] = (n[a] + s.edge - 1) / s.edge;
   const size_t count = (size_t)s.blocks[0] * s.blocks[1] * s.blocks[2];
   s.lo.assign(count, INFINITY);

@@ -23,8 +23,8 @@ struct VolumeSummary {
   std::vector<float> lo, hi;           // normalised value range of each block's voxels, x fastest
 };
 
-// Blocks of 8 voxels, or fewer for a small volume so that its longest axis has at least 8
-// blocks (bricks are cut on block faces, longest axis first). Throws as loadVolume does.
+// Blocks of 8 voxels, or fewer for a small volume so that there are at least 8^3 blocks
+// (bricks are cut on block faces). Throws as loadVolume does.
 // `cancel`, when raised, ends the reading at the next slab with std::runtime_error.
 VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cancel = nullptr);
 // 1 for every block that may be visible under tf (some value of its range has opacity).

@@ -154,7 +154,7 @@ int run(int argc, char** argv) {
                 "is mapped with unless the scene gives `range`\n",
                 scene.series.steps);
   for (const std::string& w : volumeWarnings(scene, shape)) std::printf("warning: %s\n", w.c_str());
-  const bool integral = raw && raw->type != VoxelType::Float32 && raw->type != VoxelType::Float64;
+  const bool integral = raw && storesIntegers(*raw);
   const auto [h, fine] = histograms(unclipped, shape.data_range, bins, integral);
   if (std::string advice = rangeSuggestion(scene, fine); !advice.empty()) std::printf("warning: %s\n", advice.c_str());
   printHistogram(h);

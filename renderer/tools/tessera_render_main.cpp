@@ -199,10 +199,12 @@ int run(int argc, char** argv) {
     return 1;
   }
 
-  const Scene scene = a.scene_path.empty() ? defaultScene() : loadScene(a.scene_path);
+  Scene scene = a.scene_path.empty() ? defaultScene() : loadScene(a.scene_path);
   const std::optional<std::array<double, 3>> bg = backgroundColour(a.background);
   int w = scene.width, h = scene.height;
   if (!a.size.empty()) parseSize(a.size, w, h);
+  // A camera fitted to the scene's image is fitted again to the size asked for (a tall one).
+  if (scene.camera_fitted) scene.camera = fittedCamera(sceneHalfExtent(scene), (double)w / h);
   if (!scene.mesh) return renderVolume(scene, a, w, h, bg);
   renderer::MeshToolOptions mo;
   mo.out = a.out;

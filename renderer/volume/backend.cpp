@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/cpu.h"
+#include "common/scene.h"  // kMinStep
 #include "renderer/volume/gl_volume.h"
 #include "renderer/volume/raycaster.h"
 
@@ -44,7 +45,8 @@ void checkRenderArguments(const char* who, const Volume& v, int width, int heigh
 Quality samplingQuality(const Quality& q, const Volume& v) {
   const Vec3 h = v.halfExtent();
   Quality sampled = q;
-  sampled.step = std::min(q.step, std::min({h.x, h.y, h.z}));  // half extents: half the sides
+  // Half extents: half the sides. Never below the scene's least step (2^20 samples a ray).
+  sampled.step = std::min(q.step, std::max(kMinStep, std::min({h.x, h.y, h.z})));
   return sampled;
 }
 

@@ -122,6 +122,8 @@ TEST(Scene, AVolumeAloneGetsTheDefaultColourMapAndAFittedCamera) {
   EXPECT_NEAR(length(s.camera.eye), 1.05 * radius / std::sin(15 * std::numbers::pi / 180), 1e-12);
   EXPECT_GT(s.camera.eye.z, 0);
   EXPECT_GT(s.camera.eye.y, 0);
+  EXPECT_TRUE(s.camera_fitted) << "a tool that changes the image size fits it again";
+  EXPECT_FALSE(parseScene(std::string(kGood), ".", "g.yaml").camera_fitted);
 }
 
 // Every corner of the box must land inside the image, a portrait one included (the fov is

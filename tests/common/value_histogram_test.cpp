@@ -28,6 +28,21 @@ TEST(ValueHistogram, AnIntegerOnABinsLowerEdgeIsInThatBin) {
   EXPECT_EQ(sum, 256u);
 }
 
+// A NIfTI scale of 0.01 makes an int16 file's values decimals: they must not be rounded.
+TEST(ValueHistogram, ScaledIntegersAreIntegersOnlyWithAnIntegerScale) {
+  RawVolumeSpec s;
+  s.type = VoxelType::Int16;
+  EXPECT_TRUE(storesIntegers(s));
+  s.slope = 2, s.inter = -1024;
+  EXPECT_TRUE(storesIntegers(s));
+  s.slope = 0.01;
+  EXPECT_FALSE(storesIntegers(s));
+  s.slope = 1, s.inter = 0.5;
+  EXPECT_FALSE(storesIntegers(s));
+  s.inter = 0, s.type = VoxelType::Float32;
+  EXPECT_FALSE(storesIntegers(s));
+}
+
 ValueHistogram fine(double lo, double hi) { return ValueHistogram(lo, hi, 4096, true); }
 
 void addRun(ValueHistogram& h, int from, int to, uint64_t each) {

@@ -37,7 +37,7 @@ TEST(VolumeSummary, AGeneratedVolumeSummaryEqualsTheWholeVolumesBlocks) {
   scene.volume = GeneratorSpec{"noise-cloud", 70, 2, {1, 1, 1}};
   const VolumeSummary s = summarizeVolume(scene);
   const Volume whole = loadVolume(scene);
-  EXPECT_EQ(s.edge, 8);  // 70 >= 64: every axis has at least 8 blocks
+  EXPECT_EQ(s.edge, 8);  // 9^3 blocks >= 8^3
   EXPECT_EQ(s.blocks, (std::array<int, 3>{9, 9, 9}));
   EXPECT_TRUE(s.shape.values.empty()) << "the summary holds no voxels";
   EXPECT_EQ(s.shape.data_range, whole.data_range);
@@ -53,7 +53,7 @@ TEST(VolumeSummary, ARawFileWithoutARangeIsSummarisedOverItsOwnValues) {
   scene.volume = test::rawSpec(t.write("s.raw", data.data(), data.size() * 2), n, VoxelType::UInt16, {1, 1, 1}, false, {0, 0});
   const VolumeSummary s = summarizeVolume(scene);
   const Volume whole = loadVolume(scene);
-  EXPECT_EQ(s.edge, 2);  // 16 <= 21 < 32: the longest axis has 8 or more blocks of 2
+  EXPECT_EQ(s.edge, 2);  // 11 x 9 x 6 blocks of 2: 594 >= 512 (of 4: 90)
   EXPECT_EQ(s.shape.data_range, whole.data_range);
   EXPECT_EQ(s.shape.mapped_range, whole.mapped_range);
   expectBlocksOfWhole(s, whole);

@@ -104,6 +104,34 @@ TEST(FirstContact, OnTheFarmEachRendererReadsOnlyItsBricksOfAFileWithoutRange) {
   EXPECT_EQ(renderers, 2) << r.output;
 }
 
+// The camera fitted when the scene has none fits the image asked for: a tall one
+// (`--image 40x200` on a scene of the default square image) shows the whole box, an opaque
+// one here, with transparent pixels down both sides.
+TEST(FirstContact, TheFittedCameraFitsATallImageToo) {
+  FarmDir dir("tall");
+  std::vector<uint16_t> v(8 * 8 * 8);
+  for (size_t i = 0; i < v.size(); ++i) v[i] = (uint16_t)(500 + 60 * (i % 8));
+  std::ofstream(dir.path() / "box.raw", std::ios::binary)
+      .write(reinterpret_cast<const char*>(v.data()), (std::streamsize)(v.size() * 2));
+  const auto scene = writeSceneFile(dir, "box.yaml",
+                                    "volume: {file: box.raw, dims: [8, 8, 8], type: uint16}\n"
+                                    "transfer_function: [[0, 1, 1, 1, 1], [1, 1, 1, 1, 1]]\n");
+  const std::string pam = (dir.path() / "box.pam").string();
+  const auto r = runCommand(bin("tessera-render") + " " + scene.string() + " --image 40x200 -o " +
+                                (dir.path() / "box.png").string() + " --premultiplied " + pam,
+                            120);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Image8 img = readPam(pam);
+  ASSERT_EQ(img.width, 40);
+  int lo_x = 40, hi_x = -1;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (img.at(x, y)[3] > 0) lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x);
+  EXPECT_GT(lo_x, 0) << "the box reaches the left edge: cut";
+  EXPECT_LT(hi_x, 39) << "the box reaches the right edge: cut";
+  EXPECT_GT(hi_x - lo_x, 20) << "the box fills most of the width";
+}
+
 TEST(FirstContact, ARangeOutsideTheDataIsSaidWithTheDataValues) {
   FarmDir dir("bad-range");
   writeBall(dir);

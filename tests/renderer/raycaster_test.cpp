@@ -198,6 +198,28 @@ TEST(ThinVolume, ASliceIsSampledAcrossAndMatchesTheReference) {
   EXPECT_LE(compare(out, whole).max_abs, 1.0 / 255);
 }
 
+// The step of a thin volume: half its thinnest side, never below the scene's least step;
+// a window takes it from the whole volume's box; a volume thicker than two steps keeps it.
+TEST(ThinVolume, TheStepIsHalfTheThinnestSideAndNoLessThanTheLeastStep) {
+  Volume v;
+  v.dims = {64, 64, 1};  // 4 steps thick: unchanged
+  EXPECT_DOUBLE_EQ(samplingQuality(namedQuality("default"), v).step, kL0);
+  EXPECT_DOUBLE_EQ(samplingQuality(namedQuality("fast"), v).step, 0.5 / 64);
+  v.dims = {512, 512, 1};
+  EXPECT_DOUBLE_EQ(samplingQuality(namedQuality("default"), v).step, 0.5 / 512);
+  EXPECT_DOUBLE_EQ(samplingQuality(namedQuality("reference"), v).step, kL0 / 16);
+  v.dims = {64, 8, 1};
+  v.whole_dims = {512, 512, 1};  // a window of the 512 x 512 slice
+  EXPECT_DOUBLE_EQ(samplingQuality(namedQuality("default"), v).step, 0.5 / 512);
+  Volume sheet;
+  sheet.dims = {8192, 8192, 1};
+  sheet.spacing = {1, 1, 0.01};
+  EXPECT_DOUBLE_EQ(samplingQuality(namedQuality("default"), sheet).step, kMinStep);
+  Volume cube;
+  cube.dims = {256, 256, 256};
+  EXPECT_DOUBLE_EQ(samplingQuality(namedQuality("fast"), cube).step, 2 * kL0);
+}
+
 TEST(Threads, ResultIndependentOfThreadCount) {
   auto vol = generated("noise-cloud", 32);
   const Raycaster rc(vol, defaultTf());
