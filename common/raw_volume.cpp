@@ -1,7 +1,8 @@
 // Volume samples in a file (x fastest; any of the voxel types, either byte order, after an
 // offset, plain or gzip-compressed): the whole volume or a window of it, read with
 // positioned reads (or a forward stream through compressed data) so a renderer's memory
-// follows its bricks, not the file. Raw files, NIfTI and NRRD all end here.
+// follows its bricks, not the file. Raw files, NIfTI, NRRD and DICOM series (one file a
+// slice) all end here.
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -22,6 +23,7 @@
 
 #include <zlib.h>
 
+#include "common/io/volume_files.h"  // decodeDicomSlice
 #include "common/lanes.h"
 #include "common/volume.h"
 
@@ -53,12 +55,30 @@ double stored(const unsigned char* p, bool big_endian) {
   return (double)v;
 }
 
+struct Scaling {
+  double slope = 1, inter = 0;
+  bool big_endian = false;
+};
+
 template <class T>
-void convert(const unsigned char* p, size_t count, const RawVolumeSpec& s, float* out) {
+void convert(const unsigned char* p, size_t count, const Scaling& s, float* out) {
   const bool scaled = s.slope != 1 || s.inter != 0;
   for (size_t i = 0; i < count; ++i) {
     const double v = stored<T>(p + i * sizeof(T), s.big_endian);
     out[i] = (float)(scaled ? s.slope * v + s.inter : v);
+  }
+}
+
+void convertAll(VoxelType type, const unsigned char* p, size_t count, const Scaling& s, float* out) {
+  switch (type) {
+    case VoxelType::UInt8: return convert<uint8_t>(p, count, s, out);
+    case VoxelType::Int8: return convert<int8_t>(p, count, s, out);
+    case VoxelType::UInt16: return convert<uint16_t>(p, count, s, out);
+    case VoxelType::Int16: return convert<int16_t>(p, count, s, out);
+    case VoxelType::UInt32: return convert<uint32_t>(p, count, s, out);
+    case VoxelType::Int32: return convert<int32_t>(p, count, s, out);
+    case VoxelType::Float32: return convert<float>(p, count, s, out);
+    case VoxelType::Float64: return convert<double>(p, count, s, out);
   }
 }
 
@@ -74,6 +94,11 @@ class RawFile {
     if (spec.has_range && !(spec.range[0] < spec.range[1]))
       fail(f, "range must satisfy min < max, got [" + std::to_string(spec.range[0]) + ", " +
                   std::to_string(spec.range[1]) + "]");
+    if (spec.format == VolumeFormat::Dicom) {  // slice by slice, each file opened when read
+      if (spec.slices.size() != (size_t)spec.dims[2])
+        fail(f, std::to_string(spec.slices.size()) + " slices for dims[2] = " + std::to_string(spec.dims[2]));
+      return;
+    }
     if (std::string p = notRegularFile(spec.samples()); !p.empty()) fail(spec.samples(), p);
     // A compressed file's size says nothing; a short stream is found when it is read.
     const uintmax_t expected = (uintmax_t)spec.dims[0] * spec.dims[1] * spec.dims[2] * ts_ + spec.offset;
@@ -142,6 +167,7 @@ class RawFile {
 
  private:
   void readPiece(size_t first, size_t count, float* out) {
+    if (!spec_.slices.empty()) return readSlices(first, count, out);
     const uint64_t at = spec_.offset + first * ts_;
     // Native float32 without scaling (what simulations write) is read straight into place:
     // no copy, no conversion pass (a time step's preparation is on the renderers' cores).
@@ -152,18 +178,41 @@ class RawFile {
     else readPlain(at, dst, count * ts_);
     samples_read += count * ts_;
     if (direct) return checkFinite(first, count, out);
-    const unsigned char* p = buf_.data();
-    switch (spec_.type) {
-      case VoxelType::UInt8: convert<uint8_t>(p, count, spec_, out); break;
-      case VoxelType::Int8: convert<int8_t>(p, count, spec_, out); break;
-      case VoxelType::UInt16: convert<uint16_t>(p, count, spec_, out); break;
-      case VoxelType::Int16: convert<int16_t>(p, count, spec_, out); break;
-      case VoxelType::UInt32: convert<uint32_t>(p, count, spec_, out); break;
-      case VoxelType::Int32: convert<int32_t>(p, count, spec_, out); break;
-      case VoxelType::Float32: convert<float>(p, count, spec_, out); break;
-      case VoxelType::Float64: convert<double>(p, count, spec_, out); break;
-    }
+    convertAll(spec_.type, buf_.data(), count, Scaling{spec_.slope, spec_.inter, spec_.big_endian}, out);
     checkFinite(first, count, out);
+  }
+
+  // A DICOM series: a piece may span slices, each its own file (the last one read stays
+  // open: windows are read slice by slice) or GDCM's decoding of it (the last one kept).
+  void readSlices(size_t first, size_t count, float* out) {
+    const size_t per_slice = (size_t)spec_.dims[0] * spec_.dims[1];
+    while (count > 0) {
+      const size_t z = first / per_slice, in = first % per_slice, n = std::min(count, per_slice - in);
+      const DicomSlice& s = spec_.slices[z];
+      buf_.resize(n * ts_);
+      if (s.encoded) {
+        if (decoded_z_ != z) decoded_z_ = SIZE_MAX, decoded_ = decodeDicomSlice(s.file, per_slice * ts_), decoded_z_ = z;
+        std::memcpy(buf_.data(), decoded_.data() + in * ts_, n * ts_);
+      } else {
+        if (slice_z_ != z) {
+          if (fd_ >= 0) ::close(fd_);
+          slice_z_ = SIZE_MAX;
+          fd_ = ::open(s.file.c_str(), O_RDONLY | O_CLOEXEC);
+          if (fd_ < 0) fail(s.file, std::string("cannot open: ") + std::strerror(errno));
+          slice_z_ = z;
+        }
+        for (size_t done = 0; done < n * ts_;) {
+          const ssize_t r = ::pread(fd_, buf_.data() + done, n * ts_ - done, (off_t)(s.offset + in * ts_ + done));
+          if (r < 0 && errno == EINTR) continue;
+          if (r <= 0) fail(s.file, r < 0 ? std::string("read failed: ") + std::strerror(errno) : "read failed: file shrank");
+          done += (size_t)r;
+        }
+      }
+      convertAll(spec_.type, buf_.data(), n, Scaling{s.slope, s.inter, false}, out);
+      samples_read += n * ts_;
+      checkFinite(first, n, out);
+      first += n, count -= n, out += n;
+    }
   }
 
   // One vector test over the piece; the voxel is looked for only when there is one.
@@ -289,6 +338,8 @@ class RawFile {
   uint64_t chunk_lo_ = 0, chunk_hi_ = 0;  // file bytes in this thread's chunk, when this filled it last
   gzFile gz_ = nullptr;
   std::vector<unsigned char> buf_;
+  size_t slice_z_ = SIZE_MAX, decoded_z_ = SIZE_MAX;  // a DICOM series: the slice fd_ holds, and decoded_
+  std::vector<unsigned char> decoded_;
 };
 
 // The file stays open between windows; with no declared range the whole file's min..max is

@@ -3,11 +3,24 @@
 #include <fstream>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
+#include "common/io/volume_files.h"
 #include "common/scene.h"
 
 namespace tessera {
 
 Scene loadScene(const std::string& path) {
+  // A volume file whose header says what it holds (NIfTI, NRRD, DICOM, a DICOM folder) is the
+  // scene `volume: {file: F}`: every default, from the data.
+  if (volumeFormatOf(path) != VolumeFormat::Raw) {
+    std::filesystem::path abs = std::filesystem::absolute(path).lexically_normal();
+    if (!abs.has_filename()) abs = abs.parent_path();  // a folder given as "ct/"
+    Scene s = parseScene("volume: {file: " + nlohmann::json(abs.filename().string()).dump() + "}\n",
+                         abs.parent_path().string(), path);
+    s.path = path;
+    return s;
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(path + ": cannot open scene file");
   std::stringstream ss;

@@ -1,5 +1,6 @@
 // The scene's `volume:` (a generator, a file, or a series of files) and `time:` keys.
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -118,9 +119,13 @@ TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
 RawVolumeSpec Parser::volumeFile(const YAML::Node& n, const std::string& file, TimeSeries& series) const {
   const std::string key = series.files.empty() ? "volume.file" : "volume.series";
   if (volumeFormatOf(file) == VolumeFormat::Raw) return rawFile(n, file);
+  const bool folder = volumeFormatOf(file) == VolumeFormat::Dicom && std::filesystem::is_directory(file);
+  if (folder && (n["dims"] || n["type"]))
+    fail(key, file + " is a directory: read as a DICOM series, whose headers give dims and type (leave them out), "
+                     "or name the raw file");
   for (const char* k : {"dims", "type"})
     if (n[k]) fail(std::string("volume.") + k, std::string("comes from the header of ") + file + "; leave it out");
-  if (std::string m = fileProblem(file); !m.empty()) fail(key, m);
+  if (std::string m = folder ? "" : fileProblem(file); !m.empty()) fail(key, m);
   RawVolumeSpec s;
   int steps = 1;
   try {

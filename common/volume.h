@@ -46,7 +46,17 @@ std::optional<VoxelType> voxelTypeFromName(const std::string& name);
 // Where a volume's samples are. A raw file has no header: the scene gives dims and type.
 // NIfTI and NRRD files give them (and spacing, byte order, offset, compression) in their
 // header, read by the scene parser (common/io/volume_files.h); the reader is the same.
-enum class VolumeFormat { Raw, Nifti, Nrrd };
+enum class VolumeFormat { Raw, Nifti, Nrrd, Dicom };
+
+// One slice of a DICOM series: its file, where its samples start in it (uncompressed), or
+// that GDCM must decode it (a compressed transfer syntax), and its scaling (a slice's own:
+// PET and MR series may scale each slice differently).
+struct DicomSlice {
+  std::string file;
+  uint64_t offset = 0;
+  bool encoded = false;
+  double slope = 1, inter = 0;
+};
 
 struct RawVolumeSpec {
   std::string file;  // absolute or relative to the scene's folder (resolved by the parser)
@@ -63,6 +73,7 @@ struct RawVolumeSpec {
   uint64_t gzip_start = 0;              // file byte where the gzip stream starts (after an attached header)
   double slope = 1, inter = 0;          // value = slope * stored + inter (NIfTI scl_slope, scl_inter)
   bool read_once = false;               // a series' step: what is not in the page cache bypasses it
+  std::vector<DicomSlice> slices;       // a DICOM series: slice k's file (k along the slices' normal)
   const std::string& samples() const { return data_file.empty() ? file : data_file; }
 };
 

@@ -2,25 +2,40 @@
 #include "common/io/volume_files.h"
 
 #include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 
 namespace tessera {
 
 RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps);  // nifti_header.cpp
 RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps);   // nrrd_header.cpp
+RawVolumeSpec readDicomSeries(const std::string& path);                   // dicom_series.cpp
 
 VolumeFormat volumeFormatOf(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return VolumeFormat::Dicom;
   std::string p = path;
   std::transform(p.begin(), p.end(), p.begin(), [](unsigned char c) { return (char)std::tolower(c); });
   auto ends = [&](const char* e) { const std::string s(e); return p.size() >= s.size() && p.compare(p.size() - s.size(), s.size(), s) == 0; };
   if (ends(".nii") || ends(".nii.gz") || ends(".hdr") || ends(".img") || ends(".hdr.gz") || ends(".img.gz"))
     return VolumeFormat::Nifti;
   if (ends(".nrrd") || ends(".nhdr")) return VolumeFormat::Nrrd;
+  if (ends(".dcm")) return VolumeFormat::Dicom;
+  // DICOM files often have no extension (IM0001): their preamble's "DICM" at byte 128 says it.
+  char magic[132] = {};
+  if (!std::filesystem::is_regular_file(path, ec)) return VolumeFormat::Raw;  // a FIFO would block
+  std::ifstream in(path, std::ios::binary);
+  if (in.read(magic, sizeof magic) && std::memcmp(magic + 128, "DICM", 4) == 0) return VolumeFormat::Dicom;
   return VolumeFormat::Raw;
 }
 
 RawVolumeSpec readVolumeHeader(const std::string& path, int* time_steps) {
-  return volumeFormatOf(path) == VolumeFormat::Nifti ? readNiftiHeader(path, time_steps)
-                                                     : readNrrdHeader(path, time_steps);
+  switch (volumeFormatOf(path)) {
+    case VolumeFormat::Nifti: return readNiftiHeader(path, time_steps);
+    case VolumeFormat::Dicom: return readDicomSeries(path);  // one step
+    default: return readNrrdHeader(path, time_steps);
+  }
 }
 
 }  // namespace tessera

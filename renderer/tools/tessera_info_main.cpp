@@ -2,11 +2,9 @@
 // the data's value range and a histogram (text, and a PNG with --plot), what a renderer
 // needs in memory, and the scene with every default filled in.
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -14,7 +12,6 @@
 #include "common/bricks.h"
 #include "common/image.h"
 #include "common/io/image_io.h"
-#include "common/io/volume_files.h"
 #include "common/scene.h"
 #include "common/scene_warnings.h"
 #include "common/value_histogram.h"
@@ -24,16 +21,6 @@
 namespace {
 
 using namespace tessera;
-
-// Files whose header says what they hold (every name the scene's `volume.file` reads as
-// NIfTI or NRRD): a scene of one line is all they need.
-bool isVolumeFile(const std::string& path) { return volumeFormatOf(path) != VolumeFormat::Raw; }
-
-Scene volumeScene(const std::string& path) {
-  const std::filesystem::path abs = std::filesystem::absolute(path);
-  return parseScene("volume: {file: " + nlohmann::json(abs.filename().string()).dump() + "}\n", abs.parent_path().string(),
-                    path);
-}
 
 // A volume read front to back in slabs of whole planes (about 64 MiB of floats each): the
 // tool holds one slab, never the volume, which may be bigger than this machine's memory.
@@ -120,11 +107,12 @@ int run(int argc, char** argv) {
   std::string scene_path, plot;
   int bins = 16;
   app.add_option("scene", scene_path,
-                 "scene file, or a NIfTI/NRRD volume file (read as the scene 'volume: {file: F}'); default: the built-in scene");
+                 "scene file, or a NIfTI/NRRD volume file or a DICOM series' folder (read as the scene 'volume: {file: F}'); "
+                 "default: the built-in scene");
   app.add_option("--bins", bins, "histogram bins")->check(CLI::Range(1, 4096))->capture_default_str();
   app.add_option("--plot", plot, "also write the histogram as a PNG");
   CLI11_PARSE(app, argc, argv);
-  Scene scene = scene_path.empty() ? defaultScene() : isVolumeFile(scene_path) ? volumeScene(scene_path) : loadScene(scene_path);
+  Scene scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
   std::printf("# scene %s, every default filled in\n%s\n", scene_path.empty() ? "(built-in)" : scene_path.c_str(),
               sceneYaml(scene).c_str());
   if (!scene.has_volume) return 0;

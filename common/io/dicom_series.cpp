@@ -1,0 +1,231 @@
+// A DICOM series as one volume, through GDCM (see volume_files.h): the slices of a folder
+// (or of the series one file in it belongs to), sorted along their normal.
+#include <gdcmImageReader.h>
+#include <gdcmReader.h>
+#include <gdcmScanner.h>
+#include <gdcmTrace.h>
+#include <gdcmTransferSyntax.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/io/volume_files.h"
+
+namespace tessera {
+namespace {
+namespace dicom {  // a unity build joins this file's helpers with others' (fail, ...)
+
+namespace fs = std::filesystem;
+
+const gdcm::Tag kSeries(0x0020, 0x000e), kDescription(0x0008, 0x103e), kPosition(0x0020, 0x0032),
+    kOrientation(0x0020, 0x0037), kRows(0x0028, 0x0010), kColumns(0x0028, 0x0011), kBits(0x0028, 0x0100),
+    kSigned(0x0028, 0x0103), kSamples(0x0028, 0x0002), kSlope(0x0028, 0x1053), kIntercept(0x0028, 0x1052),
+    kPixelSpacing(0x0028, 0x0030), kFrames(0x0028, 0x0008), kThickness(0x0018, 0x0050), kPixelData(0x7fe0, 0x0010);
+
+// A multi-valued DICOM string ("0.5\0.5"): its numbers, or none when one does not parse.
+std::vector<double> numbers(const char* text) {
+  std::vector<double> out;
+  if (!text) return out;
+  for (const char* p = text; *p;) {
+    char* end = nullptr;
+    const double x = std::strtod(p, &end);
+    if (end == p || !std::isfinite(x)) return {};
+    out.push_back(x);
+    p = end;
+    while (*p == ' ') ++p;
+    if (*p == '\\') ++p;
+    else if (*p) return {};
+  }
+  return out;
+}
+
+std::string trimmed(const char* text) {
+  std::string s = text ? text : "";
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\0')) s.pop_back();
+  return s;
+}
+
+struct Slice {
+  std::string file;
+  double along = 0;  // position along the normal, mm
+  double slope = 1, inter = 0;
+};
+
+[[noreturn]] void fail(const std::string& where, const std::string& what) { throw std::runtime_error(where + ": " + what); }
+
+// Where slice `file`'s samples start, or 0 when GDCM must decode them: anything but
+// uncompressed little-endian (an encapsulated, deflated or big-endian transfer syntax).
+uint64_t samplesOffset(const std::string& file, uint64_t bytes) {
+  gdcm::Reader r;
+  r.SetFileName(file.c_str());
+  if (!r.ReadUpToTag(kPixelData, {})) fail(file, "GDCM cannot read its header");
+  const gdcm::TransferSyntax ts = r.GetFile().GetHeader().GetDataSetTransferSyntax();
+  const bool implicit = ts == gdcm::TransferSyntax::ImplicitVRLittleEndian;
+  if (!implicit && ts != gdcm::TransferSyntax::ExplicitVRLittleEndian) return 0;
+  // GDCM reads the pixel data element too and stops after it: its value ends there.
+  const gdcm::DataSet& ds = r.GetFile().GetDataSet();
+  if (!ds.FindDataElement(kPixelData)) fail(file, "no pixel data (7FE0,0010)");
+  const gdcm::VL length = ds.GetDataElement(kPixelData).GetVL();
+  if (length.IsUndefined()) return 0;  // encapsulated after all: decode
+  if (length < bytes)
+    fail(file, "pixel data holds " + std::to_string((uint32_t)length) + " bytes but rows x columns x bits need " +
+                   std::to_string(bytes));
+  const uint64_t end = r.GetStreamCurrentPosition(), header = implicit ? 8 : 12;
+  if (end < (uint64_t)length + header) fail(file, "cannot locate its pixel data");
+  const uint64_t at = end - (uint64_t)length;
+  // Checked, as the offset is found from where GDCM stopped: the element's tag before it.
+  unsigned char h[4] = {};
+  std::ifstream in(file, std::ios::binary);
+  if (!in.seekg((std::streamoff)(at - header)) || !in.read(reinterpret_cast<char*>(h), sizeof h) ||
+      !(h[0] == 0xe0 && h[1] == 0x7f && h[2] == 0x10 && h[3] == 0x00))
+    fail(file, "cannot locate its pixel data");
+  return at;
+}
+
+// The files of the series `chosen` belongs to, or of the one series in `folder`.
+std::vector<std::string> seriesFiles(const gdcm::Scanner& sc, const std::vector<std::string>& images,
+                                     const std::string& folder, const std::string& chosen) {
+  std::map<std::string, std::vector<std::string>> by_series;
+  for (const std::string& f : images) by_series[trimmed(sc.GetValue(f.c_str(), kSeries))].push_back(f);
+  if (!chosen.empty()) return by_series[trimmed(sc.GetValue(chosen.c_str(), kSeries))];
+  if (by_series.size() == 1) return by_series.begin()->second;
+  std::string list;
+  for (const auto& [uid, files] : by_series)
+    list += "\n  " + std::to_string(files.size()) + " slices, '" + trimmed(sc.GetValue(files[0].c_str(), kDescription)) +
+            "' (series " + uid + "), e.g. " + fs::path(files[0]).filename().string();
+  fail(folder, "holds " + std::to_string(by_series.size()) +
+                   " series; name one file of the one to show (volume: {file: " + fs::path(folder).filename().string() +
+                   "/<that file>}):" + list);
+}
+
+RawVolumeSpec readSeries(const std::string& path) {
+  gdcm::Trace::SetWarning(false);  // GDCM's own warnings go to stderr; ours name the file and tag
+  std::error_code ec;
+  const bool is_folder = fs::is_directory(path, ec);
+  std::string folder = is_folder ? path : fs::path(path).parent_path().string();
+  if (folder.empty()) folder = ".";
+  std::vector<std::string> files;
+  for (const auto& e : fs::directory_iterator(folder, ec))
+    if (e.is_regular_file(ec)) files.push_back(e.path().string());
+  if (ec) fail(folder, "cannot list the folder: " + ec.message());
+  std::sort(files.begin(), files.end());
+  gdcm::Scanner sc;
+  for (const gdcm::Tag& t : {kSeries, kDescription, kPosition, kOrientation, kRows, kColumns, kBits, kSigned, kSamples,
+                             kSlope, kIntercept, kPixelSpacing, kFrames, kThickness})
+    sc.AddTag(t);
+  sc.Scan(files);
+  std::vector<std::string> images;  // DICOM files with an image (not a DICOMDIR, not a report)
+  for (const std::string& f : files)
+    if (sc.IsKey(f.c_str()) && sc.GetValue(f.c_str(), kRows)) images.push_back(f);
+  std::string chosen;  // the file named, as the folder's listing spells it
+  for (const std::string& f : images)
+    if (!is_folder && fs::path(f).filename() == fs::path(path).filename()) chosen = f;
+  if (!is_folder && chosen.empty()) fail(path, "not a DICOM file with an image (GDCM cannot read it, or it has no Rows)");
+  if (images.empty()) fail(folder, "no DICOM image among its " + std::to_string(files.size()) + " files");
+  const std::vector<std::string> series = seriesFiles(sc, images, folder, chosen);
+
+  // Every slice must share the first one's shape, samples and orientation.
+  const std::string& first = series[0];
+  auto value = [&](const std::string& f, const gdcm::Tag& t) { return trimmed(sc.GetValue(f.c_str(), t)); };
+  const std::vector<double> orientation = numbers(sc.GetValue(first.c_str(), kOrientation));
+  const std::vector<double> pixel = numbers(sc.GetValue(first.c_str(), kPixelSpacing));
+  const int rows = std::atoi(value(first, kRows).c_str()), columns = std::atoi(value(first, kColumns).c_str());
+  const int bits = std::atoi(value(first, kBits).c_str());
+  const bool is_signed = value(first, kSigned) == "1";
+  if (rows <= 0 || columns <= 0 || rows > 65536 || columns > 65536)
+    fail(first, "Rows " + value(first, kRows) + ", Columns " + value(first, kColumns) + ": expected 1..65536 each");
+  if (const std::string s = value(first, kSamples); !s.empty() && s != "1")
+    fail(first, "SamplesPerPixel " + s + ": a colour image; Tessera renders one value a voxel");
+  if (const std::string n = value(first, kFrames); !n.empty() && std::atoi(n.c_str()) > 1)
+    fail(first, "a multi-frame image (NumberOfFrames " + n + "); Tessera reads a series of one-frame files");
+  if (bits != 8 && bits != 16 && bits != 32) fail(first, "BitsAllocated " + value(first, kBits) + ": expected 8, 16 or 32");
+  const VoxelType type = bits == 8 ? (is_signed ? VoxelType::Int8 : VoxelType::UInt8)
+                         : bits == 16 ? (is_signed ? VoxelType::Int16 : VoxelType::UInt16)
+                                      : (is_signed ? VoxelType::Int32 : VoxelType::UInt32);
+  if (orientation.size() != 6 && series.size() > 1)
+    fail(first, "no ImageOrientationPatient (0020,0037): the slices cannot be put in order");
+  const Vec3 row{orientation.size() == 6 ? orientation[0] : 1, orientation.size() == 6 ? orientation[1] : 0,
+                 orientation.size() == 6 ? orientation[2] : 0};
+  const Vec3 col{orientation.size() == 6 ? orientation[3] : 0, orientation.size() == 6 ? orientation[4] : 1,
+                 orientation.size() == 6 ? orientation[5] : 0};
+  const Vec3 normal = cross(row, col);
+  std::vector<Slice> slices;
+  for (const std::string& f : series) {
+    for (const gdcm::Tag& t : {kRows, kColumns, kBits, kSigned, kPixelSpacing})
+      if (value(f, t) != value(first, t))
+        fail(f, "tag (" + gdcm::Tag(t).PrintAsContinuousString() + ") is '" + value(f, t) + "' but '" + value(first, t) +
+                    "' in " + fs::path(first).filename().string() + ": one series must have one shape");
+    const std::vector<double> o = numbers(sc.GetValue(f.c_str(), kOrientation));
+    for (size_t i = 0; i < o.size() && i < orientation.size(); ++i)
+      if (std::abs(o[i] - orientation[i]) > 1e-4) fail(f, "its orientation differs from " + fs::path(first).filename().string() + "'s");
+    const std::vector<double> p = numbers(sc.GetValue(f.c_str(), kPosition));
+    if (p.size() != 3 && series.size() > 1) fail(f, "no ImagePositionPatient (0020,0032): the slices cannot be put in order");
+    Slice s{f, p.size() == 3 ? dot(Vec3{p[0], p[1], p[2]}, normal) : 0};
+    if (const auto m = numbers(sc.GetValue(f.c_str(), kSlope)); m.size() == 1) s.slope = m[0];
+    if (const auto b = numbers(sc.GetValue(f.c_str(), kIntercept)); b.size() == 1) s.inter = b[0];
+    slices.push_back(s);
+  }
+  std::sort(slices.begin(), slices.end(), [](const Slice& a, const Slice& b) { return a.along < b.along; });
+
+  // Evenly spaced, as a volume's slices are (a missing file shows as a gap twice as wide).
+  double dz = 1;
+  if (slices.size() > 1) {
+    dz = (slices.back().along - slices.front().along) / (double)(slices.size() - 1);
+    for (size_t k = 1; k < slices.size(); ++k) {
+      const double gap = slices[k].along - slices[k - 1].along;
+      if (!(gap > 0))
+        fail(fs::path(slices[k].file).filename().string(), "lies where " + fs::path(slices[k - 1].file).filename().string() +
+                                                               " lies (two acquisitions in one series?)");
+      if (std::abs(gap - dz) > 0.01 * dz + 1e-6)
+        fail(folder, "slices are not evenly spaced: " + fs::path(slices[k - 1].file).filename().string() + " to " +
+                         fs::path(slices[k].file).filename().string() + " is " + std::to_string(gap) + " mm, " +
+                         std::to_string(dz) + " mm on average (a missing slice?)");
+    }
+  } else if (const auto t = numbers(sc.GetValue(first.c_str(), kThickness)); t.size() == 1 && t[0] > 0) {
+    dz = t[0];
+  }
+  RawVolumeSpec spec;
+  spec.format = VolumeFormat::Dicom;
+  spec.file = path;
+  spec.dims = {columns, rows, (int)slices.size()};
+  spec.type = type;
+  // PixelSpacing is (between rows, between columns): y first.
+  spec.spacing = {pixel.size() == 2 ? pixel[1] : 1, pixel.size() == 2 ? pixel[0] : 1, dz};
+  const uint64_t bytes = (uint64_t)rows * columns * (bits / 8);
+  for (const Slice& s : slices) {
+    const uint64_t at = samplesOffset(s.file, bytes);
+    spec.slices.push_back(DicomSlice{s.file, at, at == 0, s.slope, s.inter});
+  }
+  return spec;
+}
+
+std::vector<unsigned char> decodeSlice(const std::string& file, uint64_t bytes) {
+  gdcm::ImageReader r;
+  r.SetFileName(file.c_str());
+  if (!r.Read()) fail(file, "GDCM cannot read it as an image");
+  const gdcm::Image& image = r.GetImage();
+  std::vector<unsigned char> out(image.GetBufferLength());
+  if (out.size() < bytes || !image.GetBuffer(reinterpret_cast<char*>(out.data())))
+    fail(file, std::string("GDCM cannot decode its pixel data (transfer syntax ") +
+                   gdcm::TransferSyntax::GetTSString(image.GetTransferSyntax()) + ")");
+  return out;
+}
+
+}  // namespace dicom
+}  // namespace
+
+RawVolumeSpec readDicomSeries(const std::string& path) { return dicom::readSeries(path); }
+
+std::vector<unsigned char> decodeDicomSlice(const std::string& file, uint64_t bytes) {
+  return dicom::decodeSlice(file, bytes);
+}
+
+}  // namespace tessera

@@ -1,0 +1,170 @@
+// DICOM series written by GDCM itself (no downloaded data): slices in any file order,
+// uncompressed (explicit and implicit VR) and compressed, scaled, read whole and as windows;
+// folders of two series, a missing slice and a multi-frame file refused by name.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "common/io/volume_files.h"
+#include "common/scene.h"
+#include "tests/common/dicom_writer.h"
+#include "tests/common/temp_dir.h"
+
+namespace tessera {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kCols = 6, kRows = 5;
+
+// Stored value of voxel (x, y) of slice k: distinct everywhere, some negative.
+int16_t stored(int x, int y, int k) { return (int16_t)(x + 10 * y + 100 * k - 250); }
+
+struct SliceFile {
+  int k = 0;  // position: z = 10 + 2.5 k (mm)
+  std::string series = "1.2.826.0.1.3680043.2.1125.1";
+  std::string description = "axial";
+  gdcm::TransferSyntax::TSType syntax = gdcm::TransferSyntax::ExplicitVRLittleEndian;
+  double slope = 2, inter = -1024;
+};
+
+void writeSlice(const fs::path& file, const SliceFile& s) {
+  test::DicomSlice d;
+  d.cols = kCols, d.rows = kRows;
+  for (int y = 0; y < kRows; ++y)
+    for (int x = 0; x < kCols; ++x) d.values.push_back(stored(x, y, s.k));
+  d.z = 10 + 2.5 * s.k;
+  d.series = s.series, d.description = s.description, d.syntax = s.syntax, d.slope = s.slope, d.inter = s.inter;
+  test::writeDicomSlice(file, d);
+}
+
+// Slices 0..n-1 written in a shuffled order under names that do not sort by position.
+fs::path writeSeries(const test::TempDir& t, const std::string& folder, int n, SliceFile s = {}) {
+  const fs::path dir = t.path / folder;
+  fs::create_directories(dir);
+  for (int i = 0; i < n; ++i) {
+    s.k = (i * 3 + 1) % n;  // n not divisible by 3: every k once
+    writeSlice(dir / ("IM" + std::to_string(1000 - i)), s);
+  }
+  return dir;
+}
+
+Scene sceneOf(const fs::path& file) {
+  return parseScene("volume: {file: " + file.string() + "}\n", ".", "dicom.yaml");
+}
+
+void expectValues(const Volume& v, const VoxelBox& box, double slope, double inter) {
+  for (int z = box.lo[2]; z < box.hi[2]; ++z)
+    for (int y = box.lo[1]; y < box.hi[1]; ++y)
+      for (int x = box.lo[0]; x < box.hi[0]; ++x)
+        ASSERT_EQ(v.at(x - box.lo[0], y - box.lo[1], z - box.lo[2]), (float)(slope * stored(x, y, z) + inter))
+            << x << "," << y << "," << z;
+}
+
+TEST(DicomSeries, AFolderIsAVolumeOfItsSlicesInOrderScaled) {
+  test::TempDir t("dicom");
+  for (auto syntax : {gdcm::TransferSyntax::ExplicitVRLittleEndian, gdcm::TransferSyntax::ImplicitVRLittleEndian,
+                      gdcm::TransferSyntax::RLELossless, gdcm::TransferSyntax::JPEGLosslessProcess14_1}) {
+    SCOPED_TRACE(gdcm::TransferSyntax::GetTSString(syntax));
+    SliceFile s;
+    s.syntax = syntax;
+    const fs::path dir = writeSeries(t, std::string("ct") + std::to_string((int)syntax), 7, s);
+    const Scene scene = sceneOf(dir);
+    const auto& spec = std::get<RawVolumeSpec>(scene.volume);
+    EXPECT_EQ(spec.format, VolumeFormat::Dicom);
+    EXPECT_EQ(spec.dims, (std::array<int, 3>{kCols, kRows, 7}));
+    EXPECT_EQ(spec.type, VoxelType::Int16);
+    EXPECT_NEAR(spec.spacing[0], 0.5, 1e-9);
+    EXPECT_NEAR(spec.spacing[1], 0.7, 1e-9);
+    EXPECT_NEAR(spec.spacing[2], 2.5, 1e-9);
+    const bool compressed = syntax == gdcm::TransferSyntax::RLELossless || syntax == gdcm::TransferSyntax::JPEGLosslessProcess14_1;
+    EXPECT_EQ(spec.slices[0].encoded, compressed);
+    RawVolumeReader reader(spec);
+    const VoxelBox whole{{0, 0, 0}, spec.dims};
+    expectValues(reader.readValues(whole), whole, 2, -1024);
+    const VoxelBox window{{1, 2, 2}, {4, 5, 6}};  // what a renderer of one brick reads
+    expectValues(reader.readValues(window), window, 2, -1024);
+    // Normalised over the data's own range, as every format.
+    const Volume v = loadVolume(scene);
+    EXPECT_EQ(v.data_range[0], 2.0 * stored(0, 0, 0) - 1024);
+    EXPECT_EQ(v.data_range[1], 2.0 * stored(kCols - 1, kRows - 1, 6) - 1024);
+  }
+}
+
+TEST(DicomSeries, OneFileNamesItsSeriesAndAFolderOfTwoSeriesIsRefusedWithBoth) {
+  test::TempDir t("dicom2");
+  SliceFile a, b;
+  b.series = "1.2.826.0.1.3680043.2.1125.2";
+  b.description = "scout";
+  b.inter = 0;
+  const fs::path dir = writeSeries(t, "study", 4, a);
+  for (int k = 0; k < 2; ++k) b.k = k, writeSlice(dir / ("SC" + std::to_string(k) + ".dcm"), b);
+  try {
+    sceneOf(dir);
+    FAIL() << "two series in one folder were read as one";
+  } catch (const SceneError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("holds 2 series; name one file of the one to show"), std::string::npos) << m;
+    EXPECT_NE(m.find("4 slices, 'axial'"), std::string::npos) << m;
+    EXPECT_NE(m.find("2 slices, 'scout'"), std::string::npos) << m;
+  }
+  const RawVolumeSpec scout = std::get<RawVolumeSpec>(sceneOf(dir / "SC1.dcm").volume);
+  EXPECT_EQ(scout.dims[2], 2);
+  EXPECT_EQ(scout.slices[0].inter, 0);
+  const RawVolumeSpec axial = std::get<RawVolumeSpec>(sceneOf(dir / "IM1000").volume);
+  EXPECT_EQ(axial.dims[2], 4);
+}
+
+TEST(DicomSeries, AMissingSliceOrTwoAtOnePlaceIsSaid) {
+  test::TempDir t("dicom3");
+  const fs::path dir = writeSeries(t, "gap", 5);
+  fs::remove(dir / "IM998");  // the slice at k = (2 * 3 + 1) % 5 = 2
+  try {
+    sceneOf(dir);
+    FAIL() << "a series with a gap was read";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("slices are not evenly spaced"), std::string::npos) << e.what();
+  }
+  SliceFile twice;
+  twice.k = 0;
+  writeSlice(dir / "IM998", twice);  // a second slice where k = 0 is
+  try {
+    sceneOf(dir);
+    FAIL() << "two slices at one position were read";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("two acquisitions in one series?"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DicomSeries, AFolderWithoutImagesAndKeysTheHeaderGivesAreRefused) {
+  test::TempDir t("dicom4");
+  fs::create_directories(t.path / "empty");
+  std::ofstream(t.path / "empty" / "notes.txt") << "not DICOM";
+  try {
+    sceneOf(t.path / "empty");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("no DICOM image among its 1 files"), std::string::npos) << e.what();
+  }
+  const fs::path dir = writeSeries(t, "ct", 2);
+  try {
+    parseScene("volume: {file: " + dir.string() + ", dims: [6, 5, 2]}\n", ".", "d.yaml");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a directory: read as a DICOM series, whose headers give dims and type"),
+              std::string::npos)
+        << e.what();
+  }
+  try {  // a file of it, with no extension: known by its "DICM"
+    parseScene("volume: {file: " + (dir / "IM1000").string() + ", type: int16}\n", ".", "d.yaml");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("volume.type: comes from the header"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace tessera
