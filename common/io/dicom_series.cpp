@@ -63,30 +63,27 @@ struct Slice {
 
 // Where slice `file`'s samples start, or 0 when GDCM must decode them: anything but
 // uncompressed little-endian (an encapsulated, deflated or big-endian transfer syntax).
+// GDCM stops after the pixel data element's header without reading its value.
 uint64_t samplesOffset(const std::string& file, uint64_t bytes) {
   gdcm::Reader r;
   r.SetFileName(file.c_str());
-  if (!r.ReadUpToTag(kPixelData, {})) fail(file, "GDCM cannot read its header");
+  if (!r.ReadUpToTag(kPixelData, {kPixelData})) fail(file, "GDCM cannot read its header");
   const gdcm::TransferSyntax ts = r.GetFile().GetHeader().GetDataSetTransferSyntax();
   const bool implicit = ts == gdcm::TransferSyntax::ImplicitVRLittleEndian;
   if (!implicit && ts != gdcm::TransferSyntax::ExplicitVRLittleEndian) return 0;
-  // GDCM reads the pixel data element too and stops after it: its value ends there.
-  const gdcm::DataSet& ds = r.GetFile().GetDataSet();
-  if (!ds.FindDataElement(kPixelData)) fail(file, "no pixel data (7FE0,0010)");
-  const gdcm::VL length = ds.GetDataElement(kPixelData).GetVL();
-  if (length.IsUndefined()) return 0;  // encapsulated after all: decode
-  if (length < bytes)
-    fail(file, "pixel data holds " + std::to_string((uint32_t)length) + " bytes but rows x columns x bits need " +
-                   std::to_string(bytes));
-  const uint64_t end = r.GetStreamCurrentPosition(), header = implicit ? 8 : 12;
-  if (end < (uint64_t)length + header) fail(file, "cannot locate its pixel data");
-  const uint64_t at = end - (uint64_t)length;
-  // Checked, as the offset is found from where GDCM stopped: the element's tag before it.
-  unsigned char h[4] = {};
+  const uint64_t at = r.GetStreamCurrentPosition(), header = implicit ? 8 : 12;
+  // Checked, as the offset is where GDCM stopped: the element's tag and length before it.
+  unsigned char h[12] = {};
   std::ifstream in(file, std::ios::binary);
-  if (!in.seekg((std::streamoff)(at - header)) || !in.read(reinterpret_cast<char*>(h), sizeof h) ||
+  if (at < header || !in.seekg((std::streamoff)(at - header)) || !in.read(reinterpret_cast<char*>(h), (std::streamsize)header) ||
       !(h[0] == 0xe0 && h[1] == 0x7f && h[2] == 0x10 && h[3] == 0x00))
-    fail(file, "cannot locate its pixel data");
+    fail(file, "no pixel data (7FE0,0010) where GDCM found it");
+  const unsigned char* len = h + header - 4;
+  const uint64_t length = len[0] | len[1] << 8 | len[2] << 16 | (uint64_t)len[3] << 24;
+  if (length == 0xffffffffu) return 0;  // encapsulated after all: decode
+  if (length < bytes)
+    fail(file, "pixel data holds " + std::to_string(length) + " bytes but rows x columns x bits need " +
+                   std::to_string(bytes));
   return at;
 }
 
