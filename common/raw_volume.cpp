@@ -191,7 +191,8 @@ class RawFile {
       const DicomSlice& s = spec_.slices[z];
       buf_.resize(n * ts_);
       if (s.encoded) {
-        if (decoded_z_ != z) decoded_z_ = SIZE_MAX, decoded_ = decodeDicomSlice(s.file, per_slice * ts_), decoded_z_ = z;
+        if (decoded_z_ != z)
+          decoded_z_ = SIZE_MAX, decoded_ = decodeDicomSlice(s.file, per_slice * ts_, (int)ts_ * 8), decoded_z_ = z;
         std::memcpy(buf_.data(), decoded_.data() + in * ts_, n * ts_);
       } else {
         if (slice_z_ != z) {
@@ -208,10 +209,26 @@ class RawFile {
           done += (size_t)r;
         }
       }
+      if (s.bits_stored > 0 && s.bits_stored < (int)ts_ * 8) keepStoredBits(buf_.data(), n, s.bits_stored);
       convertAll(spec_.type, buf_.data(), n, Scaling{s.slope, s.inter, false}, out);
       samples_read += n * ts_;
       checkFinite(first, n, out);
       first += n, count -= n, out += n;
+    }
+  }
+
+  // A DICOM sample of fewer bits than its type: the bits above it cleared, or copies of its
+  // sign bit for a signed type (what GDCM's decoder gives; the uncompressed bytes may hold
+  // anything there, an overlay's bits for one).
+  void keepStoredBits(unsigned char* p, size_t count, int bits) const {
+    const bool is_signed = spec_.type == VoxelType::Int8 || spec_.type == VoxelType::Int16 || spec_.type == VoxelType::Int32;
+    const uint32_t low = (1u << bits) - 1, sign = 1u << (bits - 1);  // bits < the type's, so < 32
+    for (size_t i = 0; i < count; ++i) {
+      uint32_t v = 0;
+      std::memcpy(&v, p + i * ts_, ts_);  // little-endian: the sample's bytes are v's low ones
+      v &= low;
+      if (is_signed && (v & sign)) v |= ~low;
+      std::memcpy(p + i * ts_, &v, ts_);
     }
   }
 

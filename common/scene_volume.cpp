@@ -109,6 +109,9 @@ TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
     if (t.files.empty()) fail("volume.series", file + ": the files list is empty");
   }
   if (t.files.size() > (size_t)kMaxSteps) fail("volume.series", "more than " + std::to_string(kMaxSteps) + " steps");
+  for (const std::string& f : t.files)  // each step would be a folder scanned by every process
+    if (volumeFormatOf(f) == VolumeFormat::Dicom)
+      fail("volume.series", f + ": a DICOM series cannot be a time step; convert the steps to NIfTI or NRRD files");
   t.steps = (int)t.files.size();
   return t;
 }
@@ -119,7 +122,8 @@ TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
 RawVolumeSpec Parser::volumeFile(const YAML::Node& n, const std::string& file, TimeSeries& series) const {
   const std::string key = series.files.empty() ? "volume.file" : "volume.series";
   if (volumeFormatOf(file) == VolumeFormat::Raw) return rawFile(n, file);
-  const bool folder = volumeFormatOf(file) == VolumeFormat::Dicom && std::filesystem::is_directory(file);
+  std::error_code no_throw;
+  const bool folder = volumeFormatOf(file) == VolumeFormat::Dicom && std::filesystem::is_directory(file, no_throw);
   if (folder && (n["dims"] || n["type"]))
     fail(key, file + " is a directory: read as a DICOM series, whose headers give dims and type (leave them out), "
                      "or name the raw file");

@@ -54,6 +54,14 @@ std::vector<std::string> volumeWarnings(const Scene& scene, const Volume& shape)
     out.push_back(where + (raw && raw->has_range ? "volume.range: " : "volume: ") + why);
   }
   if (std::string why = thinProblem(scene, shape); !why.empty()) out.push_back(where + why);
+  if (const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume); raw && std::abs(raw->dicom_tilt_degrees) > 0.01) {
+    char b[300];
+    std::snprintf(b, sizeof b,
+                  "volume: the DICOM slices shift in their own plane from one to the next (a gantry tilt of %.3g "
+                  "degrees); Tessera stacks them straight, so the volume is drawn sheared by that angle",
+                  raw->dicom_tilt_degrees);
+    out.push_back(where + b);
+  }
   return out;
 }
 

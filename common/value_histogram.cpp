@@ -19,8 +19,10 @@ void ValueHistogram::add(double v) {
 }
 
 bool storesIntegers(const RawVolumeSpec& s) {
-  return s.type != VoxelType::Float32 && s.type != VoxelType::Float64 && s.slope == std::round(s.slope) &&
-         s.inter == std::round(s.inter);
+  auto integer = [](double x) { return x == std::round(x); };
+  for (const DicomSlice& d : s.slices)  // a DICOM series scales slice by slice
+    if (!integer(d.slope) || !integer(d.inter)) return false;
+  return s.type != VoxelType::Float32 && s.type != VoxelType::Float64 && integer(s.slope) && integer(s.inter);
 }
 
 uint64_t ValueHistogram::total() const { return std::accumulate(counts.begin(), counts.end(), uint64_t{0}); }

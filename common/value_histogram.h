@@ -27,7 +27,8 @@ struct ValueHistogram {
 };
 
 // Whether a file's values are integers: an integer type scaled by an integer slope and
-// intercept (a NIfTI scl_slope of 0.01 makes an int16 file's values decimals).
+// intercept (a NIfTI scl_slope of 0.01 makes an int16 file's values decimals; a DICOM
+// series: every slice's).
 bool storesIntegers(const RawVolumeSpec& s);
 
 struct RangeAdvice {

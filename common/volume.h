@@ -56,6 +56,7 @@ struct DicomSlice {
   uint64_t offset = 0;
   bool encoded = false;
   double slope = 1, inter = 0;
+  int bits_stored = 0;  // the sample's bits, at the bottom of its type's (0: all of them)
 };
 
 struct RawVolumeSpec {
@@ -74,6 +75,7 @@ struct RawVolumeSpec {
   double slope = 1, inter = 0;          // value = slope * stored + inter (NIfTI scl_slope, scl_inter)
   bool read_once = false;               // a series' step: what is not in the page cache bypasses it
   std::vector<DicomSlice> slices;       // a DICOM series: slice k's file (k along the slices' normal)
+  double dicom_tilt_degrees = 0;        // how far its slices shift in their plane (a gantry tilt): drawn unsheared
   const std::string& samples() const { return data_file.empty() ? file : data_file; }
 };
 

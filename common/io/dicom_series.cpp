@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -28,7 +29,8 @@ namespace fs = std::filesystem;
 const gdcm::Tag kSeries(0x0020, 0x000e), kDescription(0x0008, 0x103e), kPosition(0x0020, 0x0032),
     kOrientation(0x0020, 0x0037), kRows(0x0028, 0x0010), kColumns(0x0028, 0x0011), kBits(0x0028, 0x0100),
     kSigned(0x0028, 0x0103), kSamples(0x0028, 0x0002), kSlope(0x0028, 0x1053), kIntercept(0x0028, 0x1052),
-    kPixelSpacing(0x0028, 0x0030), kFrames(0x0028, 0x0008), kThickness(0x0018, 0x0050), kPixelData(0x7fe0, 0x0010);
+    kPixelSpacing(0x0028, 0x0030), kFrames(0x0028, 0x0008), kThickness(0x0018, 0x0050), kPixelData(0x7fe0, 0x0010),
+    kBitsStored(0x0028, 0x0101), kHighBit(0x0028, 0x0102);
 
 // A multi-valued DICOM string ("0.5\0.5"): its numbers, or none when one does not parse.
 std::vector<double> numbers(const char* text) {
@@ -56,6 +58,7 @@ std::string trimmed(const char* text) {
 struct Slice {
   std::string file;
   double along = 0;  // position along the normal, mm
+  Vec3 position{0, 0, 0};
   double slope = 1, inter = 0;
 };
 
@@ -97,7 +100,7 @@ std::vector<std::string> seriesFiles(const gdcm::Scanner& sc, const std::vector<
   std::string list;
   for (const auto& [uid, files] : by_series)
     list += "\n  " + std::to_string(files.size()) + " slices, '" + trimmed(sc.GetValue(files[0].c_str(), kDescription)) +
-            "' (series " + uid + "), e.g. " + fs::path(files[0]).filename().string();
+            "' (series " + uid + "), e.g. " + fs::path(files[0]).lexically_relative(folder).string();
   fail(folder, "holds " + std::to_string(by_series.size()) +
                    " series; name one file of the one to show (volume: {file: " + fs::path(folder).filename().string() +
                    "/<that file>}):" + list);
@@ -109,24 +112,29 @@ RawVolumeSpec readSeries(const std::string& path) {
   const bool is_folder = fs::is_directory(path, ec);
   std::string folder = is_folder ? path : fs::path(path).parent_path().string();
   if (folder.empty()) folder = ".";
-  std::vector<std::string> files;
-  for (const auto& e : fs::directory_iterator(folder, ec))
-    if (e.is_regular_file(ec)) files.push_back(e.path().string());
-  if (ec) fail(folder, "cannot list the folder: " + ec.message());
-  std::sort(files.begin(), files.end());
   gdcm::Scanner sc;
   for (const gdcm::Tag& t : {kSeries, kDescription, kPosition, kOrientation, kRows, kColumns, kBits, kSigned, kSamples,
-                             kSlope, kIntercept, kPixelSpacing, kFrames, kThickness})
+                             kSlope, kIntercept, kPixelSpacing, kFrames, kThickness, kBitsStored, kHighBit})
     sc.AddTag(t);
-  sc.Scan(files);
-  std::vector<std::string> images;  // DICOM files with an image (not a DICOMDIR, not a report)
-  for (const std::string& f : files)
-    if (sc.IsKey(f.c_str()) && sc.GetValue(f.c_str(), kRows)) images.push_back(f);
+  // The folder's files; none an image (a CD's DICOMDIR beside a DICOM/ tree): its sub-folders'.
+  std::vector<std::string> files, images;  // images: DICOM files with an image (not a DICOMDIR, not a report)
+  for (bool deep : {false, true}) {
+    if (deep && (!is_folder || !images.empty())) break;
+    files.clear();
+    auto add = [&](const fs::directory_entry& e) { if (e.is_regular_file(ec)) files.push_back(e.path().string()); };
+    if (deep) for (const auto& e : fs::recursive_directory_iterator(folder, ec)) add(e);
+    else for (const auto& e : fs::directory_iterator(folder, ec)) add(e);
+    if (ec) fail(folder, "cannot list the folder: " + ec.message());
+    std::sort(files.begin(), files.end());
+    sc.Scan(files);
+    for (const std::string& f : files)
+      if (sc.IsKey(f.c_str()) && sc.GetValue(f.c_str(), kRows)) images.push_back(f);
+  }
   std::string chosen;  // the file named, as the folder's listing spells it
   for (const std::string& f : images)
     if (!is_folder && fs::path(f).filename() == fs::path(path).filename()) chosen = f;
   if (!is_folder && chosen.empty()) fail(path, "not a DICOM file with an image (GDCM cannot read it, or it has no Rows)");
-  if (images.empty()) fail(folder, "no DICOM image among its " + std::to_string(files.size()) + " files");
+  if (images.empty()) fail(folder, "no DICOM image among its " + std::to_string(files.size()) + " files (sub-folders included)");
   const std::vector<std::string> series = seriesFiles(sc, images, folder, chosen);
 
   // Every slice must share the first one's shape, samples and orientation.
@@ -144,6 +152,13 @@ RawVolumeSpec readSeries(const std::string& path) {
   if (const std::string n = value(first, kFrames); !n.empty() && std::atoi(n.c_str()) > 1)
     fail(first, "a multi-frame image (NumberOfFrames " + n + "); Tessera reads a series of one-frame files");
   if (bits != 8 && bits != 16 && bits != 32) fail(first, "BitsAllocated " + value(first, kBits) + ": expected 8, 16 or 32");
+  // The stored bits sit at the bottom (HighBit = BitsStored - 1); the bits above are not the
+  // value's (a 12-bit signed sample need not be sign-extended in its 16 bits).
+  const int stored_bits = value(first, kBitsStored).empty() ? bits : std::atoi(value(first, kBitsStored).c_str());
+  if (stored_bits < 1 || stored_bits > bits) fail(first, "BitsStored " + value(first, kBitsStored) + " of " + value(first, kBits));
+  if (!value(first, kHighBit).empty() && std::atoi(value(first, kHighBit).c_str()) != stored_bits - 1)
+    fail(first, "HighBit " + value(first, kHighBit) + " with BitsStored " + std::to_string(stored_bits) +
+                    ": only samples stored at the bottom bits are read");
   const VoxelType type = bits == 8 ? (is_signed ? VoxelType::Int8 : VoxelType::UInt8)
                          : bits == 16 ? (is_signed ? VoxelType::Int16 : VoxelType::UInt16)
                                       : (is_signed ? VoxelType::Int32 : VoxelType::UInt32);
@@ -156,7 +171,7 @@ RawVolumeSpec readSeries(const std::string& path) {
   const Vec3 normal = cross(row, col);
   std::vector<Slice> slices;
   for (const std::string& f : series) {
-    for (const gdcm::Tag& t : {kRows, kColumns, kBits, kSigned, kPixelSpacing})
+    for (const gdcm::Tag& t : {kRows, kColumns, kBits, kSigned, kPixelSpacing, kBitsStored})
       if (value(f, t) != value(first, t))
         fail(f, "tag (" + gdcm::Tag(t).PrintAsContinuousString() + ") is '" + value(f, t) + "' but '" + value(first, t) +
                     "' in " + fs::path(first).filename().string() + ": one series must have one shape");
@@ -166,6 +181,7 @@ RawVolumeSpec readSeries(const std::string& path) {
     const std::vector<double> p = numbers(sc.GetValue(f.c_str(), kPosition));
     if (p.size() != 3 && series.size() > 1) fail(f, "no ImagePositionPatient (0020,0032): the slices cannot be put in order");
     Slice s{f, p.size() == 3 ? dot(Vec3{p[0], p[1], p[2]}, normal) : 0};
+    if (p.size() == 3) s.position = {p[0], p[1], p[2]};
     if (const auto m = numbers(sc.GetValue(f.c_str(), kSlope)); m.size() == 1) s.slope = m[0];
     if (const auto b = numbers(sc.GetValue(f.c_str(), kIntercept)); b.size() == 1) s.inter = b[0];
     slices.push_back(s);
@@ -190,27 +206,41 @@ RawVolumeSpec readSeries(const std::string& path) {
     dz = t[0];
   }
   RawVolumeSpec spec;
+  // Slices that shift in their own plane from one to the next (a CT gantry tilt) are drawn
+  // stacked straight: the volume is sheared by this angle, which a warning names.
+  if (slices.size() > 1) {
+    const Vec3 d = slices.back().position - slices.front().position;
+    const Vec3 in_plane = d - normal * dot(d, normal);
+    spec.dicom_tilt_degrees = std::atan2(length(in_plane), dot(d, normal)) * 180 / std::numbers::pi;
+  }
   spec.format = VolumeFormat::Dicom;
   spec.file = path;
   spec.dims = {columns, rows, (int)slices.size()};
   spec.type = type;
   // PixelSpacing is (between rows, between columns): y first.
   spec.spacing = {pixel.size() == 2 ? pixel[1] : 1, pixel.size() == 2 ? pixel[0] : 1, dz};
+  if (slices.size() > 65536) fail(folder, std::to_string(slices.size()) + " slices: at most 65536");
   const uint64_t bytes = (uint64_t)rows * columns * (bits / 8);
   for (const Slice& s : slices) {
     const uint64_t at = samplesOffset(s.file, bytes);
-    spec.slices.push_back(DicomSlice{s.file, at, at == 0, s.slope, s.inter});
+    spec.slices.push_back(DicomSlice{s.file, at, at == 0, s.slope, s.inter, stored_bits});
   }
   return spec;
 }
 
-std::vector<unsigned char> decodeSlice(const std::string& file, uint64_t bytes) {
+std::vector<unsigned char> decodeSlice(const std::string& file, uint64_t bytes, int bits) {
   gdcm::ImageReader r;
   r.SetFileName(file.c_str());
   if (!r.Read()) fail(file, "GDCM cannot read it as an image");
   const gdcm::Image& image = r.GetImage();
+  // The layout the headers promised (a decoder could hand back another).
+  if (image.GetPixelFormat().GetBitsAllocated() != bits || image.GetPixelFormat().GetSamplesPerPixel() != 1 ||
+      image.GetBufferLength() != bytes)
+    fail(file, "GDCM decodes it to " + std::to_string(image.GetPixelFormat().GetBitsAllocated()) + "-bit samples, " +
+                   std::to_string(image.GetBufferLength()) + " bytes, where the header says " + std::to_string(bits) +
+                   "-bit, " + std::to_string(bytes) + " bytes");
   std::vector<unsigned char> out(image.GetBufferLength());
-  if (out.size() < bytes || !image.GetBuffer(reinterpret_cast<char*>(out.data())))
+  if (!image.GetBuffer(reinterpret_cast<char*>(out.data())))
     fail(file, std::string("GDCM cannot decode its pixel data (transfer syntax ") +
                    gdcm::TransferSyntax::GetTSString(image.GetTransferSyntax()) + ")");
   return out;
@@ -221,8 +251,8 @@ std::vector<unsigned char> decodeSlice(const std::string& file, uint64_t bytes) 
 
 RawVolumeSpec readDicomSeries(const std::string& path) { return dicom::readSeries(path); }
 
-std::vector<unsigned char> decodeDicomSlice(const std::string& file, uint64_t bytes) {
-  return dicom::decodeSlice(file, bytes);
+std::vector<unsigned char> decodeDicomSlice(const std::string& file, uint64_t bytes, int bits) {
+  return dicom::decodeSlice(file, bytes, bits);
 }
 
 }  // namespace tessera

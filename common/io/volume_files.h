@@ -28,7 +28,8 @@ VolumeFormat volumeFormatOf(const std::string& path);
 // slice keeps its file, where its samples start (uncompressed little-endian) and its
 // RescaleSlope/Intercept. x runs along a row (columns), y down the rows, z along the normal.
 RawVolumeSpec readVolumeHeader(const std::string& path, int* time_steps = nullptr);
-// A compressed (or big-endian) DICOM slice's samples, decoded by GDCM; at least `bytes`.
-std::vector<unsigned char> decodeDicomSlice(const std::string& file, uint64_t bytes);
+// A compressed (or big-endian) DICOM slice's samples, decoded by GDCM: `bytes` of `bits`-bit
+// samples, or an error naming the file.
+std::vector<unsigned char> decodeDicomSlice(const std::string& file, uint64_t bytes, int bits);
 
 }  // namespace tessera

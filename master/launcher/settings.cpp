@@ -127,7 +127,7 @@ CheckedSettings checkSettings(const std::vector<std::string>& names, const Varia
     const std::filesystem::path absolute = p.is_absolute() ? p : (user_dir / p).lexically_normal();
     // A file, or a folder that the program reads (a DICOM series given as the scene).
     if (known->kind == Kind::ExistingFile && !std::filesystem::exists(absolute))
-      throw LaunchError(name + "=" + *value + ": no such file (looked for " + absolute.string() + ")");
+      throw LaunchError(name + "=" + *value + ": no such file or folder (looked for " + absolute.string() + ")");
     if (!p.is_absolute()) out.overrides[name] = absolute.string();
   }
   return out;

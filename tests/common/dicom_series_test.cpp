@@ -3,12 +3,16 @@
 // folders of two series, a missing slice and a multi-frame file refused by name.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <fstream>
 #include <string>
 #include <vector>
 
 #include "common/io/volume_files.h"
+#include "common/scene_warnings.h"
+#include "common/value_histogram.h"
 #include "common/scene.h"
 #include "tests/common/dicom_writer.h"
 #include "tests/common/temp_dir.h"
@@ -80,7 +84,8 @@ TEST(DicomSeries, AFolderIsAVolumeOfItsSlicesInOrderScaled) {
     EXPECT_NEAR(spec.spacing[0], 0.5, 1e-9);
     EXPECT_NEAR(spec.spacing[1], 0.7, 1e-9);
     EXPECT_NEAR(spec.spacing[2], 2.5, 1e-9);
-    const bool compressed = syntax == gdcm::TransferSyntax::RLELossless || syntax == gdcm::TransferSyntax::JPEGLosslessProcess14_1;
+    const bool compressed = syntax != gdcm::TransferSyntax::ExplicitVRLittleEndian &&
+                            syntax != gdcm::TransferSyntax::ImplicitVRLittleEndian;
     EXPECT_EQ(spec.slices[0].encoded, compressed);
     RawVolumeReader reader(spec);
     const VoxelBox whole{{0, 0, 0}, spec.dims};
@@ -163,6 +168,80 @@ TEST(DicomSeries, AFolderWithoutImagesAndKeysTheHeaderGivesAreRefused) {
     FAIL();
   } catch (const SceneError& e) {
     EXPECT_NE(std::string(e.what()).find("volume.type: comes from the header"), std::string::npos) << e.what();
+  }
+}
+
+// Each slice's own rescaling (PET and MR scale slice by slice), and 12-bit signed samples
+// whose upper bits hold something else: the value is the low 12 bits, sign-extended,
+// whether GDCM decodes the slice or it is read in place.
+TEST(DicomSeries, EachSliceKeepsItsScalingAndOnlyItsStoredBitsCount) {
+  test::TempDir t("dicom5");
+  for (auto syntax : {gdcm::TransferSyntax::ExplicitVRLittleEndian, gdcm::TransferSyntax::RLELossless}) {
+    const fs::path dir = t.path / (syntax == gdcm::TransferSyntax::RLELossless ? "rle" : "plain");
+    fs::create_directories(dir);
+    for (int k = 0; k < 3; ++k) {
+      test::DicomSlice d;
+      d.cols = 4, d.rows = 2, d.z = 3.0 * k, d.syntax = syntax, d.slope = 0.5 * (k + 1), d.inter = 10.0 * k;
+      d.bits_stored = 12;
+      for (int i = 0; i < 8; ++i) {
+        const int value = (i - 4) * 300 + k;             // -1200 .. 900: 12-bit signed
+        d.values.push_back((int16_t)((value & 0x0fff) | 0x5000));  // not sign-extended, bits 12-15 junk
+      }
+      test::writeDicomSlice(dir / ("S" + std::to_string(k)), d);
+    }
+    const Scene scene = sceneOf(dir);
+    RawVolumeReader reader(std::get<RawVolumeSpec>(scene.volume));
+    const Volume v = reader.readValues(VoxelBox{{0, 0, 0}, {4, 2, 3}});
+    for (int k = 0; k < 3; ++k)
+      for (int i = 0; i < 8; ++i)
+        ASSERT_EQ(v.at(i % 4, i / 4, k), (float)(0.5 * (k + 1) * ((i - 4) * 300 + k) + 10.0 * k))
+            << gdcm::TransferSyntax::GetTSString(syntax) << " slice " << k << " voxel " << i;
+    EXPECT_FALSE(storesIntegers(std::get<RawVolumeSpec>(scene.volume))) << "slopes of 0.5 make halves";
+  }
+}
+
+// Slices that move down their plane as they go (a head CT's gantry tilt of 15 degrees) are
+// stacked straight, and the warning says so with the angle.
+TEST(DicomSeries, AGantryTiltIsNamedByItsAngle) {
+  test::TempDir t("dicom7");
+  fs::create_directories(t.path / "tilt");
+  for (int k = 0; k < 4; ++k) {
+    test::DicomSlice d;
+    d.cols = 3, d.rows = 3, d.values.assign(9, (int16_t)(100 * k)), d.z = 2.0 * k;
+    d.y = -30 + 2.0 * k * std::tan(15 * std::numbers::pi / 180);
+    test::writeDicomSlice(t.path / "tilt" / ("S" + std::to_string(k)), d);
+  }
+  Scene scene = sceneOf(t.path / "tilt");
+  const auto& spec = std::get<RawVolumeSpec>(scene.volume);
+  EXPECT_NEAR(spec.dicom_tilt_degrees, 15, 1e-3);
+  EXPECT_NEAR(spec.spacing[2], 2.0, 1e-9) << "the distance along the normal";
+  Volume shape;
+  shape.dims = spec.dims, shape.spacing = spec.spacing, shape.data_range = shape.mapped_range = {0, 300};
+  const auto w = volumeWarnings(scene, shape);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("dicom.yaml: volume: the DICOM slices shift in their own plane from one to the next (a gantry "
+                      "tilt of 15 degrees)"),
+            std::string::npos)
+      << w[0];
+  EXPECT_TRUE(volumeWarnings(sceneOf(writeSeries(t, "straight", 2)), shape).empty());
+}
+
+// A CD's export: DICOMDIR at the top, the images in sub-folders; a multi-frame file refused.
+TEST(DicomSeries, AnExportsSubFoldersAreSearchedAndAMultiFrameFileIsRefused) {
+  test::TempDir t("dicom6");
+  writeSeries(t, "cd/DICOM/ST000001/SE000001", 4);
+  std::ofstream(t.path / "cd" / "DICOMDIR") << "not an image";
+  const RawVolumeSpec s = std::get<RawVolumeSpec>(sceneOf(t.path / "cd").volume);
+  EXPECT_EQ(s.dims, (std::array<int, 3>{kCols, kRows, 4}));
+  test::DicomSlice multi;
+  multi.cols = 2, multi.rows = 2, multi.frames = 3, multi.values.assign(12, 7);
+  fs::create_directories(t.path / "mf");
+  test::writeDicomSlice(t.path / "mf" / "enhanced.dcm", multi);
+  try {
+    sceneOf(t.path / "mf");
+    FAIL() << "a multi-frame file was read as a series";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("a multi-frame image (NumberOfFrames 3)"), std::string::npos) << e.what();
   }
 }
 

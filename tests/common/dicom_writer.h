@@ -20,23 +20,29 @@ struct DicomSlice {
   int cols = 0, rows = 0;
   std::vector<int16_t> values;  // cols x rows, along a row first
   double z = 0;                 // ImagePositionPatient's z (axial slices), mm
+  double y = -30;               // and its y (moving with z: a gantry tilt)
   double sx = 0.5, sy = 0.7;    // along a row, down the rows (PixelSpacing is sy\sx)
   std::string series = "1.2.826.0.1.3680043.2.1125.1";
   std::string description = "axial";
   gdcm::TransferSyntax::TSType syntax = gdcm::TransferSyntax::ExplicitVRLittleEndian;
   double slope = 1, inter = 0;
+  int bits_stored = 16;  // signed samples in the low bits, the rest of each 16 as `values` has them
+  int frames = 1;        // > 1: one multi-frame file (values: cols x rows x frames)
 };
 
 inline void writeDicomSlice(const std::filesystem::path& file, const DicomSlice& s) {
   gdcm::Trace::SetWarning(false);  // "No PhotometricInterpretation found" while it writes one
   gdcm::ImageWriter w;
   gdcm::SmartPointer<gdcm::Image> im = new gdcm::Image;
-  im->SetNumberOfDimensions(2);
-  const unsigned int dims[2] = {(unsigned)s.cols, (unsigned)s.rows};
+  im->SetNumberOfDimensions(s.frames > 1 ? 3 : 2);
+  const unsigned int dims[3] = {(unsigned)s.cols, (unsigned)s.rows, (unsigned)s.frames};
   im->SetDimensions(dims);
-  im->SetPixelFormat(gdcm::PixelFormat::INT16);
+  gdcm::PixelFormat format(gdcm::PixelFormat::INT16);
+  format.SetBitsStored((unsigned short)s.bits_stored);
+  format.SetHighBit((unsigned short)(s.bits_stored - 1));
+  im->SetPixelFormat(format);
   im->SetPhotometricInterpretation(gdcm::PhotometricInterpretation::MONOCHROME2);
-  const double origin[3] = {-20, -30, s.z}, cosines[6] = {1, 0, 0, 0, 1, 0};
+  const double origin[3] = {-20, s.y, s.z}, cosines[6] = {1, 0, 0, 0, 1, 0};
   im->SetOrigin(origin);
   im->SetOrigin(2, origin[2]);  // a 2-D image keeps only x and y of SetOrigin(origin)
   im->SetDirectionCosines(cosines);

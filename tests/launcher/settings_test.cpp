@@ -81,7 +81,7 @@ TEST(Settings, RelativePathsAreTheUsersFolder) {
     check({{"TESSERA_SCENE", "missing.yaml"}}, dir);
     ADD_FAILURE() << "no error";
   } catch (const LaunchError& e) {
-    EXPECT_EQ(std::string(e.what()), "TESSERA_SCENE=missing.yaml: no such file (looked for " + (dir / "missing.yaml").string() + ")");
+    EXPECT_EQ(std::string(e.what()), "TESSERA_SCENE=missing.yaml: no such file or folder (looked for " + (dir / "missing.yaml").string() + ")");
   }
   fs::remove_all(dir);
 }
