@@ -49,6 +49,12 @@ std::vector<double> numbers(const char* text) {
   return out;
 }
 
+bool hasDicomMarker(const std::string& file) {
+  char head[132] = {};
+  std::ifstream in(file, std::ios::binary);
+  return in.read(head, sizeof head) && std::memcmp(head + 128, "DICM", 4) == 0;
+}
+
 std::string trimmed(const char* text) {
   std::string s = text ? text : "";
   while (!s.empty() && (s.back() == ' ' || s.back() == '\0')) s.pop_back();
@@ -121,9 +127,20 @@ RawVolumeSpec readSeries(const std::string& path) {
   for (bool deep : {false, true}) {
     if (deep && (!is_folder || !images.empty())) break;
     files.clear();
-    auto add = [&](const fs::directory_entry& e) { if (e.is_regular_file(ec)) files.push_back(e.path().string()); };
-    if (deep) for (const auto& e : fs::recursive_directory_iterator(folder, ec)) add(e);
-    else for (const auto& e : fs::directory_iterator(folder, ec)) add(e);
+    // Only files with DICOM's marker go to GDCM (a big raw file beside the series is not parsed).
+    auto add = [&](const fs::directory_entry& e) {
+      if (e.is_regular_file(ec) && hasDicomMarker(e.path().string())) files.push_back(e.path().string());
+    };
+    if (!deep) {
+      for (const auto& e : fs::directory_iterator(folder, ec)) add(e);
+    } else {  // an export's tree is a few levels deep; a folder that is not one is not scanned whole
+      for (auto it = fs::recursive_directory_iterator(folder, ec); !ec && it != fs::recursive_directory_iterator();
+           it.increment(ec)) {
+        if (it.depth() >= 4) it.disable_recursion_pending();
+        add(*it);
+        if (files.size() > 100000) fail(folder, "more than 100000 files under it: name the series' own folder");
+      }
+    }
     if (ec) fail(folder, "cannot list the folder: " + ec.message());
     std::sort(files.begin(), files.end());
     sc.Scan(files);
@@ -134,7 +151,9 @@ RawVolumeSpec readSeries(const std::string& path) {
   for (const std::string& f : images)
     if (!is_folder && fs::path(f).filename() == fs::path(path).filename()) chosen = f;
   if (!is_folder && chosen.empty()) fail(path, "not a DICOM file with an image (GDCM cannot read it, or it has no Rows)");
-  if (images.empty()) fail(folder, "no DICOM image among its " + std::to_string(files.size()) + " files (sub-folders included)");
+  if (images.empty())
+    fail(folder, "no DICOM image in it or its sub-folders (" + std::to_string(files.size()) +
+                     " files with DICOM's marker, none an image)");
   const std::vector<std::string> series = seriesFiles(sc, images, folder, chosen);
 
   // Every slice must share the first one's shape, samples and orientation.
