@@ -23,7 +23,7 @@
 
 #include <zlib.h>
 
-#include "common/io/volume_files.h"  // decodeDicomSlice
+#include "common/io/volume_files.h"  // DicomSliceBytes
 #include "common/lanes.h"
 #include "common/volume.h"
 
@@ -182,53 +182,19 @@ class RawFile {
     checkFinite(first, count, out);
   }
 
-  // A DICOM series: a piece may span slices, each its own file (the last one read stays
-  // open: windows are read slice by slice) or GDCM's decoding of it (the last one kept).
+  // A DICOM series: a piece may span slices, each its own file (dicom_series.cpp).
   void readSlices(size_t first, size_t count, float* out) {
+    if (!slices_) slices_ = std::make_unique<DicomSliceBytes>(spec_);
     const size_t per_slice = (size_t)spec_.dims[0] * spec_.dims[1];
     while (count > 0) {
       const size_t z = first / per_slice, in = first % per_slice, n = std::min(count, per_slice - in);
-      const DicomSlice& s = spec_.slices[z];
       buf_.resize(n * ts_);
-      if (s.encoded) {
-        if (decoded_z_ != z)
-          decoded_z_ = SIZE_MAX, decoded_ = decodeDicomSlice(s.file, per_slice * ts_, (int)ts_ * 8), decoded_z_ = z;
-        std::memcpy(buf_.data(), decoded_.data() + in * ts_, n * ts_);
-      } else {
-        if (slice_z_ != z) {
-          if (fd_ >= 0) ::close(fd_);
-          slice_z_ = SIZE_MAX;
-          fd_ = ::open(s.file.c_str(), O_RDONLY | O_CLOEXEC);
-          if (fd_ < 0) fail(s.file, std::string("cannot open: ") + std::strerror(errno));
-          slice_z_ = z;
-        }
-        for (size_t done = 0; done < n * ts_;) {
-          const ssize_t r = ::pread(fd_, buf_.data() + done, n * ts_ - done, (off_t)(s.offset + in * ts_ + done));
-          if (r < 0 && errno == EINTR) continue;
-          if (r <= 0) fail(s.file, r < 0 ? std::string("read failed: ") + std::strerror(errno) : "read failed: file shrank");
-          done += (size_t)r;
-        }
-      }
-      if (s.bits_stored > 0 && s.bits_stored < (int)ts_ * 8) keepStoredBits(buf_.data(), n, s.bits_stored);
+      slices_->read(z, in, n, buf_.data());
+      const DicomSlice& s = spec_.slices[z];
       convertAll(spec_.type, buf_.data(), n, Scaling{s.slope, s.inter, false}, out);
       samples_read += n * ts_;
       checkFinite(first, n, out);
       first += n, count -= n, out += n;
-    }
-  }
-
-  // A DICOM sample of fewer bits than its type: the bits above it cleared, or copies of its
-  // sign bit for a signed type (what GDCM's decoder gives; the uncompressed bytes may hold
-  // anything there, an overlay's bits for one).
-  void keepStoredBits(unsigned char* p, size_t count, int bits) const {
-    const bool is_signed = spec_.type == VoxelType::Int8 || spec_.type == VoxelType::Int16 || spec_.type == VoxelType::Int32;
-    const uint32_t low = (1u << bits) - 1, sign = 1u << (bits - 1);  // bits < the type's, so < 32
-    for (size_t i = 0; i < count; ++i) {
-      uint32_t v = 0;
-      std::memcpy(&v, p + i * ts_, ts_);  // little-endian: the sample's bytes are v's low ones
-      v &= low;
-      if (is_signed && (v & sign)) v |= ~low;
-      std::memcpy(p + i * ts_, &v, ts_);
     }
   }
 
@@ -355,8 +321,7 @@ class RawFile {
   uint64_t chunk_lo_ = 0, chunk_hi_ = 0;  // file bytes in this thread's chunk, when this filled it last
   gzFile gz_ = nullptr;
   std::vector<unsigned char> buf_;
-  size_t slice_z_ = SIZE_MAX, decoded_z_ = SIZE_MAX;  // a DICOM series: the slice fd_ holds, and decoded_
-  std::vector<unsigned char> decoded_;
+  std::unique_ptr<DicomSliceBytes> slices_;  // a DICOM series' slice files
 };
 
 // The file stays open between windows; with no declared range the whole file's min..max is

@@ -1,5 +1,8 @@
 // A DICOM series as one volume, through GDCM (see volume_files.h): the slices of a folder
-// (or of the series one file in it belongs to), sorted along their normal.
+// (or of the series one file in it belongs to), sorted along their normal; and their samples.
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <gdcmImageReader.h>
 #include <gdcmReader.h>
 #include <gdcmScanner.h>
@@ -270,8 +273,47 @@ std::vector<unsigned char> decodeSlice(const std::string& file, uint64_t bytes, 
 
 RawVolumeSpec readDicomSeries(const std::string& path) { return dicom::readSeries(path); }
 
-std::vector<unsigned char> decodeDicomSlice(const std::string& file, uint64_t bytes, int bits) {
-  return dicom::decodeSlice(file, bytes, bits);
+DicomSliceBytes::DicomSliceBytes(const RawVolumeSpec& spec)
+    : spec_(spec), ts_(voxelTypeSize(spec.type)), per_slice_((size_t)spec.dims[0] * spec.dims[1]) {}
+
+DicomSliceBytes::~DicomSliceBytes() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void DicomSliceBytes::read(size_t z, size_t in, size_t count, unsigned char* dst) {
+  const DicomSlice& s = spec_.slices[z];
+  if (s.encoded) {
+    if (decoded_z_ != z)
+      decoded_z_ = SIZE_MAX, decoded_ = dicom::decodeSlice(s.file, per_slice_ * ts_, (int)ts_ * 8), decoded_z_ = z;
+    std::memcpy(dst, decoded_.data() + in * ts_, count * ts_);
+  } else {
+    if (open_z_ != z) {
+      if (fd_ >= 0) ::close(fd_);
+      open_z_ = SIZE_MAX;
+      fd_ = ::open(s.file.c_str(), O_RDONLY | O_CLOEXEC);
+      if (fd_ < 0) dicom::fail(s.file, std::string("cannot open: ") + std::strerror(errno));
+      open_z_ = z;
+    }
+    for (size_t done = 0; done < count * ts_;) {
+      const ssize_t r = ::pread(fd_, dst + done, count * ts_ - done, (off_t)(s.offset + in * ts_ + done));
+      if (r < 0 && errno == EINTR) continue;
+      if (r <= 0) dicom::fail(s.file, r < 0 ? std::string("read failed: ") + std::strerror(errno) : "read failed: file shrank");
+      done += (size_t)r;
+    }
+  }
+  // Only the stored bits: the bits above cleared, or copies of the sign bit for a signed type
+  // (what GDCM's decoder gives; uncompressed bytes may hold anything there, an overlay's bits).
+  const int bits = s.bits_stored;
+  if (bits <= 0 || bits >= (int)ts_ * 8) return;
+  const bool is_signed = spec_.type == VoxelType::Int8 || spec_.type == VoxelType::Int16 || spec_.type == VoxelType::Int32;
+  const uint32_t low = (1u << bits) - 1, sign = 1u << (bits - 1);  // bits < the type's, so < 32
+  for (size_t i = 0; i < count; ++i) {
+    uint32_t v = 0;
+    std::memcpy(&v, dst + i * ts_, ts_);  // little-endian: the sample's bytes are v's low ones
+    v &= low;
+    if (is_signed && (v & sign)) v |= ~low;
+    std::memcpy(dst + i * ts_, &v, ts_);
+  }
 }
 
 }  // namespace tessera

@@ -6,6 +6,7 @@
 // j along y, k along z) scaled by the voxel spacing; a NIfTI qform/sform or NRRD space
 // directions rotation is not applied, only its spacing.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -28,8 +29,25 @@ VolumeFormat volumeFormatOf(const std::string& path);
 // slice keeps its file, where its samples start (uncompressed little-endian) and its
 // RescaleSlope/Intercept. x runs along a row (columns), y down the rows, z along the normal.
 RawVolumeSpec readVolumeHeader(const std::string& path, int* time_steps = nullptr);
-// A compressed (or big-endian) DICOM slice's samples, decoded by GDCM: `bytes` of `bits`-bit
-// samples, or an error naming the file.
-std::vector<unsigned char> decodeDicomSlice(const std::string& file, uint64_t bytes, int bits);
+// The samples of a DICOM series' slices, as their type's little-endian bytes holding only
+// the stored bits (a 12-bit signed sample sign-extended, whatever the bits above held): an
+// uncompressed slice by positioned reads of its file (the last one read stays open: windows
+// are read slice by slice), a compressed one decoded whole by GDCM (the last one kept).
+class DicomSliceBytes {
+ public:
+  explicit DicomSliceBytes(const RawVolumeSpec& spec);  // spec.slices; kept by reference
+  ~DicomSliceBytes();
+  DicomSliceBytes(const DicomSliceBytes&) = delete;
+  DicomSliceBytes& operator=(const DicomSliceBytes&) = delete;
+  // `count` samples of slice z from its sample `in` into dst; errors name the slice's file.
+  void read(size_t z, size_t in, size_t count, unsigned char* dst);
+
+ private:
+  const RawVolumeSpec& spec_;
+  size_t ts_, per_slice_;
+  int fd_ = -1;
+  size_t open_z_ = SIZE_MAX, decoded_z_ = SIZE_MAX;
+  std::vector<unsigned char> decoded_;
+};
 
 }  // namespace tessera
