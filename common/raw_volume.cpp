@@ -25,6 +25,7 @@
 
 #include "common/io/volume_files.h"  // DicomSliceBytes
 #include "common/lanes.h"
+#include "common/sample_convert.h"
 #include "common/volume.h"
 
 namespace tessera {
@@ -42,44 +43,6 @@ void checkGeometry(const std::string& file, const std::array<int, 3>& dims, cons
     if (dims[i] <= 0) fail(file, "dims must be positive, got " + std::to_string(dims[i]));
   }
   if (std::string p = spacingProblem(sp); !p.empty()) fail(file, p);
-}
-
-// The stored value of type T at p, in the file's byte order.
-template <class T>
-double stored(const unsigned char* p, bool big_endian) {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, p, sizeof(T));
-  if (big_endian != (std::endian::native == std::endian::big)) std::reverse(b, b + sizeof(T));
-  T v;
-  std::memcpy(&v, b, sizeof(T));
-  return (double)v;
-}
-
-struct Scaling {
-  double slope = 1, inter = 0;
-  bool big_endian = false;
-};
-
-template <class T>
-void convert(const unsigned char* p, size_t count, const Scaling& s, float* out) {
-  const bool scaled = s.slope != 1 || s.inter != 0;
-  for (size_t i = 0; i < count; ++i) {
-    const double v = stored<T>(p + i * sizeof(T), s.big_endian);
-    out[i] = (float)(scaled ? s.slope * v + s.inter : v);
-  }
-}
-
-void convertAll(VoxelType type, const unsigned char* p, size_t count, const Scaling& s, float* out) {
-  switch (type) {
-    case VoxelType::UInt8: return convert<uint8_t>(p, count, s, out);
-    case VoxelType::Int8: return convert<int8_t>(p, count, s, out);
-    case VoxelType::UInt16: return convert<uint16_t>(p, count, s, out);
-    case VoxelType::Int16: return convert<int16_t>(p, count, s, out);
-    case VoxelType::UInt32: return convert<uint32_t>(p, count, s, out);
-    case VoxelType::Int32: return convert<int32_t>(p, count, s, out);
-    case VoxelType::Float32: return convert<float>(p, count, s, out);
-    case VoxelType::Float64: return convert<double>(p, count, s, out);
-  }
 }
 
 }  // namespace
@@ -178,7 +141,7 @@ class RawFile {
     else readPlain(at, dst, count * ts_);
     samples_read += count * ts_;
     if (direct) return checkFinite(first, count, out);
-    convertAll(spec_.type, buf_.data(), count, Scaling{spec_.slope, spec_.inter, spec_.big_endian}, out);
+    samples::convertAll(spec_.type, buf_.data(), count, samples::Scaling{spec_.slope, spec_.inter, spec_.big_endian}, out);
     checkFinite(first, count, out);
   }
 
@@ -191,7 +154,7 @@ class RawFile {
       buf_.resize(n * ts_);
       slices_->read(z, in, n, buf_.data());
       const DicomSlice& s = spec_.slices[z];
-      convertAll(spec_.type, buf_.data(), n, Scaling{s.slope, s.inter, false}, out);
+      samples::convertAll(spec_.type, buf_.data(), n, samples::Scaling{s.slope, s.inter, false}, out);
       samples_read += n * ts_;
       checkFinite(first, n, out);
       first += n, count -= n, out += n;

@@ -1,9 +1,12 @@
 // Ray generation per DESIGN.md, projection as its inverse, and camera validation.
 #include "common/camera.h"
+#include "common/scene.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <limits>
 
 using namespace tessera;
@@ -91,4 +94,30 @@ TEST(Camera, Orbited) {
   expectVec(o.up, {0, 1, 0});
   Camera full = c.orbited({1, 1, 0}, 360);
   expectVec(full.eye, c.eye, 1e-12);
+}
+
+// Every corner of the box must land inside the image, a portrait one included (the fov is
+// vertical: fitted to it alone, a tall image cut the box's sides).
+TEST(FittedCamera, SeesTheWholeBoxWhateverTheImagesShape) {
+  for (const char* image : {"[1024, 1024]", "[2048, 512]", "[512, 1024]", "[100, 1000]"}) {
+    const Scene s = parseScene(
+        std::string("volume: {generator: {name: hollow-shell, size: 16}, spacing: [1, 1, 2]}\nimage: ") + image + "\n",
+        ".", "s.yaml");
+    const RayGenerator rays(s.camera, s.width, s.height);
+    const Vec3 h = sceneHalfExtent(s);
+    double min_x = 1e9, max_x = -1e9, min_y = 1e9, max_y = -1e9;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 p{corner & 1 ? h.x : -h.x, corner & 2 ? h.y : -h.y, corner & 4 ? h.z : -h.z};
+      double sx = 0, sy = 0;
+      ASSERT_TRUE(rays.project(p, sx, sy)) << image;
+      min_x = std::min(min_x, sx), max_x = std::max(max_x, sx), min_y = std::min(min_y, sy), max_y = std::max(max_y, sy);
+    }
+    EXPECT_GE(min_x, 0) << image;
+    EXPECT_LE(max_x, s.width) << image;
+    EXPECT_GE(min_y, 0) << image;
+    EXPECT_LE(max_y, s.height) << image;
+    // Not farther than needed: the bounding sphere fitted, this long box still fills over a
+    // third of the narrower side (0.40-0.45 here).
+    EXPECT_GT(std::max((max_x - min_x) / s.width, (max_y - min_y) / s.height), 0.35) << image;
+  }
 }
