@@ -64,14 +64,13 @@ void rayLights(const ShadeParams& p, const RaySpan* spans, int n, LightBlock& ou
   alignas(32) int64_t vox[8];
   for (int l = 0; l < 8; ++l)
     vox[l] = (int64_t)ii[0][l] + (int64_t)c.gdims[0] * ((int64_t)ii[1][l] + (int64_t)c.gdims[1] * ii[2][l]);
-  const __m256i v_lo = _mm256_load_si256(reinterpret_cast<const __m256i*>(vox));
-  const __m256i v_hi = _mm256_load_si256(reinterpret_cast<const __m256i*>(vox + 4));
   const auto* base = reinterpret_cast<const long long*>(c.grad);
-  // The corner `off` elements away: x, y, z components of the eight lanes.
+  // The corner `off` elements away: x, y, z components of the eight lanes. Read one lane at a
+  // time, not by gather instructions (see classifyPacket's voxel reads).
   auto corner = [&](int64_t off, __m256 g[3]) {
-    const __m256i o = _mm256_set1_epi64x(off);
-    const __m256 lo4 = _mm256_castsi256_ps(_mm256_i64gather_epi64(base, _mm256_add_epi64(v_lo, o), 8));
-    const __m256 hi4 = _mm256_castsi256_ps(_mm256_i64gather_epi64(base, _mm256_add_epi64(v_hi, o), 8));
+    const long long* q = base + off;
+    const __m256 lo4 = _mm256_castsi256_ps(_mm256_setr_epi64x(q[vox[0]], q[vox[1]], q[vox[2]], q[vox[3]]));
+    const __m256 hi4 = _mm256_castsi256_ps(_mm256_setr_epi64x(q[vox[4]], q[vox[5]], q[vox[6]], q[vox[7]]));
     // Dwords (x | y << 16) and (z | 0 << 16) of the eight lanes, in lane order.
     const __m256i xy = _mm256_castpd_si256(_mm256_permute4x64_pd(
         _mm256_castps_pd(_mm256_shuffle_ps(lo4, hi4, 0x88)), 0xD8));
@@ -117,8 +116,12 @@ void rayLights(const ShadeParams& p, const RaySpan* spans, int n, LightBlock& ou
     const __m256 t = _mm256_mul_ps(_mm256_min_ps(_mm256_mul_ps(_mm256_andnot_ps(sign, nh), inv_len), one),
                                    _mm256_set1_ps((float)last));
     const __m256i jv = _mm256_min_epi32(_mm256_cvttps_epi32(t), _mm256_set1_epi32(last - 1));
-    const __m256 h0 = _mm256_i32gather_ps(c.highlight, jv, 4);
-    const __m256 h1 = _mm256_i32gather_ps(c.highlight + 1, jv, 4);
+    alignas(32) int32_t j[8];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(j), jv);
+    const float* hl = c.highlight;
+    const __m256 h0 = _mm256_setr_ps(hl[j[0]], hl[j[1]], hl[j[2]], hl[j[3]], hl[j[4]], hl[j[5]], hl[j[6]], hl[j[7]]);
+    ++hl;
+    const __m256 h1 = _mm256_setr_ps(hl[j[0]], hl[j[1]], hl[j[2]], hl[j[3]], hl[j[4]], hl[j[5]], hl[j[6]], hl[j[7]]);
     const __m256 h = _mm256_fmadd_ps(_mm256_sub_ps(t, _mm256_cvtepi32_ps(jv)), _mm256_sub_ps(h1, h0), h0);
     highlight = _mm256_blendv_ps(zero, h, steep);
   }
