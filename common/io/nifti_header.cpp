@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <zlib.h>
+
 #include "common/io/volume_files.h"
 
 namespace tessera {
@@ -19,6 +21,52 @@ bool startsWithGzipMagic(const std::string& path) {
   unsigned char m[2] = {0, 0};
   std::ifstream in(path, std::ios::binary);
   return in.read(reinterpret_cast<char*>(m), 2) && m[0] == 0x1f && m[1] == 0x8b;
+}
+
+// Why nifticlib refused `path`, from the header's first bytes (gzread reads a plain file as it
+// is): nifticlib only says "bad header" on stderr. Empty when the bytes show nothing wrong.
+std::string headerProblem(const std::string& path) {
+  unsigned char h[540] = {};
+  gzFile f = gzopen(path.c_str(), "rb");
+  if (!f) return "";
+  const int n = gzread(f, h, sizeof h);
+  gzclose(f);
+  if (n < 4) return "only " + std::to_string(std::max(n, 0)) + " bytes: not a NIfTI file";
+  auto i32 = [&](int at, bool swap) {
+    uint32_t v = (uint32_t)h[at] | (uint32_t)h[at + 1] << 8 | (uint32_t)h[at + 2] << 16 | (uint32_t)h[at + 3] << 24;
+    return (int32_t)(swap ? __builtin_bswap32(v) : v);
+  };
+  auto i16 = [&](int at, bool swap) {
+    const uint16_t v = (uint16_t)(h[at] | h[at + 1] << 8);
+    return (int16_t)(swap ? __builtin_bswap16(v) : v);
+  };
+  auto i64 = [&](int at, bool swap) {
+    uint64_t v = 0;
+    for (int b = 7; b >= 0; --b) v = v << 8 | h[at + b];
+    return (int64_t)(swap ? __builtin_bswap64(v) : v);
+  };
+  bool swap = false;
+  int version = 0;
+  for (bool sw : {false, true}) {
+    if (i32(0, sw) == 348) version = 1, swap = sw;
+    if (i32(0, sw) == 540) version = 2, swap = sw;
+  }
+  if (!version)
+    return "its first 4 bytes give a header size of " + std::to_string(i32(0, false)) +
+           ", where a NIfTI-1 header has 348 and a NIfTI-2 header 540: not a NIfTI file";
+  const int size = version == 1 ? 348 : 540;
+  if (n < size)
+    return "cut short: " + std::to_string(n) + " bytes of its " + std::to_string(size) + "-byte NIfTI-" +
+           std::to_string(version) + " header";
+  const int64_t dim0 = version == 1 ? i16(40, swap) : i64(16, swap);
+  if (dim0 < 1 || dim0 > 7) return "dim[0] = " + std::to_string(dim0) + ", must be in 1..7";
+  for (int d = 1; d <= dim0; ++d) {
+    const int64_t v = version == 1 ? i16(40 + 2 * d, swap) : i64(16 + 8 * d, swap);
+    if (v < 1) return "dim[" + std::to_string(d) + "] = " + std::to_string(v) + ", must be at least 1";
+  }
+  const int datatype = version == 1 ? i16(70, swap) : i16(12, swap);
+  if (!nifti_is_valid_datatype(datatype)) return "datatype " + std::to_string(datatype) + " is not a NIfTI type code";
+  return "";
 }
 
 }  // namespace
@@ -32,6 +80,7 @@ RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps) {
     if (startsWithGzipMagic(path) && !nifti_is_gzfile(path.c_str()))
       return fail("gzip-compressed, but its name does not end in .gz (nifticlib goes by the name: rename it " +
                   std::filesystem::path(path).filename().string() + ".gz)");
+    if (std::string why = headerProblem(path); !why.empty()) return fail("not a readable NIfTI file: " + why);
     return fail("not a readable NIfTI-1 or NIfTI-2 file (missing, cut short, or a bad header)");
   }
   RawVolumeSpec s;

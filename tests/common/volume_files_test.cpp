@@ -224,6 +224,31 @@ TEST(VolumeFiles, BadHeadersAreNamedByFileAndField) {
       << cut;
 }
 
+// nifticlib says only "bad header" (on stderr); the error says what is wrong with the bytes.
+TEST(VolumeFiles, ABadNiftiHeaderIsSaidByWhatIsWrong) {
+  TempDir t("bad-nifti-bytes");
+  writeNifti(t.file("good.nii"));
+  std::string good;
+  {
+    std::ifstream in(t.file("good.nii"), std::ios::binary);
+    good.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  ASSERT_GT(good.size(), 352u);
+  auto write = [&](const std::string& name, std::string bytes) {
+    std::ofstream(t.file(name), std::ios::binary) << bytes;
+    return errorOf("volume: {file: " + name + "}\n", t.path.string());
+  };
+  auto expectSays = [](const std::string& error, const std::string& what) {
+    EXPECT_NE(error.find(what), std::string::npos) << "expected: " << what << "\ngot: " << error;
+  };
+  expectSays(write("cut.nii", good.substr(0, 200)), "cut.nii: not a readable NIfTI file: cut short: 200 bytes of its 348-byte NIfTI-1 header");
+  std::string dim0 = good;
+  dim0[40] = 9, dim0[41] = 0;  // little-endian int16, as nifticlib wrote it here
+  expectSays(write("dim0.nii", dim0), "dim0.nii: not a readable NIfTI file: dim[0] = 9, must be in 1..7");
+  expectSays(write("text.nii", "a text file, not a volume, named .nii by mistake\n"),
+             "text.nii: not a readable NIfTI file: its first 4 bytes give a header size of");
+}
+
 // Found by review: a header ending the file (no blank line, no data file) read from offset
 // 2^64 - 1; "byte skip: abc" said only "stoll"; an RGB axis was drawn as 3 voxels of space.
 TEST(VolumeFiles, NrrdHeadersWithoutDataOrWithBadFieldsAreNamed) {

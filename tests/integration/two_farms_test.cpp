@@ -21,6 +21,16 @@ std::string socketFolder(const std::string& output) {
   return std::regex_search(output, m, std::regex("run [0-9a-f]+: sockets in (\\S+)")) ? m[1].str() : "";
 }
 
+// Whether `output` has a line "<endpoints>/<socket> is in use by a live farm (run '...".
+bool saysInUse(const std::string& output, const std::string& endpoints) {
+  const std::string prefix = endpoints + "/", in_use = " is in use by a live farm (run '";
+  for (size_t at = output.find(prefix); at != std::string::npos; at = output.find(prefix, at + 1)) {
+    const size_t socket_end = output.find_first_of(" \n", at);
+    if (socket_end != std::string::npos && output.compare(socket_end, in_use.size(), in_use) == 0) return true;
+  }
+  return false;
+}
+
 void expectFramesMatch(const FarmDir& dir, const fs::path& scene, int frames) {
   for (int k = 0; k < frames; ++k) {
     ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " missing in " << dir.path();
@@ -60,7 +70,9 @@ TEST(TwoFarms, AFarmOnTheEndpointsOfALiveFarmRefusesToStartAndTheLiveOneGoesOn) 
   const auto rb = b.runFarm(b.writeScene(5, 24, 64, 48), 1, 1, 5, 60, "", shared);
   const bool a_still_running = !fs::exists(a.frame(frames - 1));
   EXPECT_NE(rb.exit_code, 0) << rb.output;
-  EXPECT_NE(rb.output.find(shared + "/master-pub is in use by a live farm (run '"), std::string::npos) << rb.output;
+  // Whichever of B's stages binds first says so (the display often does, before the master
+  // has read its scene); tessera-up then stops the others.
+  EXPECT_TRUE(saysInUse(rb.output, shared)) << rb.output;
   EXPECT_FALSE(fs::exists(b.path() / "out" / "metrics.jsonl")) << "the failed start left a metrics file";
   const auto ra = run_a.get();
   ASSERT_EQ(ra.exit_code, 0) << ra.output;
