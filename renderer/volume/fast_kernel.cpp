@@ -1,4 +1,4 @@
-// Fast kernel: float, SIMD over 8 consecutive samples of one ray (AVX2 gathers), table
+// Fast kernel: float, SIMD over 8 consecutive samples of one ray (AVX2 arithmetic, voxels read lane by lane), table
 // classification, empty-space skipping over the min-max hierarchy, early termination.
 // Compiled once per instruction set (TESSERA_KERNEL_ISA = scalar | avx2 | avx512, each its
 // own namespace); kernel_dispatch.cpp calls the one the CPU supports.

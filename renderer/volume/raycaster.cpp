@@ -47,7 +47,7 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, 
   for (int a = 0; a < 3; ++a)
     if (v.dims[a] <= 0) throw std::invalid_argument("Raycaster: volume dims must be positive");
   if (v.values.size() != v.voxelCount()) throw std::invalid_argument("Raycaster: volume value count != dims product");
-  // 32-bit gather indices (AVX2) address at most 2^31 values of the bricked copy, which holds
+  // The kernel's 32-bit lane indices address at most 2^31 values of the bricked copy, which holds
   // 9^3 voxels per 8^3-cell brick: ~1.5 G voxels in one renderer (a larger volume needs more bricks).
   const auto nb = MinMaxHierarchy::blockDims(v.dims);
   const double bricked = (double)nb[0] * nb[1] * nb[2] * VolumeAccel::kBrickSize;
