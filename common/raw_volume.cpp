@@ -23,7 +23,7 @@
 
 #include <zlib.h>
 
-#include "common/io/volume_files.h"  // DicomSliceBytes
+#include "common/io/volume_files.h"  // sliceBytes
 #include "common/lanes.h"
 #include "common/sample_convert.h"
 #include "common/volume.h"
@@ -57,7 +57,7 @@ class RawFile {
     if (spec.has_range && !(spec.range[0] < spec.range[1]))
       fail(f, "range must satisfy min < max, got [" + std::to_string(spec.range[0]) + ", " +
                   std::to_string(spec.range[1]) + "]");
-    if (spec.format == VolumeFormat::Dicom) {  // slice by slice, each file opened when read
+    if (!spec.slices.empty()) {  // slice by slice: a DICOM series, a TIFF stack
       if (spec.slices.size() != (size_t)spec.dims[2])
         fail(f, std::to_string(spec.slices.size()) + " slices for dims[2] = " + std::to_string(spec.dims[2]));
       return;
@@ -145,15 +145,15 @@ class RawFile {
     checkFinite(first, count, out);
   }
 
-  // A DICOM series: a piece may span slices, each its own file (dicom_series.cpp).
+  // A DICOM series or a TIFF stack: a piece may span slices (dicom_series.cpp, tiff_stack.cpp).
   void readSlices(size_t first, size_t count, float* out) {
-    if (!slices_) slices_ = std::make_unique<DicomSliceBytes>(spec_);
+    if (!slices_) slices_ = sliceBytes(spec_);
     const size_t per_slice = (size_t)spec_.dims[0] * spec_.dims[1];
     while (count > 0) {
       const size_t z = first / per_slice, in = first % per_slice, n = std::min(count, per_slice - in);
       buf_.resize(n * ts_);
       slices_->read(z, in, n, buf_.data());
-      const DicomSlice& s = spec_.slices[z];
+      const SliceFile& s = spec_.slices[z];
       samples::convertAll(spec_.type, buf_.data(), n, samples::Scaling{s.slope, s.inter, false}, out);
       samples_read += n * ts_;
       checkFinite(first, n, out);
@@ -284,7 +284,7 @@ class RawFile {
   uint64_t chunk_lo_ = 0, chunk_hi_ = 0;  // file bytes in this thread's chunk, when this filled it last
   gzFile gz_ = nullptr;
   std::vector<unsigned char> buf_;
-  std::unique_ptr<DicomSliceBytes> slices_;  // a DICOM series' slice files
+  std::unique_ptr<SliceBytes> slices_;  // a DICOM series' or a TIFF stack's slices
 };
 
 // The file stays open between windows; with no declared range the whole file's min..max is

@@ -108,7 +108,7 @@ struct SceneError : std::runtime_error {
 // message names the file and key path, e.g. "scene.yaml: camera.fov: expected a number".
 Scene parseScene(const std::string& yaml_text, const std::string& base_dir,
                  const std::string& name_for_errors = "<scene>");
-// A scene file, or a volume file that says what it holds (NIfTI, NRRD, a DICOM series or
+// A scene file, or a volume file that says what it holds (NIfTI, NRRD, TIFF, a DICOM series or
 // its folder): then the scene `volume: {file: F}` with every default.
 Scene loadScene(const std::string& path);
 // The scene as YAML with every default filled in; parseScene of it gives the same Scene.

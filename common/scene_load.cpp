@@ -11,7 +11,7 @@
 namespace tessera {
 
 Scene loadScene(const std::string& path) {
-  // A volume file whose header says what it holds (NIfTI, NRRD, DICOM, a DICOM folder) is the
+  // A volume file whose header says what it holds (NIfTI, NRRD, DICOM, TIFF, or a folder of DICOM or TIFF slices) is the
   // scene `volume: {file: F}`: every default, from the data.
   if (volumeFormatOf(path) != VolumeFormat::Raw) {
     std::filesystem::path abs = std::filesystem::absolute(path).lexically_normal();

@@ -109,9 +109,12 @@ TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
     if (t.files.empty()) fail("volume.series", file + ": the files list is empty");
   }
   if (t.files.size() > (size_t)kMaxSteps) fail("volume.series", "more than " + std::to_string(kMaxSteps) + " steps");
-  for (const std::string& f : t.files)  // each step would be a folder scanned by every process
-    if (volumeFormatOf(f) == VolumeFormat::Dicom)
-      fail("volume.series", f + ": a DICOM series cannot be a time step; convert the steps to NIfTI or NRRD files");
+  for (const std::string& f : t.files) {  // a step's slices are listed per step: not kept for a series
+    const VolumeFormat fmt = volumeFormatOf(f);
+    if (fmt == VolumeFormat::Dicom || fmt == VolumeFormat::Tiff)
+      fail("volume.series", f + ": a " + (fmt == VolumeFormat::Dicom ? "DICOM series" : "TIFF stack") +
+                                " cannot be a time step; convert the steps to NIfTI or NRRD files");
+  }
   t.steps = (int)t.files.size();
   return t;
 }
@@ -123,10 +126,10 @@ RawVolumeSpec Parser::volumeFile(const YAML::Node& n, const std::string& file, T
   const std::string key = series.files.empty() ? "volume.file" : "volume.series";
   if (volumeFormatOf(file) == VolumeFormat::Raw) return rawFile(n, file);
   std::error_code no_throw;
-  const bool folder = volumeFormatOf(file) == VolumeFormat::Dicom && std::filesystem::is_directory(file, no_throw);
+  const bool folder = std::filesystem::is_directory(file, no_throw);
   if (folder && (n["dims"] || n["type"]))
-    fail(key, file + " is a directory: read as a DICOM series, whose headers give dims and type (leave them out), "
-                     "or name the raw file");
+    fail(key, file + " is a directory: read as a DICOM series or a TIFF stack, whose headers give dims and type (leave "
+                     "them out), or name the raw file");
   for (const char* k : {"dims", "type"})
     if (n[k]) fail(std::string("volume.") + k, std::string("comes from the header of ") + file + "; leave it out");
   if (std::string m = folder ? "" : fileProblem(file); !m.empty()) fail(key, m);

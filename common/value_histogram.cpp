@@ -20,7 +20,7 @@ void ValueHistogram::add(double v) {
 
 bool storesIntegers(const RawVolumeSpec& s) {
   auto integer = [](double x) { return x == std::round(x); };
-  for (const DicomSlice& d : s.slices)  // a DICOM series scales slice by slice
+  for (const SliceFile& d : s.slices)  // a DICOM series scales slice by slice
     if (!integer(d.slope) || !integer(d.inter)) return false;
   return s.type != VoxelType::Float32 && s.type != VoxelType::Float64 && integer(s.slope) && integer(s.inter);
 }

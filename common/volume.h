@@ -46,12 +46,13 @@ std::optional<VoxelType> voxelTypeFromName(const std::string& name);
 // Where a volume's samples are. A raw file has no header: the scene gives dims and type.
 // NIfTI and NRRD files give them (and spacing, byte order, offset, compression) in their
 // header, read by the scene parser (common/io/volume_files.h); the reader is the same.
-enum class VolumeFormat { Raw, Nifti, Nrrd, Dicom };
+enum class VolumeFormat { Raw, Nifti, Nrrd, Dicom, Tiff };
 
-// One slice of a DICOM series: its file, where its samples start in it (uncompressed), or
-// that GDCM must decode it (a compressed transfer syntax), and its scaling (a slice's own:
-// PET and MR series may scale each slice differently).
-struct DicomSlice {
+// One slice of a volume kept slice by slice. A DICOM series' slice: its file, where its
+// samples start in it (uncompressed), or that GDCM must decode it (a compressed transfer
+// syntax), and its scaling (a slice's own: PET and MR series may scale each slice
+// differently). A TIFF stack's: its file and its page (offset: the image file directory).
+struct SliceFile {
   std::string file;
   uint64_t offset = 0;
   bool encoded = false;
@@ -74,7 +75,7 @@ struct RawVolumeSpec {
   uint64_t gzip_start = 0;              // file byte where the gzip stream starts (after an attached header)
   double slope = 1, inter = 0;          // value = slope * stored + inter (NIfTI scl_slope, scl_inter)
   bool read_once = false;               // a series' step: what is not in the page cache bypasses it
-  std::vector<DicomSlice> slices;       // a DICOM series: slice k's file (k along the slices' normal)
+  std::vector<SliceFile> slices;        // a DICOM series (k along the slices' normal) or a TIFF stack: slice k
   double dicom_tilt_degrees = 0;        // how far its slices shift in their plane (a gantry tilt): drawn unsheared
   const std::string& samples() const { return data_file.empty() ? file : data_file; }
 };

@@ -245,7 +245,7 @@ RawVolumeSpec readSeries(const std::string& path) {
   const uint64_t bytes = (uint64_t)rows * columns * (bits / 8);
   for (const Slice& s : slices) {
     const uint64_t at = samplesOffset(s.file, bytes);
-    spec.slices.push_back(DicomSlice{s.file, at, at == 0, s.slope, s.inter, stored_bits});
+    spec.slices.push_back(SliceFile{s.file, at, at == 0, s.slope, s.inter, stored_bits});
   }
   return spec;
 }
@@ -271,17 +271,35 @@ std::vector<unsigned char> decodeSlice(const std::string& file, uint64_t bytes, 
 }  // namespace dicom
 }  // namespace
 
+namespace {
+namespace dicom {
+class SliceFiles : public SliceBytes {
+ public:
+  explicit SliceFiles(const RawVolumeSpec& spec)
+      : spec_(spec), ts_(voxelTypeSize(spec.type)), per_slice_((size_t)spec.dims[0] * spec.dims[1]) {}
+  ~SliceFiles() override {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  SliceFiles(const SliceFiles&) = delete;
+  SliceFiles& operator=(const SliceFiles&) = delete;
+  void read(size_t z, size_t in, size_t count, unsigned char* dst) override;
+
+ private:
+  const RawVolumeSpec& spec_;
+  size_t ts_, per_slice_;
+  int fd_ = -1;
+  size_t open_z_ = SIZE_MAX, decoded_z_ = SIZE_MAX;
+  std::vector<unsigned char> decoded_;
+};
+}  // namespace dicom
+}  // namespace
+
 RawVolumeSpec readDicomSeries(const std::string& path) { return dicom::readSeries(path); }
 
-DicomSliceBytes::DicomSliceBytes(const RawVolumeSpec& spec)
-    : spec_(spec), ts_(voxelTypeSize(spec.type)), per_slice_((size_t)spec.dims[0] * spec.dims[1]) {}
+std::unique_ptr<SliceBytes> dicomSliceBytes(const RawVolumeSpec& spec) { return std::make_unique<dicom::SliceFiles>(spec); }
 
-DicomSliceBytes::~DicomSliceBytes() {
-  if (fd_ >= 0) ::close(fd_);
-}
-
-void DicomSliceBytes::read(size_t z, size_t in, size_t count, unsigned char* dst) {
-  const DicomSlice& s = spec_.slices[z];
+void dicom::SliceFiles::read(size_t z, size_t in, size_t count, unsigned char* dst) {
+  const SliceFile& s = spec_.slices[z];
   if (s.encoded) {
     if (decoded_z_ != z)
       decoded_z_ = SIZE_MAX, decoded_ = dicom::decodeSlice(s.file, per_slice_ * ts_, (int)ts_ * 8), decoded_z_ = z;

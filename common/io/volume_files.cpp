@@ -11,10 +11,18 @@ namespace tessera {
 RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps);  // nifti_header.cpp
 RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps);   // nrrd_header.cpp
 RawVolumeSpec readDicomSeries(const std::string& path);                   // dicom_series.cpp
+RawVolumeSpec readTiffStack(const std::string& path);                     // tiff_stack.cpp
+std::unique_ptr<SliceBytes> dicomSliceBytes(const RawVolumeSpec& spec);   // dicom_series.cpp
+std::unique_ptr<SliceBytes> tiffSliceBytes(const RawVolumeSpec& spec);    // tiff_stack.cpp
 
 VolumeFormat volumeFormatOf(const std::string& path) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) return VolumeFormat::Dicom;
+  if (std::filesystem::is_directory(path, ec)) {
+    for (const auto& e : std::filesystem::directory_iterator(path, ec))
+      if (isTiffName(e.path().string()) && e.is_regular_file(ec)) return VolumeFormat::Tiff;
+    return VolumeFormat::Dicom;
+  }
+  if (isTiffName(path)) return VolumeFormat::Tiff;
   std::string p = path;
   std::transform(p.begin(), p.end(), p.begin(), [](unsigned char c) { return (char)std::tolower(c); });
   auto ends = [&](const char* e) { const std::string s(e); return p.size() >= s.size() && p.compare(p.size() - s.size(), s.size(), s) == 0; };
@@ -34,8 +42,13 @@ RawVolumeSpec readVolumeHeader(const std::string& path, int* time_steps) {
   switch (volumeFormatOf(path)) {
     case VolumeFormat::Nifti: return readNiftiHeader(path, time_steps);
     case VolumeFormat::Dicom: return readDicomSeries(path);  // one step
+    case VolumeFormat::Tiff: return readTiffStack(path);     // one step
     default: return readNrrdHeader(path, time_steps);
   }
+}
+
+std::unique_ptr<SliceBytes> sliceBytes(const RawVolumeSpec& spec) {
+  return spec.format == VolumeFormat::Tiff ? tiffSliceBytes(spec) : dicomSliceBytes(spec);
 }
 
 }  // namespace tessera

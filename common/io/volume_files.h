@@ -1,6 +1,7 @@
 // Volume files that describe themselves: NIfTI-1 and NIfTI-2 (`.nii`, `.nii.gz`, `.hdr` +
 // `.img`; read with nifticlib), NRRD (`.nrrd` with attached data, `.nhdr` with a data
-// file; raw or gzip encoding) and DICOM series (a folder of slices; GDCM). Only the header is read here: the samples are read by the
+// file; raw or gzip encoding), DICOM series (a folder of slices; GDCM) and TIFF stacks (a
+// multi-page TIFF or a folder of TIFFs; libtiff). Only the header is read here: the samples are read by the
 // same windowed reader as raw files (common/raw_volume.cpp), so a renderer reads only its
 // bricks from an uncompressed file. Orientation: Tessera shows index space (i along x,
 // j along y, k along z) scaled by the voxel spacing; a NIfTI qform/sform or NRRD space
@@ -8,6 +9,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -16,8 +18,11 @@
 namespace tessera {
 
 // The format a file name says: .nii, .nii.gz, .hdr, .img -> Nifti; .nrrd, .nhdr -> Nrrd;
-// a folder, .dcm or a file with DICOM's "DICM" at byte 128 -> Dicom; else Raw.
+// .tif, .tiff or a folder holding such files -> Tiff; another folder, .dcm or a file with
+// DICOM's "DICM" at byte 128 -> Dicom; else Raw.
 VolumeFormat volumeFormatOf(const std::string& path);
+// A .tif or .tiff name (any case).
+bool isTiffName(const std::string& path);
 // dims, type, spacing, byte order, data file, offset and compression from the header.
 // Throws std::runtime_error naming the file, the field and the value when the header is
 // unreadable, inconsistent or describes what Tessera does not render (complex or RGB
@@ -28,26 +33,24 @@ VolumeFormat volumeFormatOf(const std::string& path);
 // is a volume of its slices sorted along their normal, evenly spaced, of one shape; each
 // slice keeps its file, where its samples start (uncompressed little-endian) and its
 // RescaleSlope/Intercept. x runs along a row (columns), y down the rows, z along the normal.
+// A TIFF stack (a multi-page file, one slice a full-size page; or a folder of single-page
+// files in natural name order) is a volume of grayscale pages of one size and sample type;
+// ImageJ's metadata gives the spacing (1/resolution across, `spacing=` between slices),
+// else it is 1. x runs along a row, y down the rows, z from the first page to the last.
 RawVolumeSpec readVolumeHeader(const std::string& path, int* time_steps = nullptr);
-// The samples of a DICOM series' slices, as their type's little-endian bytes holding only
-// the stored bits (a 12-bit signed sample sign-extended, whatever the bits above held): an
-// uncompressed slice by positioned reads of its file (the last one read stays open: windows
-// are read slice by slice), a compressed one decoded whole by GDCM (the last one kept).
-class DicomSliceBytes {
+// The samples of a volume kept slice by slice (spec.slices: a DICOM series, a TIFF stack), as
+// their type's little-endian bytes. A DICOM slice holds only its stored bits (a 12-bit signed
+// sample sign-extended, whatever the bits above held): uncompressed, read by positioned reads
+// of its file (the last one read stays open: windows are read slice by slice); compressed,
+// decoded whole by GDCM (the last one kept). A TIFF slice is read by the strips that hold the
+// rows asked for, decoded by libtiff (the last strip kept).
+class SliceBytes {
  public:
-  explicit DicomSliceBytes(const RawVolumeSpec& spec);  // spec.slices; kept by reference
-  ~DicomSliceBytes();
-  DicomSliceBytes(const DicomSliceBytes&) = delete;
-  DicomSliceBytes& operator=(const DicomSliceBytes&) = delete;
+  virtual ~SliceBytes() = default;
   // `count` samples of slice z from its sample `in` into dst; errors name the slice's file.
-  void read(size_t z, size_t in, size_t count, unsigned char* dst);
-
- private:
-  const RawVolumeSpec& spec_;
-  size_t ts_, per_slice_;
-  int fd_ = -1;
-  size_t open_z_ = SIZE_MAX, decoded_z_ = SIZE_MAX;
-  std::vector<unsigned char> decoded_;
+  virtual void read(size_t z, size_t in, size_t count, unsigned char* dst) = 0;
 };
+// The reader for spec.format (Dicom or Tiff); spec is kept by reference.
+std::unique_ptr<SliceBytes> sliceBytes(const RawVolumeSpec& spec);
 
 }  // namespace tessera

@@ -125,7 +125,7 @@ CheckedSettings checkSettings(const std::vector<std::string>& names, const Varia
     if (known->kind != Kind::Path && known->kind != Kind::ExistingFile) continue;
     const std::filesystem::path p = std::filesystem::path(*value);
     const std::filesystem::path absolute = p.is_absolute() ? p : (user_dir / p).lexically_normal();
-    // A file, or a folder that the program reads (a DICOM series given as the scene).
+    // A file, or a folder that the program reads (a DICOM series or TIFF stack given as the scene).
     if (known->kind == Kind::ExistingFile && !std::filesystem::exists(absolute))
       throw LaunchError(name + "=" + *value + ": no such file or folder (looked for " + absolute.string() + ")");
     if (!p.is_absolute()) out.overrides[name] = absolute.string();

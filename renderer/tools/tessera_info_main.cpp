@@ -107,7 +107,7 @@ int run(int argc, char** argv) {
   std::string scene_path, plot;
   int bins = 16;
   app.add_option("scene", scene_path,
-                 "scene file, or a NIfTI/NRRD volume file or a DICOM series' folder (read as the scene 'volume: {file: F}'); "
+                 "scene file, or a NIfTI/NRRD/TIFF volume file, a DICOM series' or a TIFF stack's folder (read as the scene 'volume: {file: F}'); "
                  "default: the built-in scene");
   app.add_option("--bins", bins, "histogram bins")->check(CLI::Range(1, 4096))->capture_default_str();
   app.add_option("--plot", plot, "also write the histogram as a PNG");

@@ -161,7 +161,7 @@ TEST(DicomSeries, AFolderWithoutImagesAndKeysTheHeaderGivesAreRefused) {
     parseScene("volume: {file: " + dir.string() + ", dims: [6, 5, 2]}\n", ".", "d.yaml");
     FAIL();
   } catch (const SceneError& e) {
-    EXPECT_NE(std::string(e.what()).find("is a directory: read as a DICOM series, whose headers give dims and type"),
+    EXPECT_NE(std::string(e.what()).find("is a directory: read as a DICOM series or a TIFF stack, whose headers give dims and type"),
               std::string::npos)
         << e.what();
   }

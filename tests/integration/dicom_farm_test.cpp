@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <regex>
 #include <string>
 
 #include "tests/common/dicom_writer.h"
@@ -44,13 +43,9 @@ TEST(DicomFarm, ACtSeriesRendersOnTheFarmAsTesseraRenderRendersIt) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(dir.matches(dir.farmFrame(0), dir.reference(scene, 0), 1, "dicom"));
   // Each renderer read its half of the 40 slices of 64 x 56 int16 (280 KiB), plus ghost slices.
-  const std::regex read_line("read ([0-9.]+) MiB of volume samples");
-  int renderers = 0;
-  for (auto it = std::sregex_iterator(r.output.begin(), r.output.end(), read_line); it != std::sregex_iterator(); ++it) {
-    ++renderers;
-    EXPECT_LT(std::stod((*it)[1].str()), 0.2) << "a renderer read more than its bricks\n" << r.output;
-  }
-  EXPECT_EQ(renderers, 2) << r.output;
+  const std::vector<double> read = renderersRead(r.output);
+  EXPECT_EQ(read.size(), 2u) << r.output;
+  for (double mib : read) EXPECT_LT(mib, 0.2) << "a renderer read more than its bricks\n" << r.output;
 
   const auto info = runCommand(bin("tessera-info") + " " + (dir.path() / "ct").string() + "/ --bins 4", 60);
   ASSERT_EQ(info.exit_code, 0) << info.output;

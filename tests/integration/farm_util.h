@@ -10,7 +10,9 @@
 #include <iterator>
 #include <map>
 #include <random>
+#include <regex>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -54,6 +56,15 @@ inline Scene smallScene(int frames) {
 }
 
 inline std::string bin(const std::string& name) { return std::string(TESSERA_BINARY_DIR) + "/bin/" + name; }
+
+// The MiB of volume samples each renderer of a farm's output says it read, in order.
+inline std::vector<double> renderersRead(const std::string& output) {
+  const std::regex line("read ([0-9.]+) MiB of volume samples");
+  std::vector<double> mib;
+  for (auto it = std::sregex_iterator(output.begin(), output.end(), line); it != std::sregex_iterator(); ++it)
+    mib.push_back(std::stod((*it)[1].str()));
+  return mib;
+}
 
 // Largest difference of any channel, in rgba8 units.
 inline int maxAbsDiff(const Image8& a, const Image8& b) {

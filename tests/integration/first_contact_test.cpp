@@ -93,15 +93,12 @@ TEST(FirstContact, OnTheFarmEachRendererReadsOnlyItsBricksOfAFileWithoutRange) {
   const auto r = dir.runFarm(scene, 2, 1, 1);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(dir.matches(dir.farmFrame(0), dir.reference(scene, 0), 1, "own_range"));
-  const std::regex read_line("read ([0-9.]+) MiB of volume samples");
-  int renderers = 0;
-  for (auto it = std::sregex_iterator(r.output.begin(), r.output.end(), read_line); it != std::sregex_iterator(); ++it) {
-    ++renderers;
-    const double mib = std::stod((*it)[1].str());
+  const std::vector<double> read = renderersRead(r.output);
+  EXPECT_EQ(read.size(), 2u) << r.output;
+  for (double mib : read) {
     EXPECT_GT(mib, 1.5) << "half the file is a renderer's bricks\n" << r.output;
     EXPECT_LT(mib, 2.5) << "a renderer read more than its bricks and ghost voxels of the 4 MiB file\n" << r.output;
   }
-  EXPECT_EQ(renderers, 2) << r.output;
 }
 
 // The camera fitted when the scene has none fits the image asked for: a tall one

@@ -1,0 +1,286 @@
+// TIFF stacks through libtiff: a multi-page TIFF (one slice a page, as Fiji and most
+// microscopes and micro-CT scanners save a stack) or a folder of single-page TIFFs (one slice
+// a file, in natural name order: slice2 before slice10). Grayscale pages of one size and
+// sample type; ImageJ's metadata gives the spacing. A slice is read by the strips that hold
+// the rows a window needs, decoded by libtiff (any compression it decodes).
+#include <tiffio.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/io/volume_files.h"
+
+namespace tessera {
+namespace {
+namespace tiff {  // a unity build joins this file's helpers with others' (fail, ...)
+
+namespace fs = std::filesystem;
+
+[[noreturn]] void fail(const std::string& file, const std::string& what) { throw std::runtime_error(file + ": " + what); }
+
+// libtiff reports through global handlers that print; its last error on this thread goes into
+// the exception that names the file instead, and its warnings (unknown tags, common in
+// microscopes' files) are dropped.
+thread_local std::string last_error;
+void onError(const char*, const char* fmt, va_list ap) {
+  char buf[512];
+  std::vsnprintf(buf, sizeof buf, fmt, ap);
+  last_error = buf;
+}
+
+struct Closer {
+  void operator()(TIFF* t) const { TIFFClose(t); }
+};
+using File = std::unique_ptr<TIFF, Closer>;
+
+File open(const std::string& path) {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    TIFFSetErrorHandler(onError);
+    TIFFSetWarningHandler(nullptr);
+  });
+  last_error.clear();
+  File t(TIFFOpen(path.c_str(), "r"));
+  if (!t) fail(path, "not a readable TIFF file" + (last_error.empty() ? "" : " (" + last_error + ")"));
+  return t;
+}
+
+// What a page holds, checked against what Tessera renders.
+struct Page {
+  uint32_t width = 0, height = 0;
+  VoxelType type = VoxelType::UInt8;
+};
+
+Page pageOf(TIFF* t, const std::string& file, int k) {
+  const std::string at = "page " + std::to_string(k + 1);
+  Page p;
+  uint16_t bits = 1, format = SAMPLEFORMAT_UINT, spp = 1, photometric = PHOTOMETRIC_MINISBLACK, compression = 1;
+  TIFFGetField(t, TIFFTAG_IMAGEWIDTH, &p.width);
+  TIFFGetField(t, TIFFTAG_IMAGELENGTH, &p.height);
+  TIFFGetFieldDefaulted(t, TIFFTAG_BITSPERSAMPLE, &bits);
+  TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLEFORMAT, &format);
+  TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLESPERPIXEL, &spp);
+  TIFFGetField(t, TIFFTAG_PHOTOMETRIC, &photometric);
+  TIFFGetFieldDefaulted(t, TIFFTAG_COMPRESSION, &compression);
+  if (p.width == 0 || p.height == 0) fail(file, at + " is " + std::to_string(p.width) + " x " + std::to_string(p.height) + " pixels");
+  if (spp != 1 || photometric == PHOTOMETRIC_PALETTE || photometric == PHOTOMETRIC_RGB)
+    fail(file, at + " is a colour image (" + std::to_string(spp) + " samples a pixel" +
+                   (photometric == PHOTOMETRIC_PALETTE ? ", a palette" : "") +
+                   "): Tessera renders one value a voxel; save the stack as grayscale (Fiji: Image > Type > 16-bit)");
+  if (TIFFIsTiled(t))
+    fail(file, at + " is stored in tiles; Tessera reads strips: convert it with `tiffcp -s " + fs::path(file).filename().string() +
+                   " stripped.tif` (libtiff-tools)");
+  if (!TIFFIsCODECConfigured(compression))
+    fail(file, at + " uses compression " + std::to_string(compression) + ", which this libtiff cannot decode");
+  const bool sign = format == SAMPLEFORMAT_INT, real = format == SAMPLEFORMAT_IEEEFP;
+  if (real && bits == 32) p.type = VoxelType::Float32;
+  else if (real && bits == 64) p.type = VoxelType::Float64;
+  else if (!real && (format == SAMPLEFORMAT_UINT || sign) && (bits == 8 || bits == 16 || bits == 32))
+    p.type = bits == 8 ? (sign ? VoxelType::Int8 : VoxelType::UInt8)
+             : bits == 16 ? (sign ? VoxelType::Int16 : VoxelType::UInt16)
+                          : (sign ? VoxelType::Int32 : VoxelType::UInt32);
+  else
+    fail(file, at + " has " + std::to_string(bits) + "-bit samples of format " + std::to_string(format) +
+                   " (1 unsigned, 2 signed, 3 float): Tessera reads 8, 16 and 32-bit integers and 32 and 64-bit floats");
+  return p;
+}
+
+// A thumbnail or a pyramid level beside the full-size pages (NewSubfileType bit 0).
+bool reduced(TIFF* t) {
+  uint32_t kind = 0;
+  return TIFFGetField(t, TIFFTAG_SUBFILETYPE, &kind) && (kind & FILETYPE_REDUCEDIMAGE);
+}
+
+// The full-size pages of a file, each with where its directory starts. A directory that
+// cannot be read (a file cut short) is an error, not the end of the stack.
+std::vector<uint64_t> pagesOf(TIFF* t, const std::string& file) {
+  std::vector<uint64_t> pages;
+  for (int k = 1;; ++k) {
+    if (!reduced(t)) pages.push_back(TIFFCurrentDirOffset(t));
+    last_error.clear();
+    if (TIFFReadDirectory(t)) continue;
+    if (!last_error.empty()) fail(file, "the directory after page " + std::to_string(k) + " cannot be read (" + last_error + ")");
+    return pages;
+  }
+}
+
+// ImageJ writes its stack's layout and z spacing in the first page's description
+// ("ImageJ=1.54f\nimages=60\nchannels=2\nslices=30\nspacing=2.5\nunit=micron\n...").
+double imageJValue(const std::string& description, const std::string& key, double otherwise) {
+  const size_t at = description.find("\n" + key + "=");
+  return at == std::string::npos ? otherwise : std::atof(description.c_str() + at + key.size() + 2);
+}
+
+// Name order as people number slices: runs of digits compare as numbers.
+bool naturalLess(const std::string& a, const std::string& b) {
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (std::isdigit((unsigned char)a[i]) && std::isdigit((unsigned char)b[j])) {
+      size_t ei = i, ej = j;
+      while (ei < a.size() && std::isdigit((unsigned char)a[ei])) ++ei;
+      while (ej < b.size() && std::isdigit((unsigned char)b[ej])) ++ej;
+      const std::string na = a.substr(i, ei - i), nb = b.substr(j, ej - j);
+      const size_t za = na.find_first_not_of('0'), zb = nb.find_first_not_of('0');
+      const std::string va = za == std::string::npos ? "" : na.substr(za), vb = zb == std::string::npos ? "" : nb.substr(zb);
+      if (va.size() != vb.size()) return va.size() < vb.size();
+      if (va != vb) return va < vb;
+      i = ei, j = ej;
+    } else {
+      if (a[i] != b[j]) return a[i] < b[j];
+      ++i, ++j;
+    }
+  }
+  return a.size() - i < b.size() - j;
+}
+
+RawVolumeSpec readStack(const std::string& path) {
+  RawVolumeSpec spec;
+  spec.format = VolumeFormat::Tiff;
+  spec.file = path;
+  std::vector<std::string> files;
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    for (const auto& e : fs::directory_iterator(path, ec))
+      if (e.is_regular_file(ec) && isTiffName(e.path().string())) files.push_back(e.path().string());
+    if (files.empty()) fail(path, "a folder with no .tif or .tiff file");
+    std::sort(files.begin(), files.end(), naturalLess);
+  } else {
+    files.push_back(path);
+  }
+  if (files.size() > 65536) fail(path, std::to_string(files.size()) + " TIFF files; at most 65536 slices");
+  Page first;
+  std::string description;
+  float xres = 0, yres = 0;
+  for (const std::string& f : files) {
+    File t = open(f);
+    if (spec.slices.empty()) {
+      char* d = nullptr;
+      if (TIFFGetField(t.get(), TIFFTAG_IMAGEDESCRIPTION, &d) && d) description = d;
+      TIFFGetField(t.get(), TIFFTAG_XRESOLUTION, &xres);
+      TIFFGetField(t.get(), TIFFTAG_YRESOLUTION, &yres);
+    }
+    const std::vector<uint64_t> pages = pagesOf(t.get(), f);
+    if (files.size() > 1 && pages.size() != 1)
+      fail(f, "holds " + std::to_string(pages.size()) + " pages; in a folder, each TIFF file is one slice (give a multi-page file itself)");
+    for (size_t k = 0; k < pages.size(); ++k) {
+      if (!TIFFSetSubDirectory(t.get(), pages[k])) fail(f, "page " + std::to_string(k + 1) + " cannot be read: " + last_error);
+      const Page p = pageOf(t.get(), f, (int)k);
+      if (spec.slices.empty()) first = p;
+      if (p.width != first.width || p.height != first.height || p.type != first.type)
+        fail(f, "page " + std::to_string(k + 1) + " is " + std::to_string(p.width) + " x " + std::to_string(p.height) + " " +
+                    voxelTypeName(p.type) + ", the first " + std::to_string(first.width) + " x " + std::to_string(first.height) +
+                    " " + voxelTypeName(first.type) + ": a stack's pages are one size and type");
+      SliceFile s;
+      s.file = f;
+      s.offset = pages[k];
+      spec.slices.push_back(std::move(s));
+    }
+    if (spec.slices.size() > 65536) fail(path, "more than 65536 pages; at most 65536 slices");
+  }
+  if (first.width > 65536 || first.height > 65536) fail(files[0], "pages wider or taller than 65536 pixels");
+  spec.dims = {(int)first.width, (int)first.height, (int)spec.slices.size()};
+  spec.type = first.type;
+  if (description.rfind("ImageJ=", 0) == 0) {
+    const double channels = imageJValue(description, "channels", 1), frames = imageJValue(description, "frames", 1);
+    if (channels > 1)
+      fail(files[0], "an ImageJ hyperstack of " + std::to_string((int)channels) +
+                         " channels: Tessera renders one; save one channel (Fiji: Image > Color > Split Channels)");
+    if (frames > 1)
+      fail(files[0], "an ImageJ hyperstack of " + std::to_string((int)frames) +
+                         " time points: save each as its own stack and list them as the scene's volume.series");
+    const double images = imageJValue(description, "images", (double)spec.slices.size());
+    if (images > (double)spec.slices.size())
+      fail(files[0], "ImageJ wrote " + std::to_string((long long)images) + " images but the file has " +
+                         std::to_string(spec.slices.size()) + " pages (ImageJ saves a stack over 4 GB that way): save it as raw "
+                         "data and give volume.dims and type");
+    // Resolution in pixels per unit; the same unit for the slices' spacing.
+    if (xres > 0) spec.spacing[0] = 1.0 / xres;
+    if (yres > 0) spec.spacing[1] = 1.0 / yres;
+    spec.spacing[2] = imageJValue(description, "spacing", 1.0);
+  }
+  return spec;
+}
+
+// A stack's slices by strips: the file and page of the last read stay open, and the last
+// strip decoded is kept (a window reads a slice row by row).
+class Strips : public SliceBytes {
+ public:
+  explicit Strips(const RawVolumeSpec& spec)
+      : spec_(spec), ts_(voxelTypeSize(spec.type)), width_((size_t)spec.dims[0]), height_((size_t)spec.dims[1]) {}
+
+  void read(size_t z, size_t in, size_t count, unsigned char* dst) override {
+    const SliceFile& s = spec_.slices[z];
+    select(s);
+    for (size_t done = 0; done < count;) {
+      const size_t at = in + done, strip = at / width_ / rows_per_strip_;
+      if (strip != strip_index_) decode(s, strip);
+      const size_t strip_start = strip * rows_per_strip_ * width_;  // the strip's first sample
+      const size_t n = std::min(count - done, strip_start + bytes_.size() / ts_ - at);
+      std::memcpy(dst + done * ts_, bytes_.data() + (at - strip_start) * ts_, n * ts_);
+      done += n;
+    }
+  }
+
+ private:
+  void select(const SliceFile& s) {
+    if (file_ != s.file) {
+      file_.clear(), dir_ = UINT64_MAX;
+      t_ = open(s.file);
+      file_ = s.file;
+    }
+    if (dir_ == s.offset) return;
+    dir_ = UINT64_MAX, strip_index_ = SIZE_MAX;
+    last_error.clear();
+    if (!TIFFSetSubDirectory(t_.get(), s.offset)) fail(s.file, "a page cannot be read: " + last_error);
+    uint32_t rps = 0;
+    TIFFGetFieldDefaulted(t_.get(), TIFFTAG_ROWSPERSTRIP, &rps);
+    rows_per_strip_ = std::clamp<size_t>(rps, 1, height_);
+    dir_ = s.offset;
+  }
+
+  void decode(const SliceFile& s, size_t strip) {
+    const size_t rows = std::min(rows_per_strip_, height_ - strip * rows_per_strip_), want = rows * width_ * ts_;
+    strip_index_ = SIZE_MAX;
+    bytes_.resize(std::max<size_t>(want, (size_t)std::max<tmsize_t>(TIFFStripSize(t_.get()), 0)));
+    last_error.clear();
+    const tmsize_t got = TIFFReadEncodedStrip(t_.get(), (uint32_t)strip, bytes_.data(), (tmsize_t)bytes_.size());
+    if (got < (tmsize_t)want)
+      fail(s.file, "strip " + std::to_string(strip) + " of a page decodes to " + std::to_string(std::max<tmsize_t>(got, 0)) +
+                       " bytes, " + std::to_string(want) + " expected (the file is cut short or damaged" +
+                       (last_error.empty() ? "" : ": " + last_error) + ")");
+    bytes_.resize(want);
+    strip_index_ = strip;
+  }
+
+  const RawVolumeSpec& spec_;
+  size_t ts_, width_, height_;
+  File t_;
+  std::string file_;
+  uint64_t dir_ = UINT64_MAX;
+  size_t rows_per_strip_ = 1, strip_index_ = SIZE_MAX;
+  std::vector<unsigned char> bytes_;  // the decoded strip strip_index_
+};
+
+}  // namespace tiff
+}  // namespace
+
+bool isTiffName(const std::string& path) {
+  std::string p = std::filesystem::path(path).extension().string();
+  std::transform(p.begin(), p.end(), p.begin(), [](unsigned char c) { return (char)std::tolower(c); });
+  return p == ".tif" || p == ".tiff";
+}
+
+RawVolumeSpec readTiffStack(const std::string& path) { return tiff::readStack(path); }
+
+std::unique_ptr<SliceBytes> tiffSliceBytes(const RawVolumeSpec& spec) { return std::make_unique<tiff::Strips>(spec); }
+
+}  // namespace tessera

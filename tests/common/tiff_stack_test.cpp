@@ -1,0 +1,194 @@
+// TIFF stacks, written with libtiff itself: a multi-page file (strips, LZW with a predictor,
+// uncompressed) and a folder of single-page files load as the raw file of the same samples,
+// window by window; ImageJ's spacing is read; what Tessera cannot render is named.
+#include <gtest/gtest.h>
+#include <tiffio.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "common/io/volume_files.h"
+#include "common/scene.h"
+#include "tests/common/raw_spec.h"
+#include "tests/common/temp_dir.h"
+
+namespace tessera {
+namespace {
+
+using test::TempDir;
+
+constexpr int kNx = 13, kNy = 11, kNz = 7;
+
+// A different value at every voxel, so any axis mix-up shows.
+std::vector<uint16_t> samples() {
+  std::vector<uint16_t> v((size_t)kNx * kNy * kNz);
+  for (int z = 0; z < kNz; ++z)
+    for (int y = 0; y < kNy; ++y)
+      for (int x = 0; x < kNx; ++x) v[x + kNx * (y + kNy * z)] = (uint16_t)(x * 3 + y * 40 + z * 500 + 100);
+  return v;
+}
+
+struct PageOptions {
+  uint16_t compression = COMPRESSION_NONE;
+  uint32_t rows_per_strip = 3;
+  uint16_t samples_per_pixel = 1;
+  bool tiled = false;
+  std::string description;
+  bool big_endian = false;
+  float resolution = 0;  // pixels per unit across (0: not written)
+};
+
+// Pages [z0, z1) of samples() into `path`, each one page.
+void writePages(const std::string& path, int z0, int z1, const PageOptions& o = {}) {
+  TIFF* t = TIFFOpen(path.c_str(), o.big_endian ? "wb" : "wl");
+  ASSERT_NE(t, nullptr);
+  const auto v = samples();
+  for (int z = z0; z < z1; ++z) {
+    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)kNx);
+    TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)kNy);
+    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, (uint16_t)16);
+    TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, (uint16_t)SAMPLEFORMAT_UINT);
+    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, o.samples_per_pixel);
+    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, o.samples_per_pixel == 3 ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK);
+    TIFFSetField(t, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+    TIFFSetField(t, TIFFTAG_COMPRESSION, o.compression);
+    if (o.compression == COMPRESSION_LZW) TIFFSetField(t, TIFFTAG_PREDICTOR, PREDICTOR_HORIZONTAL);
+    if (z == z0 && !o.description.empty()) TIFFSetField(t, TIFFTAG_IMAGEDESCRIPTION, o.description.c_str());
+    if (o.resolution > 0) {
+      TIFFSetField(t, TIFFTAG_XRESOLUTION, o.resolution);
+      TIFFSetField(t, TIFFTAG_YRESOLUTION, o.resolution);
+      TIFFSetField(t, TIFFTAG_RESOLUTIONUNIT, RESUNIT_NONE);
+    }
+    std::vector<uint16_t> row((size_t)kNx * o.samples_per_pixel);
+    if (o.tiled) {
+      TIFFSetField(t, TIFFTAG_TILEWIDTH, (uint32_t)16);
+      TIFFSetField(t, TIFFTAG_TILELENGTH, (uint32_t)16);
+      std::vector<uint16_t> tile(16 * 16, 7);
+      ASSERT_GE(TIFFWriteEncodedTile(t, 0, tile.data(), (tmsize_t)tile.size() * 2), 0);
+    } else {
+      TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, o.rows_per_strip);
+      for (int y = 0; y < kNy; ++y) {
+        for (int x = 0; x < kNx; ++x)
+          for (int c = 0; c < o.samples_per_pixel; ++c) row[x * o.samples_per_pixel + c] = v[x + kNx * (y + kNy * z)];
+        ASSERT_EQ(TIFFWriteScanline(t, row.data(), (uint32_t)y, 0), 1);
+      }
+    }
+    ASSERT_EQ(TIFFWriteDirectory(t), 1);
+  }
+  TIFFClose(t);
+}
+
+Volume reference(const TempDir& t, std::array<double, 3> spacing = {1, 1, 1}) {
+  const auto v = samples();
+  return loadRawVolume(test::rawSpec(t.write("ref.raw", v.data(), v.size() * 2), {kNx, kNy, kNz}, VoxelType::UInt16,
+                                     spacing, false, {0, 0}));
+}
+
+std::string errorOf(const std::string& yaml, const std::string& dir) {
+  try {
+    loadVolume(parseScene(yaml, dir, "s.yaml"));
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+void expectWindowsMatch(const Scene& s, const Volume& whole) {
+  VolumeReader reader(s);
+  for (const VoxelBox& box : {VoxelBox{{0, 0, 0}, {kNx, kNy, 3}}, VoxelBox{{2, 4, 2}, {9, 10, 7}}, VoxelBox{{0, 5, 6}, {kNx, 6, 7}}}) {
+    const Volume w = reader.read(box);
+    ASSERT_EQ(w.dims, (std::array<int, 3>{box.hi[0] - box.lo[0], box.hi[1] - box.lo[1], box.hi[2] - box.lo[2]}));
+    for (int z = 0; z < w.dims[2]; ++z)
+      for (int y = 0; y < w.dims[1]; ++y)
+        for (int x = 0; x < w.dims[0]; ++x)
+          ASSERT_EQ(w.at(x, y, z), whole.at(x + box.lo[0], y + box.lo[1], z + box.lo[2])) << x << " " << y << " " << z;
+  }
+}
+
+TEST(TiffStack, AMultiPageFileLoadsAsTheRawFileWindowByWindow) {
+  TempDir t("tiff-pages");
+  const Volume ref = reference(t);
+  auto options = [](uint16_t compression, uint32_t rows_per_strip, bool big_endian) {
+    PageOptions o;
+    o.compression = compression, o.rows_per_strip = rows_per_strip, o.big_endian = big_endian;
+    return o;
+  };
+  // Strips of 3 rows; LZW with a predictor, 4 rows; one strip a page; big-endian deflate, 1 row.
+  for (const PageOptions& o : {options(COMPRESSION_NONE, 3, false), options(COMPRESSION_LZW, 4, false),
+                               options(COMPRESSION_NONE, 100, false), options(COMPRESSION_ADOBE_DEFLATE, 1, true)}) {
+    writePages(t.file("stack.tif"), 0, kNz, o);
+    const Scene s = parseScene("volume: {file: stack.tif}\n", t.path.string(), "s.yaml");
+    const Volume v = loadVolume(s);
+    EXPECT_EQ(v.dims, ref.dims);
+    EXPECT_EQ(v.data_range, ref.data_range);
+    EXPECT_EQ(v.values, ref.values) << "compression " << o.compression << ", rows per strip " << o.rows_per_strip;
+    expectWindowsMatch(s, v);
+  }
+}
+
+TEST(TiffStack, AFolderOfPagesIsReadInNaturalNameOrder) {
+  TempDir t("tiff-folder");
+  std::filesystem::create_directories(t.path / "slices");
+  for (int z = 0; z < kNz; ++z) writePages((t.path / "slices" / ("slice" + std::to_string(z + 8) + ".tif")).string(), z, z + 1);
+  std::filesystem::create_directories(t.path / "slices" / "notes");  // other entries are left alone
+  EXPECT_EQ(volumeFormatOf((t.path / "slices").string()), VolumeFormat::Tiff);
+  const Scene s = parseScene("volume: {file: slices}\n", t.path.string(), "s.yaml");
+  const Volume v = loadVolume(s);
+  const Volume ref = reference(t);
+  EXPECT_EQ(v.values, ref.values) << "slice8..slice14: slice10 sorts after slice9";
+  expectWindowsMatch(s, v);
+}
+
+TEST(TiffStack, ImageJsSpacingIsRead) {
+  TempDir t("tiff-imagej");
+  PageOptions o;
+  o.description = "ImageJ=1.54f\nimages=7\nslices=7\nunit=micron\nspacing=2.5\nloop=false\n";
+  o.resolution = 4;  // pixels per micron: 0.25 micron across
+  writePages(t.file("ij.tif"), 0, kNz, o);
+  const Volume v = loadVolume(parseScene("volume: {file: ij.tif}\n", t.path.string(), "s.yaml"));
+  EXPECT_EQ(v.spacing, (std::array<double, 3>{0.25, 0.25, 2.5}));
+  EXPECT_EQ(v.values, reference(t).values);
+  // The scene's spacing replaces it; without ImageJ's metadata the spacing is 1.
+  EXPECT_EQ(loadVolume(parseScene("volume: {file: ij.tif, spacing: [1, 2, 3]}\n", t.path.string(), "s.yaml")).spacing,
+            (std::array<double, 3>{1, 2, 3}));
+  writePages(t.file("plain.tif"), 0, kNz);
+  EXPECT_EQ(loadVolume(parseScene("volume: {file: plain.tif}\n", t.path.string(), "s.yaml")).spacing,
+            (std::array<double, 3>{1, 1, 1}));
+}
+
+TEST(TiffStack, WhatTesseraCannotRenderIsNamed) {
+  TempDir t("tiff-bad");
+  auto expectSays = [&](const std::string& file, const std::string& what) {
+    const std::string e = errorOf("volume: {file: " + file + "}\n", t.path.string());
+    EXPECT_NE(e.find(what), std::string::npos) << "expected: " << what << "\ngot: " << e;
+  };
+  PageOptions rgb;
+  rgb.samples_per_pixel = 3;
+  writePages(t.file("rgb.tif"), 0, 2, rgb);
+  expectSays("rgb.tif", "rgb.tif: page 1 is a colour image (3 samples a pixel)");
+  PageOptions tiled;
+  tiled.tiled = true;
+  writePages(t.file("tiled.tif"), 0, 1, tiled);
+  expectSays("tiled.tif", "tiled.tif: page 1 is stored in tiles; Tessera reads strips: convert it with `tiffcp -s tiled.tif");
+  PageOptions channels;
+  channels.description = "ImageJ=1.54f\nimages=6\nchannels=2\nslices=3\nhyperstack=true\n";
+  writePages(t.file("two.tif"), 0, 6, channels);
+  expectSays("two.tif", "two.tif: an ImageJ hyperstack of 2 channels");
+  std::ofstream(t.file("text.tif")) << "not a TIFF";
+  expectSays("text.tif", "text.tif: not a readable TIFF file");
+  // A page of another size in a folder, and a file cut short in its last strips.
+  std::filesystem::create_directories(t.path / "mixed");
+  writePages((t.path / "mixed" / "a1.tif").string(), 0, 1);
+  writePages((t.path / "mixed" / "a2.tif").string(), 0, 2);
+  expectSays("mixed", "a2.tif: holds 2 pages; in a folder, each TIFF file is one slice");
+  writePages(t.file("cut.tif"), 0, kNz);
+  std::filesystem::resize_file(t.file("cut.tif"), std::filesystem::file_size(t.file("cut.tif")) - 600);
+  const std::string cut = errorOf("volume: {file: cut.tif}\n", t.path.string());
+  EXPECT_NE(cut.find("cut.tif"), std::string::npos) << cut;
+  EXPECT_NE(cut.find("cannot be read"), std::string::npos) << cut;  // not a stack of fewer pages
+}
+
+}  // namespace
+}  // namespace tessera

@@ -1,0 +1,73 @@
+// A microscopist's TIFF stack on the farm: a multi-page 16-bit file (LZW, strips of 8 rows,
+// as Fiji and scanners save them) renders as tessera-render renders it, each renderer
+// decoding only the strips of its bricks' rows and slices; tessera-info takes the file alone.
+#include <gtest/gtest.h>
+#include <tiffio.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "tests/integration/farm_util.h"
+
+namespace tessera::test {
+namespace {
+
+constexpr int kW = 64, kH = 56, kD = 40;
+
+// A cell-like blob (bright nucleus in a dimmer body) on a dark background, 0.5 um across and
+// 2 um between slices, in ImageJ's metadata.
+fs::path writeStack(const FarmDir& dir) {
+  const fs::path file = dir.path() / "cells.tif";
+  TIFF* t = TIFFOpen(file.c_str(), "w");
+  EXPECT_NE(t, nullptr);
+  std::vector<uint16_t> row(kW);
+  for (int z = 0; z < kD; ++z) {
+    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)kW);
+    TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)kH);
+    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, (uint16_t)16);
+    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, (uint16_t)1);
+    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+    TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_LZW);
+    TIFFSetField(t, TIFFTAG_PREDICTOR, PREDICTOR_HORIZONTAL);
+    TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, (uint32_t)8);
+    TIFFSetField(t, TIFFTAG_XRESOLUTION, 2.0f);
+    TIFFSetField(t, TIFFTAG_YRESOLUTION, 2.0f);
+    if (z == 0) TIFFSetField(t, TIFFTAG_IMAGEDESCRIPTION, "ImageJ=1.54f\nimages=40\nslices=40\nunit=micron\nspacing=2\n");
+    for (int y = 0; y < kH; ++y) {
+      for (int x = 0; x < kW; ++x) {
+        const double body = std::hypot((x - 30) / 24.0, (y - 28) / 20.0, (z - 20) / 6.0);
+        const double nucleus = std::hypot((x - 36) / 8.0, (y - 24) / 8.0, (z - 20) / 2.5);
+        row[x] = (uint16_t)(nucleus < 1 ? 3000 : body < 1 ? 900 + 300 * std::sin(x * 0.5 + z * 0.4) : 120 + (x + y) % 7);
+      }
+      EXPECT_EQ(TIFFWriteScanline(t, row.data(), (uint32_t)y, 0), 1);
+    }
+    EXPECT_EQ(TIFFWriteDirectory(t), 1);
+  }
+  TIFFClose(t);
+  return file;
+}
+
+TEST(TiffFarm, AMicroscopeStackRendersOnTheFarmAsTesseraRenderRendersIt) {
+  FarmDir dir("tiff-farm");
+  writeStack(dir);
+  const fs::path scene = dir.path() / "cells.yaml";
+  std::ofstream(scene) << "volume: {file: cells.tif, range: [0, 3200]}\nimage: [64, 48]\n"
+                          "transfer_function: [[0, 0, 0, 0, 0], [0.1, 0.2, 0.8, 0.3, 0], [0.3, 0.3, 0.9, 0.4, 0.08], "
+                          "[1, 1, 0.9, 0.3, 0.8]]\n";
+  const auto r = dir.runFarm(scene, 2, 1, 1);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(dir.matches(dir.farmFrame(0), dir.reference(scene, 0), 1, "tiff"));
+  // Each renderer read its half of the 40 pages of 64 x 56 uint16 (280 KiB), plus ghost slices.
+  const std::vector<double> read = renderersRead(r.output);
+  EXPECT_EQ(read.size(), 2u) << r.output;
+  for (double mib : read) EXPECT_LT(mib, 0.2) << "a renderer read more than its bricks\n" << r.output;
+
+  const auto info = runCommand(bin("tessera-info") + " " + (dir.path() / "cells.tif").string() + " --bins 4", 60);
+  ASSERT_EQ(info.exit_code, 0) << info.output;
+  EXPECT_NE(info.output.find("volume: 64 x 56 x 40 voxels, uint16, spacing 0.5 0.5 2"), std::string::npos) << info.output;
+  EXPECT_NE(info.output.find("values: 120 .. 3000;"), std::string::npos) << info.output;
+}
+
+}  // namespace
+}  // namespace tessera::test
