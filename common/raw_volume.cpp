@@ -152,7 +152,9 @@ class RawFile {
     while (count > 0) {
       const size_t z = first / per_slice, in = first % per_slice, n = std::min(count, per_slice - in);
       buf_.resize(n * ts_);
+      const uint64_t decoded = slices_->decoded_bytes;
       slices_->read(z, in, n, buf_.data());
+      bytes_inflated += slices_->decoded_bytes - decoded;
       const SliceFile& s = spec_.slices[z];
       samples::convertAll(spec_.type, buf_.data(), n, samples::Scaling{s.slope, s.inter, false}, out);
       samples_read += n * ts_;

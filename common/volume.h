@@ -58,6 +58,7 @@ struct SliceFile {
   bool encoded = false;
   double slope = 1, inter = 0;
   int bits_stored = 0;  // the sample's bits, at the bottom of its type's (0: all of them)
+  bool bottom_up = false;  // a TIFF page stored bottom row first
 };
 
 struct RawVolumeSpec {
@@ -134,6 +135,8 @@ inline float normaliseSample(float x, double lo, double hi) {
 }
 // Bytes zlib decompressed for gzip files, the bytes a read skips included: a gzip stream
 // read forwards once costs its samples once; one reopened for every window costs far more.
+// With them, what DICOM's compressed slices and TIFF strips decoded to (whole slices, whole
+// strips: rows no window asked for included).
 uint64_t volumeBytesInflated();
 // The same file opened once for many windows, as loadRawVolume reads them. Windows read in
 // file order (slabs of planes front to back) cost one pass over the file in all: a gzip

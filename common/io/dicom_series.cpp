@@ -302,7 +302,8 @@ void dicom::SliceFiles::read(size_t z, size_t in, size_t count, unsigned char* d
   const SliceFile& s = spec_.slices[z];
   if (s.encoded) {
     if (decoded_z_ != z)
-      decoded_z_ = SIZE_MAX, decoded_ = dicom::decodeSlice(s.file, per_slice_ * ts_, (int)ts_ * 8), decoded_z_ = z;
+      decoded_z_ = SIZE_MAX, decoded_ = dicom::decodeSlice(s.file, per_slice_ * ts_, (int)ts_ * 8), decoded_z_ = z,
+      decoded_bytes += decoded_.size();
     std::memcpy(dst, decoded_.data() + in * ts_, count * ts_);
   } else {
     if (open_z_ != z) {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstring>
@@ -27,14 +28,19 @@ namespace fs = std::filesystem;
 
 [[noreturn]] void fail(const std::string& file, const std::string& what) { throw std::runtime_error(file + ": " + what); }
 
-// libtiff reports through global handlers that print; its last error on this thread goes into
-// the exception that names the file instead, and its warnings (unknown tags, common in
-// microscopes' files) are dropped.
-thread_local std::string last_error;
+// libtiff reports through global handlers that print; its last error and warning on this
+// thread go into the exceptions that name the file instead. Warnings (unknown tags, common in
+// microscopes' files) matter only where a page list ends early (a loop in it).
+thread_local std::string last_error, last_warning;
 void onError(const char*, const char* fmt, va_list ap) {
   char buf[512];
   std::vsnprintf(buf, sizeof buf, fmt, ap);
   last_error = buf;
+}
+void onWarning(const char*, const char* fmt, va_list ap) {
+  char buf[512];
+  std::vsnprintf(buf, sizeof buf, fmt, ap);
+  last_warning = buf;
 }
 
 struct Closer {
@@ -46,7 +52,7 @@ File open(const std::string& path) {
   static std::once_flag once;
   std::call_once(once, [] {
     TIFFSetErrorHandler(onError);
-    TIFFSetWarningHandler(nullptr);
+    TIFFSetWarningHandler(onWarning);
   });
   last_error.clear();
   File t(TIFFOpen(path.c_str(), "r"));
@@ -58,11 +64,25 @@ File open(const std::string& path) {
 struct Page {
   uint32_t width = 0, height = 0;
   VoxelType type = VoxelType::UInt8;
+  bool bottom_up = false;  // rows stored bottom first (Orientation BOTLEFT)
 };
 
-Page pageOf(TIFF* t, const std::string& file, int k) {
+Page pageOf(TIFF* t, const std::string& file, int k, uint64_t file_size) {
   const std::string at = "page " + std::to_string(k + 1);
   Page p;
+  uint16_t orientation = ORIENTATION_TOPLEFT;
+  TIFFGetField(t, TIFFTAG_ORIENTATION, &orientation);
+  if (orientation != ORIENTATION_TOPLEFT && orientation != ORIENTATION_BOTLEFT)
+    fail(file, at + " has Orientation " + std::to_string(orientation) +
+                   "; Tessera reads pages stored top row first (1) or bottom row first (4), columns left to right");
+  p.bottom_up = orientation == ORIENTATION_BOTLEFT;
+  // A file cut inside its pixels (its pages listed before them) is found now, not mid-run.
+  uint64_t *offsets = nullptr, *counts = nullptr;
+  if (TIFFGetField(t, TIFFTAG_STRIPOFFSETS, &offsets) && TIFFGetField(t, TIFFTAG_STRIPBYTECOUNTS, &counts) && offsets && counts)
+    for (uint32_t i = 0, n = TIFFNumberOfStrips(t); i < n; ++i)
+      if (offsets[i] + counts[i] > file_size)
+        fail(file, at + "'s strip " + std::to_string(i) + " ends at byte " + std::to_string(offsets[i] + counts[i]) +
+                       ", past the file's " + std::to_string(file_size) + " (the file is cut short)");
   uint16_t bits = 1, format = SAMPLEFORMAT_UINT, spp = 1, photometric = PHOTOMETRIC_MINISBLACK, compression = 1;
   TIFFGetField(t, TIFFTAG_IMAGEWIDTH, &p.width);
   TIFFGetField(t, TIFFTAG_IMAGELENGTH, &p.height);
@@ -106,9 +126,10 @@ std::vector<uint64_t> pagesOf(TIFF* t, const std::string& file) {
   std::vector<uint64_t> pages;
   for (int k = 1;; ++k) {
     if (!reduced(t)) pages.push_back(TIFFCurrentDirOffset(t));
-    last_error.clear();
+    last_error.clear(), last_warning.clear();
     if (TIFFReadDirectory(t)) continue;
-    if (!last_error.empty()) fail(file, "the directory after page " + std::to_string(k) + " cannot be read (" + last_error + ")");
+    const std::string& why = last_error.empty() ? last_warning : last_error;
+    if (!why.empty()) fail(file, "the directory after page " + std::to_string(k) + " cannot be read (" + why + ")");
     return pages;
   }
 }
@@ -118,6 +139,56 @@ std::vector<uint64_t> pagesOf(TIFF* t, const std::string& file) {
 double imageJValue(const std::string& description, const std::string& key, double otherwise) {
   const size_t at = description.find("\n" + key + "=");
   return at == std::string::npos ? otherwise : std::atof(description.c_str() + at + key.size() + 2);
+}
+
+// An attribute of the OME-XML Pixels element ("<Pixels ... SizeC=\"2\" ...>"), or "".
+std::string omePixels(const std::string& xml, const std::string& attribute) {
+  size_t at = xml.find("Pixels ");
+  while (at != std::string::npos && at > 0 && xml[at - 1] != '<' && xml[at - 1] != ':') at = xml.find("Pixels ", at + 1);
+  if (at == std::string::npos) return "";
+  const size_t end = xml.find('>', at);
+  const std::string tag = xml.substr(at, end == std::string::npos ? std::string::npos : end - at);
+  const size_t a = tag.find(" " + attribute + "=\"");
+  if (a == std::string::npos) return "";
+  const size_t v = a + attribute.size() + 3;
+  return tag.substr(v, tag.find('"', v) - v);
+}
+
+// A name with its digit runs replaced by '#', and those runs: "z012_ch01.tif" -> "z#_ch#.tif",
+// {"012", "01"}.
+std::string namePattern(const std::string& name, std::vector<std::string>* numbers = nullptr) {
+  std::string pattern;
+  for (size_t i = 0; i < name.size();) {
+    if (!std::isdigit((unsigned char)name[i])) {
+      pattern += name[i++];
+      continue;
+    }
+    const size_t start = i;
+    while (i < name.size() && std::isdigit((unsigned char)name[i])) ++i;
+    pattern += '#';
+    if (numbers) numbers->push_back(name.substr(start, i - start));
+  }
+  return pattern;
+}
+
+// A folder's slices must be one series numbered by one number: names of another pattern (a
+// projection saved beside them) or a second number that varies (channels, times) are refused.
+void checkOneNumbering(const std::string& folder, const std::vector<std::string>& files) {
+  const std::string first = fs::path(files[0]).filename().string();
+  std::vector<std::string> first_numbers;
+  const std::string pattern = namePattern(first, &first_numbers);
+  std::vector<bool> varies(first_numbers.size(), false);
+  for (const std::string& f : files) {
+    const std::string name = fs::path(f).filename().string();
+    std::vector<std::string> numbers;
+    if (namePattern(name, &numbers) != pattern)
+      fail(folder, "its TIFF files are not one numbered series: " + first + " and " + name +
+                       " differ in more than a number; keep one stack's slices in a folder of their own");
+    for (size_t i = 0; i < numbers.size(); ++i) varies[i] = varies[i] || numbers[i] != first_numbers[i];
+  }
+  if (std::count(varies.begin(), varies.end(), true) > 1)
+    fail(folder, "its TIFF files are numbered by more than one number (" + first + ", " + fs::path(files.back()).filename().string() +
+                     "): several channels or time points? Keep one channel's slices at one time in a folder of their own");
 }
 
 // Name order as people number slices: runs of digits compare as numbers.
@@ -149,10 +220,13 @@ RawVolumeSpec readStack(const std::string& path) {
   std::vector<std::string> files;
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
-    for (const auto& e : fs::directory_iterator(path, ec))
-      if (e.is_regular_file(ec) && isTiffName(e.path().string())) files.push_back(e.path().string());
+    for (const auto& e : fs::directory_iterator(path, ec)) {
+      const std::string name = e.path().filename().string();
+      if (!name.empty() && name[0] != '.' && e.is_regular_file(ec) && isTiffName(name)) files.push_back(e.path().string());
+    }
     if (files.empty()) fail(path, "a folder with no .tif or .tiff file");
     std::sort(files.begin(), files.end(), naturalLess);
+    checkOneNumbering(path, files);
   } else {
     files.push_back(path);
   }
@@ -162,6 +236,7 @@ RawVolumeSpec readStack(const std::string& path) {
   float xres = 0, yres = 0;
   for (const std::string& f : files) {
     File t = open(f);
+    const uint64_t file_size = (uint64_t)fs::file_size(f, ec);
     if (spec.slices.empty()) {
       char* d = nullptr;
       if (TIFFGetField(t.get(), TIFFTAG_IMAGEDESCRIPTION, &d) && d) description = d;
@@ -173,7 +248,7 @@ RawVolumeSpec readStack(const std::string& path) {
       fail(f, "holds " + std::to_string(pages.size()) + " pages; in a folder, each TIFF file is one slice (give a multi-page file itself)");
     for (size_t k = 0; k < pages.size(); ++k) {
       if (!TIFFSetSubDirectory(t.get(), pages[k])) fail(f, "page " + std::to_string(k + 1) + " cannot be read: " + last_error);
-      const Page p = pageOf(t.get(), f, (int)k);
+      const Page p = pageOf(t.get(), f, (int)k, file_size);
       if (spec.slices.empty()) first = p;
       if (p.width != first.width || p.height != first.height || p.type != first.type)
         fail(f, "page " + std::to_string(k + 1) + " is " + std::to_string(p.width) + " x " + std::to_string(p.height) + " " +
@@ -182,6 +257,7 @@ RawVolumeSpec readStack(const std::string& path) {
       SliceFile s;
       s.file = f;
       s.offset = pages[k];
+      s.bottom_up = p.bottom_up;
       spec.slices.push_back(std::move(s));
     }
     if (spec.slices.size() > 65536) fail(path, "more than 65536 pages; at most 65536 slices");
@@ -189,7 +265,19 @@ RawVolumeSpec readStack(const std::string& path) {
   if (first.width > 65536 || first.height > 65536) fail(files[0], "pages wider or taller than 65536 pixels");
   spec.dims = {(int)first.width, (int)first.height, (int)spec.slices.size()};
   spec.type = first.type;
-  if (description.rfind("ImageJ=", 0) == 0) {
+  if (description.find("<OME") != std::string::npos) {
+    // OME-TIFF (Bio-Formats, Micro-Manager): channels and time points are pages of the same
+    // size, interleaved by DimensionOrder; one channel at one time is a volume.
+    const int channels = std::atoi(omePixels(description, "SizeC").c_str()), times = std::atoi(omePixels(description, "SizeT").c_str());
+    if (channels > 1 || times > 1)
+      fail(files[0], "an OME-TIFF of " + std::to_string(std::max(channels, 1)) + " channels and " + std::to_string(std::max(times, 1)) +
+                         " time points: Tessera renders one channel at one time; save it as its own stack (Fiji: Image > "
+                         "Color > Split Channels, Image > Duplicate)");
+    for (int a = 0; a < 3; ++a) {
+      const double v = std::atof(omePixels(description, std::string("PhysicalSize") + "XYZ"[a]).c_str());
+      if (v > 0) spec.spacing[a] = v;
+    }
+  } else if (description.rfind("ImageJ=", 0) == 0) {
     const double channels = imageJValue(description, "channels", 1), frames = imageJValue(description, "frames", 1);
     if (channels > 1)
       fail(files[0], "an ImageJ hyperstack of " + std::to_string((int)channels) +
@@ -205,7 +293,7 @@ RawVolumeSpec readStack(const std::string& path) {
     // Resolution in pixels per unit; the same unit for the slices' spacing.
     if (xres > 0) spec.spacing[0] = 1.0 / xres;
     if (yres > 0) spec.spacing[1] = 1.0 / yres;
-    spec.spacing[2] = imageJValue(description, "spacing", 1.0);
+    spec.spacing[2] = std::fabs(imageJValue(description, "spacing", 1.0));  // ImageJ keeps a negative one's size
   }
   return spec;
 }
@@ -219,19 +307,23 @@ class Strips : public SliceBytes {
 
   void read(size_t z, size_t in, size_t count, unsigned char* dst) override {
     const SliceFile& s = spec_.slices[z];
-    select(s);
+    select(s, z);
     for (size_t done = 0; done < count;) {
-      const size_t at = in + done, strip = at / width_ / rows_per_strip_;
-      if (strip != strip_index_) decode(s, strip);
-      const size_t strip_start = strip * rows_per_strip_ * width_;  // the strip's first sample
-      const size_t n = std::min(count - done, strip_start + bytes_.size() / ts_ - at);
-      std::memcpy(dst + done * ts_, bytes_.data() + (at - strip_start) * ts_, n * ts_);
+      const size_t at = in + done, row = at / width_, x = at % width_;
+      const size_t stored = s.bottom_up ? height_ - 1 - row : row;  // the row's place in the page
+      const size_t strip = stored / rows_per_strip_;
+      if (strip != strip_index_) decode(s, z, strip);
+      const size_t n = std::min(count - done, width_ - x);  // to the row's end
+      std::memcpy(dst + done * ts_, bytes_.data() + ((stored - strip * rows_per_strip_) * width_ + x) * ts_, n * ts_);
       done += n;
     }
   }
 
  private:
-  void select(const SliceFile& s) {
+  // "f.tif: slice 3": where an error is.
+  std::string where(const SliceFile& s, size_t z) const { return s.file + ": slice " + std::to_string(z + 1); }
+
+  void select(const SliceFile& s, size_t z) {
     if (file_ != s.file) {
       file_.clear(), dir_ = UINT64_MAX;
       t_ = open(s.file);
@@ -240,24 +332,25 @@ class Strips : public SliceBytes {
     if (dir_ == s.offset) return;
     dir_ = UINT64_MAX, strip_index_ = SIZE_MAX;
     last_error.clear();
-    if (!TIFFSetSubDirectory(t_.get(), s.offset)) fail(s.file, "a page cannot be read: " + last_error);
+    if (!TIFFSetSubDirectory(t_.get(), s.offset)) throw std::runtime_error(where(s, z) + ": its page cannot be read: " + last_error);
     uint32_t rps = 0;
     TIFFGetFieldDefaulted(t_.get(), TIFFTAG_ROWSPERSTRIP, &rps);
     rows_per_strip_ = std::clamp<size_t>(rps, 1, height_);
     dir_ = s.offset;
   }
 
-  void decode(const SliceFile& s, size_t strip) {
+  void decode(const SliceFile& s, size_t z, size_t strip) {
     const size_t rows = std::min(rows_per_strip_, height_ - strip * rows_per_strip_), want = rows * width_ * ts_;
     strip_index_ = SIZE_MAX;
     bytes_.resize(std::max<size_t>(want, (size_t)std::max<tmsize_t>(TIFFStripSize(t_.get()), 0)));
     last_error.clear();
     const tmsize_t got = TIFFReadEncodedStrip(t_.get(), (uint32_t)strip, bytes_.data(), (tmsize_t)bytes_.size());
     if (got < (tmsize_t)want)
-      fail(s.file, "strip " + std::to_string(strip) + " of a page decodes to " + std::to_string(std::max<tmsize_t>(got, 0)) +
-                       " bytes, " + std::to_string(want) + " expected (the file is cut short or damaged" +
-                       (last_error.empty() ? "" : ": " + last_error) + ")");
+      throw std::runtime_error(where(s, z) + ": strip " + std::to_string(strip) + " decodes to " +
+                               std::to_string(std::max<tmsize_t>(got, 0)) + " bytes, " + std::to_string(want) +
+                               " expected (the file is cut short or damaged" + (last_error.empty() ? "" : ": " + last_error) + ")");
     bytes_.resize(want);
+    decoded_bytes += want;
     strip_index_ = strip;
   }
 

@@ -18,9 +18,18 @@ std::unique_ptr<SliceBytes> tiffSliceBytes(const RawVolumeSpec& spec);    // tif
 VolumeFormat volumeFormatOf(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) {
-    for (const auto& e : std::filesystem::directory_iterator(path, ec))
-      if (isTiffName(e.path().string()) && e.is_regular_file(ec)) return VolumeFormat::Tiff;
-    return VolumeFormat::Dicom;
+    // TIFF slices, unless DICOM files are there too (a screenshot saved into a CT export): a
+    // few of the other files are looked at for DICOM's marker. Hidden files (macOS's ._x.tif)
+    // do not count.
+    bool tiff = false;
+    int others = 0;
+    for (const auto& e : std::filesystem::directory_iterator(path, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name.empty() || name[0] == '.' || !e.is_regular_file(ec)) continue;
+      if (isTiffName(name)) tiff = true;
+      else if (others++ < 16 && volumeFormatOf(e.path().string()) == VolumeFormat::Dicom) return VolumeFormat::Dicom;
+    }
+    return tiff ? VolumeFormat::Tiff : VolumeFormat::Dicom;
   }
   if (isTiffName(path)) return VolumeFormat::Tiff;
   std::string p = path;

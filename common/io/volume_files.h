@@ -49,6 +49,7 @@ class SliceBytes {
   virtual ~SliceBytes() = default;
   // `count` samples of slice z from its sample `in` into dst; errors name the slice's file.
   virtual void read(size_t z, size_t in, size_t count, unsigned char* dst) = 0;
+  uint64_t decoded_bytes = 0;  // what decoders produced (compressed slices, strips), rows not asked for included
 };
 // The reader for spec.format (Dicom or Tiff); spec is kept by reference.
 std::unique_ptr<SliceBytes> sliceBytes(const RawVolumeSpec& spec);

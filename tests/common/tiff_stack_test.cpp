@@ -5,6 +5,7 @@
 #include <tiffio.h>
 
 #include <filesystem>
+#include <regex>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -16,6 +17,7 @@
 
 namespace tessera {
 namespace {
+namespace tiff_test {  // a unity build joins test files: volume_files_test.cpp has samples() too
 
 using test::TempDir;
 
@@ -38,6 +40,7 @@ struct PageOptions {
   std::string description;
   bool big_endian = false;
   float resolution = 0;  // pixels per unit across (0: not written)
+  bool bottom_up = false;  // Orientation BOTLEFT, rows written bottom first
 };
 
 // Pages [z0, z1) of samples() into `path`, each one page.
@@ -56,6 +59,7 @@ void writePages(const std::string& path, int z0, int z1, const PageOptions& o = 
     TIFFSetField(t, TIFFTAG_COMPRESSION, o.compression);
     if (o.compression == COMPRESSION_LZW) TIFFSetField(t, TIFFTAG_PREDICTOR, PREDICTOR_HORIZONTAL);
     if (z == z0 && !o.description.empty()) TIFFSetField(t, TIFFTAG_IMAGEDESCRIPTION, o.description.c_str());
+    if (o.bottom_up) TIFFSetField(t, TIFFTAG_ORIENTATION, ORIENTATION_BOTLEFT);
     if (o.resolution > 0) {
       TIFFSetField(t, TIFFTAG_XRESOLUTION, o.resolution);
       TIFFSetField(t, TIFFTAG_YRESOLUTION, o.resolution);
@@ -70,8 +74,9 @@ void writePages(const std::string& path, int z0, int z1, const PageOptions& o = 
     } else {
       TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, o.rows_per_strip);
       for (int y = 0; y < kNy; ++y) {
+        const int vy = o.bottom_up ? kNy - 1 - y : y;  // the volume's row stored as page row y
         for (int x = 0; x < kNx; ++x)
-          for (int c = 0; c < o.samples_per_pixel; ++c) row[x * o.samples_per_pixel + c] = v[x + kNx * (y + kNy * z)];
+          for (int c = 0; c < o.samples_per_pixel; ++c) row[x * o.samples_per_pixel + c] = v[x + kNx * (vy + kNy * z)];
         ASSERT_EQ(TIFFWriteScanline(t, row.data(), (uint32_t)y, 0), 1);
       }
     }
@@ -190,5 +195,91 @@ TEST(TiffStack, WhatTesseraCannotRenderIsNamed) {
   EXPECT_NE(cut.find("cannot be read"), std::string::npos) << cut;  // not a stack of fewer pages
 }
 
+TEST(TiffStack, PagesStoredBottomRowFirstAreTurnedUpright) {
+  TempDir t("tiff-botleft");
+  PageOptions o;
+  o.bottom_up = true;
+  o.rows_per_strip = 4;
+  writePages(t.file("up.tif"), 0, kNz, o);
+  const Scene s = parseScene("volume: {file: up.tif}\n", t.path.string(), "s.yaml");
+  const Volume v = loadVolume(s);
+  EXPECT_EQ(v.values, reference(t).values);
+  expectWindowsMatch(s, v);
+}
+
+TEST(TiffStack, FloatPagesKeepTheirValues) {
+  TempDir t("tiff-float");
+  const std::vector<float> v{-1.5f, 0.25f, 3.0f, 7.75f, 2.0f, -0.5f, 1.0f, 4.5f};  // 2 x 2 x 2
+  TIFF* f = TIFFOpen(t.file("f.tif").c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  for (int z = 0; z < 2; ++z) {
+    TIFFSetField(f, TIFFTAG_IMAGEWIDTH, (uint32_t)2);
+    TIFFSetField(f, TIFFTAG_IMAGELENGTH, (uint32_t)2);
+    TIFFSetField(f, TIFFTAG_BITSPERSAMPLE, (uint16_t)32);
+    TIFFSetField(f, TIFFTAG_SAMPLEFORMAT, (uint16_t)SAMPLEFORMAT_IEEEFP);
+    TIFFSetField(f, TIFFTAG_SAMPLESPERPIXEL, (uint16_t)1);
+    TIFFSetField(f, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+    for (int y = 0; y < 2; ++y) ASSERT_EQ(TIFFWriteScanline(f, const_cast<float*>(v.data() + 4 * z + 2 * y), (uint32_t)y, 0), 1);
+    ASSERT_EQ(TIFFWriteDirectory(f), 1);
+  }
+  TIFFClose(f);
+  const Volume got = loadVolume(parseScene("volume: {file: f.tif}\n", t.path.string(), "s.yaml"));
+  const Volume want = loadRawVolume(test::rawSpec(t.write("f.raw", v.data(), v.size() * 4), {2, 2, 2}, VoxelType::Float32,
+                                                  {1, 1, 1}, false, {0, 0}));
+  EXPECT_EQ(got.data_range, (std::array<double, 2>{-1.5, 7.75}));
+  EXPECT_EQ(got.values, want.values);
+}
+
+// Found by review: a screenshot saved into a DICOM export made the folder a TIFF stack; a
+// projection or a second channel in a folder of slices became slices; OME-TIFF's channels
+// became slices; macOS's ._ files were read as slices.
+TEST(TiffStack, AFolderIsOneNumberedSeriesOfOneChannel) {
+  TempDir t("tiff-folders");
+  const auto folder = [&](const std::string& name) {
+    std::filesystem::create_directories(t.path / name);
+    return t.path / name;
+  };
+  auto expectSays = [&](const std::string& file, const std::string& what) {
+    const std::string e = errorOf("volume: {file: " + file + "}\n", t.path.string());
+    EXPECT_NE(e.find(what), std::string::npos) << "expected: " << what << "\ngot: " << e;
+  };
+  const auto ct = folder("ct");
+  std::string dicom(132, '\0');
+  dicom.replace(128, 4, "DICM");
+  std::ofstream(ct / "IM0001", std::ios::binary) << dicom;
+  writePages((ct / "screenshot.tif").string(), 0, 1);
+  EXPECT_EQ(volumeFormatOf(ct.string()), VolumeFormat::Dicom);
+
+  const auto stack = folder("stack");
+  for (int z = 0; z < kNz; ++z) writePages((stack / ("cell_z" + std::to_string(z) + ".tif")).string(), z, z + 1);
+  std::ofstream(stack / "._cell_z0.tif") << "macOS resource fork";
+  EXPECT_EQ(loadVolume(parseScene("volume: {file: stack}\n", t.path.string(), "s.yaml")).values, reference(t).values);
+  writePages((stack / "MAX_cell.tif").string(), 0, 1);
+  expectSays("stack", "its TIFF files are not one numbered series: MAX_cell.tif and cell_z0.tif differ in more than a number");
+
+  const auto channels = folder("channels");
+  for (int z = 0; z < 2; ++z)
+    for (int c = 0; c < 2; ++c)
+      writePages((channels / ("cell_z" + std::to_string(z) + "_ch" + std::to_string(c) + ".tif")).string(), z, z + 1);
+  expectSays("channels", "its TIFF files are numbered by more than one number");
+
+  PageOptions ome;
+  ome.description = "<?xml version=\"1.0\"?><OME xmlns=\"http://www.openmicroscopy.org/Schemas/OME/2016-06\"><Image ID=\"Image:0\">"
+                    "<Pixels ID=\"Pixels:0\" DimensionOrder=\"XYCZT\" Type=\"uint16\" SizeX=\"13\" SizeY=\"11\" SizeZ=\"3\" "
+                    "SizeC=\"2\" SizeT=\"1\" PhysicalSizeX=\"0.2\" PhysicalSizeY=\"0.2\" PhysicalSizeZ=\"1.5\"></Pixels></Image></OME>";
+  writePages(t.file("two.ome.tif"), 0, 6, ome);
+  expectSays("two.ome.tif", "two.ome.tif: an OME-TIFF of 2 channels and 1 time points");
+  ome.description = std::regex_replace(ome.description, std::regex("SizeC=\"2\""), "SizeC=\"1\"");
+  ome.description = std::regex_replace(ome.description, std::regex("SizeZ=\"3\""), "SizeZ=\"7\"");
+  writePages(t.file("one.ome.tif"), 0, kNz, ome);
+  EXPECT_EQ(loadVolume(parseScene("volume: {file: one.ome.tif}\n", t.path.string(), "s.yaml")).spacing,
+            (std::array<double, 3>{0.2, 0.2, 1.5}));
+  PageOptions frames;
+  frames.description = "ImageJ=1.54f\nimages=6\nslices=3\nframes=2\nhyperstack=true\n";
+  writePages(t.file("time.tif"), 0, 6, frames);
+  expectSays("time.tif", "time.tif: an ImageJ hyperstack of 2 time points");
+}
+
+}  // namespace tiff_test
 }  // namespace
 }  // namespace tessera
