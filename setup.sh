@@ -16,7 +16,7 @@ PKGS=(
   build-essential cmake pkg-config ninja-build
   libzmq3-dev cppzmq-dev liblzo2-dev libdeflate-dev liblz4-dev libzstd-dev
   libosmesa6-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev
-  libpng-dev libisal-dev libsdl2-dev nlohmann-json3-dev libfftw3-dev zlib1g-dev libnifti2-dev libgdcm-dev libgdcm-tools libtiff-dev libtiff-tools
+  libpng-dev libisal-dev libsdl2-dev nlohmann-json3-dev libfftw3-dev zlib1g-dev libnifti2-dev libgdcm-dev libgdcm-tools libtiff-dev
   libgtest-dev libgmock-dev libbenchmark-dev libteem-dev libxtst-dev
   libcivetweb-dev libturbojpeg0-dev libwebsockets-dev
 )

@@ -1,8 +1,8 @@
 // TIFF stacks through libtiff: a multi-page TIFF (one slice a page, as Fiji and most
 // microscopes and micro-CT scanners save a stack) or a folder of single-page TIFFs (one slice
 // a file, in natural name order: slice2 before slice10). Grayscale pages of one size and
-// sample type; ImageJ's metadata gives the spacing. A slice is read by the strips that hold
-// the rows a window needs, decoded by libtiff (any compression it decodes).
+// sample type; ImageJ's or OME's metadata gives the spacing. A slice is read by the strips or
+// tiles that hold the part a window needs, decoded by libtiff (any compression it decodes).
 #include <tiffio.h>
 
 #include <algorithm>
@@ -78,11 +78,14 @@ Page pageOf(TIFF* t, const std::string& file, int k, uint64_t file_size) {
   p.bottom_up = orientation == ORIENTATION_BOTLEFT;
   // A file cut inside its pixels (its pages listed before them) is found now, not mid-run.
   uint64_t *offsets = nullptr, *counts = nullptr;
-  if (TIFFGetField(t, TIFFTAG_STRIPOFFSETS, &offsets) && TIFFGetField(t, TIFFTAG_STRIPBYTECOUNTS, &counts) && offsets && counts)
-    for (uint32_t i = 0, n = TIFFNumberOfStrips(t); i < n; ++i)
+  const bool tiled = TIFFIsTiled(t);
+  if (TIFFGetField(t, tiled ? TIFFTAG_TILEOFFSETS : TIFFTAG_STRIPOFFSETS, &offsets) &&
+      TIFFGetField(t, tiled ? TIFFTAG_TILEBYTECOUNTS : TIFFTAG_STRIPBYTECOUNTS, &counts) && offsets && counts)
+    for (uint32_t i = 0, n = tiled ? TIFFNumberOfTiles(t) : TIFFNumberOfStrips(t); i < n; ++i)
       if (offsets[i] + counts[i] > file_size)
-        fail(file, at + "'s strip " + std::to_string(i) + " ends at byte " + std::to_string(offsets[i] + counts[i]) +
-                       ", past the file's " + std::to_string(file_size) + " (the file is cut short)");
+        fail(file, at + "'s " + (tiled ? "tile " : "strip ") + std::to_string(i) + " ends at byte " +
+                       std::to_string(offsets[i] + counts[i]) + ", past the file's " + std::to_string(file_size) +
+                       " (the file is cut short)");
   uint16_t bits = 1, format = SAMPLEFORMAT_UINT, spp = 1, photometric = PHOTOMETRIC_MINISBLACK, compression = 1;
   TIFFGetField(t, TIFFTAG_IMAGEWIDTH, &p.width);
   TIFFGetField(t, TIFFTAG_IMAGELENGTH, &p.height);
@@ -96,9 +99,6 @@ Page pageOf(TIFF* t, const std::string& file, int k, uint64_t file_size) {
     fail(file, at + " is a colour image (" + std::to_string(spp) + " samples a pixel" +
                    (photometric == PHOTOMETRIC_PALETTE ? ", a palette" : "") +
                    "): Tessera renders one value a voxel; save the stack as grayscale (Fiji: Image > Type > 16-bit)");
-  if (TIFFIsTiled(t))
-    fail(file, at + " is stored in tiles; Tessera reads strips: convert it with `tiffcp -s " + fs::path(file).filename().string() +
-                   " stripped.tif` (libtiff-tools)");
   if (!TIFFIsCODECConfigured(compression))
     fail(file, at + " uses compression " + std::to_string(compression) + ", which this libtiff cannot decode");
   const bool sign = format == SAMPLEFORMAT_INT, real = format == SAMPLEFORMAT_IEEEFP;
@@ -171,46 +171,38 @@ std::string namePattern(const std::string& name, std::vector<std::string>* numbe
   return pattern;
 }
 
-// A folder's slices must be one series numbered by one number: names of another pattern (a
-// projection saved beside them) or a second number that varies (channels, times) are refused.
-void checkOneNumbering(const std::string& folder, const std::vector<std::string>& files) {
-  const std::string first = fs::path(files[0]).filename().string();
-  std::vector<std::string> first_numbers;
-  const std::string pattern = namePattern(first, &first_numbers);
-  std::vector<bool> varies(first_numbers.size(), false);
-  for (const std::string& f : files) {
-    const std::string name = fs::path(f).filename().string();
-    std::vector<std::string> numbers;
-    if (namePattern(name, &numbers) != pattern)
-      fail(folder, "its TIFF files are not one numbered series: " + first + " and " + name +
+// A folder's slices: one series numbered by one number, in that number's order (z9 before
+// z10). Names of another pattern (a projection saved beside them) or a second number that
+// varies (channels, times) are refused.
+std::vector<std::string> numberedSlices(const std::string& folder, std::vector<std::string> files) {
+  std::sort(files.begin(), files.end());
+  auto name = [](const std::string& f) { return fs::path(f).filename().string(); };
+  std::vector<std::vector<std::string>> numbers(files.size());
+  const std::string pattern = namePattern(name(files[0]), &numbers[0]);
+  std::vector<bool> varies(numbers[0].size(), false);
+  for (size_t i = 1; i < files.size(); ++i) {
+    if (namePattern(name(files[i]), &numbers[i]) != pattern)
+      fail(folder, "its TIFF files are not one numbered series: " + name(files[0]) + " and " + name(files[i]) +
                        " differ in more than a number; keep one stack's slices in a folder of their own");
-    for (size_t i = 0; i < numbers.size(); ++i) varies[i] = varies[i] || numbers[i] != first_numbers[i];
+    for (size_t k = 0; k < varies.size(); ++k) varies[k] = varies[k] || numbers[i][k] != numbers[0][k];
   }
   if (std::count(varies.begin(), varies.end(), true) > 1)
-    fail(folder, "its TIFF files are numbered by more than one number (" + first + ", " + fs::path(files.back()).filename().string() +
+    fail(folder, "its TIFF files are numbered by more than one number (" + name(files[0]) + ", " + name(files.back()) +
                      "): several channels or time points? Keep one channel's slices at one time in a folder of their own");
-}
-
-// Name order as people number slices: runs of digits compare as numbers.
-bool naturalLess(const std::string& a, const std::string& b) {
-  size_t i = 0, j = 0;
-  while (i < a.size() && j < b.size()) {
-    if (std::isdigit((unsigned char)a[i]) && std::isdigit((unsigned char)b[j])) {
-      size_t ei = i, ej = j;
-      while (ei < a.size() && std::isdigit((unsigned char)a[ei])) ++ei;
-      while (ej < b.size() && std::isdigit((unsigned char)b[ej])) ++ej;
-      const std::string na = a.substr(i, ei - i), nb = b.substr(j, ej - j);
-      const size_t za = na.find_first_not_of('0'), zb = nb.find_first_not_of('0');
-      const std::string va = za == std::string::npos ? "" : na.substr(za), vb = zb == std::string::npos ? "" : nb.substr(zb);
-      if (va.size() != vb.size()) return va.size() < vb.size();
-      if (va != vb) return va < vb;
-      i = ei, j = ej;
-    } else {
-      if (a[i] != b[j]) return a[i] < b[j];
-      ++i, ++j;
-    }
-  }
-  return a.size() - i < b.size() - j;
+  const size_t k = std::find(varies.begin(), varies.end(), true) - varies.begin();
+  if (k == varies.size()) return files;
+  // By value: fewer digits once leading zeros are dropped is smaller.
+  auto value = [&](size_t i) {
+    const std::string& d = numbers[i][k];
+    const size_t nz = std::min(d.find_first_not_of('0'), d.size());
+    return std::make_pair(d.size() - nz, d.substr(nz));
+  };
+  std::vector<size_t> order(files.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return value(a) < value(b); });
+  std::vector<std::string> sorted;
+  for (size_t i : order) sorted.push_back(files[i]);
+  return sorted;
 }
 
 RawVolumeSpec readStack(const std::string& path) {
@@ -225,8 +217,7 @@ RawVolumeSpec readStack(const std::string& path) {
       if (!name.empty() && name[0] != '.' && e.is_regular_file(ec) && isTiffName(name)) files.push_back(e.path().string());
     }
     if (files.empty()) fail(path, "a folder with no .tif or .tiff file");
-    std::sort(files.begin(), files.end(), naturalLess);
-    checkOneNumbering(path, files);
+    files = numberedSlices(path, std::move(files));
   } else {
     files.push_back(path);
   }
@@ -298,11 +289,12 @@ RawVolumeSpec readStack(const std::string& path) {
   return spec;
 }
 
-// A stack's slices by strips: the file and page of the last read stay open, and the last
-// strip decoded is kept (a window reads a slice row by row).
-class Strips : public SliceBytes {
+// A stack's slices by blocks: strips (every column of some rows) or tiles. The file and page
+// of the last read stay open, and the blocks of one row of blocks are kept once decoded (a
+// window reads a slice row by row, each row across its blocks).
+class Blocks : public SliceBytes {
  public:
-  explicit Strips(const RawVolumeSpec& spec)
+  explicit Blocks(const RawVolumeSpec& spec)
       : spec_(spec), ts_(voxelTypeSize(spec.type)), width_((size_t)spec.dims[0]), height_((size_t)spec.dims[1]) {}
 
   void read(size_t z, size_t in, size_t count, unsigned char* dst) override {
@@ -311,10 +303,10 @@ class Strips : public SliceBytes {
     for (size_t done = 0; done < count;) {
       const size_t at = in + done, row = at / width_, x = at % width_;
       const size_t stored = s.bottom_up ? height_ - 1 - row : row;  // the row's place in the page
-      const size_t strip = stored / rows_per_strip_;
-      if (strip != strip_index_) decode(s, z, strip);
-      const size_t n = std::min(count - done, width_ - x);  // to the row's end
-      std::memcpy(dst + done * ts_, bytes_.data() + ((stored - strip * rows_per_strip_) * width_ + x) * ts_, n * ts_);
+      const size_t by = stored / block_h_, bx = x / block_w_;
+      const std::vector<unsigned char>& b = block(s, z, by, bx);
+      const size_t n = std::min({count - done, width_ - x, (bx + 1) * block_w_ - x});  // to the row's or block's end
+      std::memcpy(dst + done * ts_, b.data() + ((stored - by * block_h_) * block_w_ + (x - bx * block_w_)) * ts_, n * ts_);
       done += n;
     }
   }
@@ -330,28 +322,49 @@ class Strips : public SliceBytes {
       file_ = s.file;
     }
     if (dir_ == s.offset) return;
-    dir_ = UINT64_MAX, strip_index_ = SIZE_MAX;
+    dir_ = UINT64_MAX, block_row_ = SIZE_MAX;
     last_error.clear();
     if (!TIFFSetSubDirectory(t_.get(), s.offset)) throw std::runtime_error(where(s, z) + ": its page cannot be read: " + last_error);
-    uint32_t rps = 0;
-    TIFFGetFieldDefaulted(t_.get(), TIFFTAG_ROWSPERSTRIP, &rps);
-    rows_per_strip_ = std::clamp<size_t>(rps, 1, height_);
+    tiled_ = TIFFIsTiled(t_.get());
+    uint32_t w = 0, h = 0;
+    if (tiled_) {
+      TIFFGetField(t_.get(), TIFFTAG_TILEWIDTH, &w);
+      TIFFGetField(t_.get(), TIFFTAG_TILELENGTH, &h);
+      if (w == 0 || h == 0) throw std::runtime_error(where(s, z) + ": a tiled page without its tile size");
+      block_w_ = w, block_h_ = h;
+    } else {
+      TIFFGetFieldDefaulted(t_.get(), TIFFTAG_ROWSPERSTRIP, &h);
+      block_w_ = width_, block_h_ = std::clamp<size_t>(h, 1, height_);
+    }
+    blocks_.assign((width_ + block_w_ - 1) / block_w_, {});
     dir_ = s.offset;
   }
 
-  void decode(const SliceFile& s, size_t z, size_t strip) {
-    const size_t rows = std::min(rows_per_strip_, height_ - strip * rows_per_strip_), want = rows * width_ * ts_;
-    strip_index_ = SIZE_MAX;
-    bytes_.resize(std::max<size_t>(want, (size_t)std::max<tmsize_t>(TIFFStripSize(t_.get()), 0)));
+  // Block (by, bx), decoded once per row of blocks.
+  const std::vector<unsigned char>& block(const SliceFile& s, size_t z, size_t by, size_t bx) {
+    if (by != block_row_) {
+      for (auto& b : blocks_) b.clear();
+      block_row_ = by;
+    }
+    std::vector<unsigned char>& b = blocks_[bx];
+    if (!b.empty()) return b;
+    // A tile is whole even at the page's edge; a strip ends with the page.
+    const size_t want = (tiled_ ? block_h_ : std::min(block_h_, height_ - by * block_h_)) * block_w_ * ts_;
+    const tmsize_t room = tiled_ ? TIFFTileSize(t_.get()) : TIFFStripSize(t_.get());
+    b.resize(std::max<size_t>(want, (size_t)std::max<tmsize_t>(room, 0)));
     last_error.clear();
-    const tmsize_t got = TIFFReadEncodedStrip(t_.get(), (uint32_t)strip, bytes_.data(), (tmsize_t)bytes_.size());
-    if (got < (tmsize_t)want)
-      throw std::runtime_error(where(s, z) + ": strip " + std::to_string(strip) + " decodes to " +
+    const uint32_t index = tiled_ ? TIFFComputeTile(t_.get(), (uint32_t)(bx * block_w_), (uint32_t)(by * block_h_), 0, 0) : (uint32_t)by;
+    const tmsize_t got = tiled_ ? TIFFReadEncodedTile(t_.get(), index, b.data(), (tmsize_t)b.size())
+                                : TIFFReadEncodedStrip(t_.get(), index, b.data(), (tmsize_t)b.size());
+    if (got < (tmsize_t)want) {
+      b.clear();
+      throw std::runtime_error(where(s, z) + ": " + (tiled_ ? "tile " : "strip ") + std::to_string(index) + " decodes to " +
                                std::to_string(std::max<tmsize_t>(got, 0)) + " bytes, " + std::to_string(want) +
                                " expected (the file is cut short or damaged" + (last_error.empty() ? "" : ": " + last_error) + ")");
-    bytes_.resize(want);
+    }
+    b.resize(want);
     decoded_bytes += want;
-    strip_index_ = strip;
+    return b;
   }
 
   const RawVolumeSpec& spec_;
@@ -359,8 +372,9 @@ class Strips : public SliceBytes {
   File t_;
   std::string file_;
   uint64_t dir_ = UINT64_MAX;
-  size_t rows_per_strip_ = 1, strip_index_ = SIZE_MAX;
-  std::vector<unsigned char> bytes_;  // the decoded strip strip_index_
+  bool tiled_ = false;
+  size_t block_w_ = 1, block_h_ = 1, block_row_ = SIZE_MAX;
+  std::vector<std::vector<unsigned char>> blocks_;  // the decoded blocks of row block_row_ (empty: not yet)
 };
 
 }  // namespace tiff
@@ -374,6 +388,6 @@ bool isTiffName(const std::string& path) {
 
 RawVolumeSpec readTiffStack(const std::string& path) { return tiff::readStack(path); }
 
-std::unique_ptr<SliceBytes> tiffSliceBytes(const RawVolumeSpec& spec) { return std::make_unique<tiff::Strips>(spec); }
+std::unique_ptr<SliceBytes> tiffSliceBytes(const RawVolumeSpec& spec) { return std::make_unique<tiff::Blocks>(spec); }
 
 }  // namespace tessera

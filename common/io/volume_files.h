@@ -42,14 +42,14 @@ RawVolumeSpec readVolumeHeader(const std::string& path, int* time_steps = nullpt
 // their type's little-endian bytes. A DICOM slice holds only its stored bits (a 12-bit signed
 // sample sign-extended, whatever the bits above held): uncompressed, read by positioned reads
 // of its file (the last one read stays open: windows are read slice by slice); compressed,
-// decoded whole by GDCM (the last one kept). A TIFF slice is read by the strips that hold the
-// rows asked for, decoded by libtiff (the last strip kept).
+// decoded whole by GDCM (the last one kept). A TIFF slice is read by the strips or tiles that hold the
+// samples asked for, decoded by libtiff (the last row of them kept).
 class SliceBytes {
  public:
   virtual ~SliceBytes() = default;
   // `count` samples of slice z from its sample `in` into dst; errors name the slice's file.
   virtual void read(size_t z, size_t in, size_t count, unsigned char* dst) = 0;
-  uint64_t decoded_bytes = 0;  // what decoders produced (compressed slices, strips), rows not asked for included
+  uint64_t decoded_bytes = 0;  // what decoders produced (compressed slices, strips, tiles), parts not asked for included
 };
 // The reader for spec.format (Dicom or Tiff); spec is kept by reference.
 std::unique_ptr<SliceBytes> sliceBytes(const RawVolumeSpec& spec);
