@@ -109,11 +109,12 @@ TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
     if (t.files.empty()) fail("volume.series", file + ": the files list is empty");
   }
   if (t.files.size() > (size_t)kMaxSteps) fail("volume.series", "more than " + std::to_string(kMaxSteps) + " steps");
-  for (const std::string& f : t.files) {  // a step's slices are listed per step: not kept for a series
+  for (const std::string& f : t.files) {  // a folder a step would be scanned by every process at every step
+    std::error_code no_throw;
     const VolumeFormat fmt = volumeFormatOf(f);
-    if (fmt == VolumeFormat::Dicom || fmt == VolumeFormat::Tiff)
-      fail("volume.series", f + ": a " + (fmt == VolumeFormat::Dicom ? "DICOM series" : "TIFF stack") +
-                                " cannot be a time step; convert the steps to NIfTI or NRRD files");
+    if (fmt == VolumeFormat::Dicom || (fmt == VolumeFormat::Tiff && std::filesystem::is_directory(f, no_throw)))
+      fail("volume.series", f + ": a " + (fmt == VolumeFormat::Dicom ? "DICOM series" : "folder of TIFF slices") +
+                                " cannot be a time step; make each step one file (a multi-page TIFF, NIfTI or NRRD)");
   }
   t.steps = (int)t.files.size();
   return t;

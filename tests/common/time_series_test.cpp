@@ -1,9 +1,11 @@
 // Time series: which step a frame shows (loop, once, swing, backwards), series in every form
-// (pattern, list, ParaView .series, 4-D NIfTI written by nifticlib, 4-D NRRD written by teem)
+// (pattern, list, ParaView .series, 4-D NIfTI written by nifticlib, 4-D NRRD written by teem,
+// multi-page TIFFs written by libtiff)
 // loading as the same steps given as raw files, and the bad inputs named by file and field.
 #include <gtest/gtest.h>
 #include <nifti2_io.h>
 #include <teem/nrrd.h>
+#include <tiffio.h>
 
 #include <cstring>
 #include <filesystem>
@@ -44,6 +46,28 @@ void writeRawSteps(const TempDir& t) {
     auto v = stepSamples(s);
     t.write(std::string("t") + std::to_string(s) + ".raw", v.data(), v.size() * 2);
   }
+}
+
+// Step `step` as a multi-page int16 TIFF (LZW, strips of 2 rows), as a light-sheet
+// microscope's time-lapse saves one stack a time point.
+void writeTiffStep(const std::string& path, int step) {
+  TIFF* t = TIFFOpen(path.c_str(), "w");
+  ASSERT_NE(t, nullptr);
+  const auto v = stepSamples(step);
+  for (int z = 0; z < kSz; ++z) {
+    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)kSx);
+    TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)kSy);
+    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, (uint16_t)16);
+    TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, (uint16_t)SAMPLEFORMAT_INT);
+    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, (uint16_t)1);
+    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+    TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_LZW);
+    TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, (uint32_t)2);
+    for (int y = 0; y < kSy; ++y)
+      ASSERT_EQ(TIFFWriteScanline(t, const_cast<int16_t*>(v.data() + kSx * (y + kSy * z)), (uint32_t)y, 0), 1);
+    ASSERT_EQ(TIFFWriteDirectory(t), 1);
+  }
+  TIFFClose(t);
 }
 
 void writeNifti4d(const std::string& path) {
@@ -126,6 +150,7 @@ TEST(TimeSeries, EveryFormLoadsTheSameStepsAsRawFiles) {
   writeNifti4d(t.file("four.nii.gz"));
   writeNrrd4d(t.file("four.nrrd"));
   for (int s = 0; s < kSteps; ++s) writeNifti3d(t.file(std::string("n") + std::to_string(s) + ".nii"), s);
+  for (int s = 0; s < kSteps; ++s) writeTiffStep(t.file(std::string("f") + std::to_string(s) + ".tif"), s);
   std::ofstream(t.file("run.series")) << R"({"file-series-version": "1.0", "files": [
     {"name": "t0.raw", "time": 0}, {"name": "t1.raw", "time": 0.25}, {"name": "t2.raw", "time": 0.5}, {"name": "t3.raw", "time": 1}]})";
   const Scene ref = scene(t, "  series: [t0.raw, t1.raw, t2.raw, t3.raw]\n" + kRaw);
@@ -133,7 +158,8 @@ TEST(TimeSeries, EveryFormLoadsTheSameStepsAsRawFiles) {
   const std::vector<std::string> forms = {
       "  series: {pattern: t%d.raw, first: 0, last: 3}\n" + kRaw, "  series: run.series\n" + kRaw,
       "  file: four.nii\n", "  file: four.nii.gz\n", "  file: four.nrrd\n",
-      "  series: {pattern: n%d.nii, first: 0, last: 3}\n"};
+      "  series: {pattern: n%d.nii, first: 0, last: 3}\n",
+      "  series: {pattern: f%d.tif, first: 0, last: 3}\n  spacing: [0.5, 1, 1]\n"};
   const VoxelBox whole{{0, 0, 0}, {kSx, kSy, kSz}}, window{{2, 1, 1}, {7, 6, 4}};
   for (const auto& form : forms) {
     Scene s = scene(t, form);
@@ -196,6 +222,9 @@ TEST(TimeSeries, BadSeriesAreNamedBeforeTheFirstFrame) {
   has("  series: [t0.raw, t1.raw]\n" + kRaw, "time: {step: 2}\n", "time.step: must be in 0..1");
   has("  series: [t0.raw, t1.raw]\n" + kRaw, "time: {stride: 0}\n", "time.stride: must not be 0");
   has("  series: [t0.raw, t1.raw]\n" + kRaw, "time: {mode: bounce}\n", "expected loop, once or swing");
+  std::filesystem::create_directories(t.path / "slices");
+  writeTiffStep((t.path / "slices" / "z0.tif").string(), 0);
+  has("  series: [slices, slices]\n", "", "slices: a folder of TIFF slices cannot be a time step");
 }
 
 TEST(TimeSeries, AStepThatDiffersOrIsMissingIsNamedWhenRead) {
