@@ -314,6 +314,48 @@ TEST(TiffStack, AFolderIsOneNumberedSeriesOfOneChannel) {
   expectSays("time.tif", "time.tif: an ImageJ hyperstack of 2 time points");
 }
 
+// Found by review as untested: a thumbnail page between the full-size ones (NewSubfileType
+// "reduced") is skipped; a page of another size in one file is refused; .TIF in capitals.
+TEST(TiffStack, ThumbnailsAreSkippedAndAPageOfAnotherSizeIsRefused) {
+  TempDir t("tiff-pages-mixed");
+  const auto v = samples();
+  // One page of w x h: the volume's slice z where it has one, else a constant.
+  auto page = [&](TIFF* f, int w, int h, int z, bool thumbnail) {
+    TIFFSetField(f, TIFFTAG_IMAGEWIDTH, (uint32_t)w);
+    TIFFSetField(f, TIFFTAG_IMAGELENGTH, (uint32_t)h);
+    TIFFSetField(f, TIFFTAG_BITSPERSAMPLE, (uint16_t)16);
+    TIFFSetField(f, TIFFTAG_SAMPLESPERPIXEL, (uint16_t)1);
+    TIFFSetField(f, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+    if (thumbnail) TIFFSetField(f, TIFFTAG_SUBFILETYPE, (uint32_t)FILETYPE_REDUCEDIMAGE);
+    std::vector<uint16_t> row(w, 7);
+    for (int y = 0; y < h; ++y) {
+      if (w == kNx && h == kNy)
+        for (int x = 0; x < w; ++x) row[x] = v[x + kNx * (y + kNy * z)];
+      ASSERT_EQ(TIFFWriteScanline(f, row.data(), (uint32_t)y, 0), 1);
+    }
+    ASSERT_EQ(TIFFWriteDirectory(f), 1);
+  };
+  TIFF* f = TIFFOpen(t.file("thumbs.TIF").c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  page(f, 4, 3, 0, true);  // a preview before the stack, as scanners write one
+  for (int z = 0; z < kNz; ++z) {
+    page(f, kNx, kNy, z, false);
+    if (z == 2) page(f, 5, 5, 0, true);
+  }
+  TIFFClose(f);
+  EXPECT_EQ(volumeFormatOf(t.file("thumbs.TIF")), VolumeFormat::Tiff);
+  EXPECT_EQ(loadVolume(parseScene("volume: {file: thumbs.TIF}\n", t.path.string(), "s.yaml")).values, reference(t).values);
+
+  f = TIFFOpen(t.file("sizes.tif").c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  page(f, kNx, kNy, 0, false);
+  page(f, kNx - 1, kNy, 1, false);
+  TIFFClose(f);
+  const std::string e = errorOf("volume: {file: sizes.tif}\n", t.path.string());
+  EXPECT_NE(e.find("sizes.tif: page 2 is 12 x 11 uint16, the first 13 x 11 uint16: a stack's pages are one size and type"),
+            std::string::npos) << e;
+}
+
 }  // namespace tiff_test
 }  // namespace
 }  // namespace tessera
