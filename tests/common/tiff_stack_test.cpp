@@ -13,6 +13,7 @@
 
 #include "common/io/volume_files.h"
 #include "common/scene.h"
+#include "tests/common/load_error.h"
 #include "tests/common/raw_spec.h"
 #include "tests/common/temp_dir.h"
 
@@ -84,14 +85,7 @@ Volume reference(const TempDir& t, std::array<double, 3> spacing = {1, 1, 1}) {
                                      spacing, false, {0, 0}));
 }
 
-std::string errorOf(const std::string& yaml, const std::string& dir) {
-  try {
-    loadVolume(parseScene(yaml, dir, "s.yaml"));
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "<no error>";
-}
+using test::loadError;
 
 void expectWindowsMatch(const Scene& s, const Volume& whole) {
   VolumeReader reader(s);
@@ -159,7 +153,7 @@ TEST(TiffStack, ImageJsSpacingIsRead) {
 TEST(TiffStack, WhatTesseraCannotRenderIsNamed) {
   TempDir t("tiff-bad");
   auto expectSays = [&](const std::string& file, const std::string& what) {
-    const std::string e = errorOf("volume: {file: " + file + "}\n", t.path.string());
+    const std::string e = loadError("volume: {file: " + file + "}\n", t.path.string());
     EXPECT_NE(e.find(what), std::string::npos) << "expected: " << what << "\ngot: " << e;
   };
   PageOptions rgb;
@@ -179,7 +173,7 @@ TEST(TiffStack, WhatTesseraCannotRenderIsNamed) {
   expectSays("mixed", "a2.tif: holds 2 pages; in a folder, each TIFF file is one slice");
   writePages(t.file("cut.tif"), 0, kNz);
   std::filesystem::resize_file(t.file("cut.tif"), std::filesystem::file_size(t.file("cut.tif")) - 600);
-  const std::string cut = errorOf("volume: {file: cut.tif}\n", t.path.string());
+  const std::string cut = loadError("volume: {file: cut.tif}\n", t.path.string());
   EXPECT_NE(cut.find("cut.tif"), std::string::npos) << cut;
   EXPECT_NE(cut.find("cannot be read"), std::string::npos) << cut;  // not a stack of fewer pages
 }
@@ -274,7 +268,7 @@ TEST(TiffStack, AFolderIsOneNumberedSeriesOfOneChannel) {
     return t.path / name;
   };
   auto expectSays = [&](const std::string& file, const std::string& what) {
-    const std::string e = errorOf("volume: {file: " + file + "}\n", t.path.string());
+    const std::string e = loadError("volume: {file: " + file + "}\n", t.path.string());
     EXPECT_NE(e.find(what), std::string::npos) << "expected: " << what << "\ngot: " << e;
   };
   const auto ct = folder("ct");
@@ -351,7 +345,7 @@ TEST(TiffStack, ThumbnailsAreSkippedAndAPageOfAnotherSizeIsRefused) {
   page(f, kNx, kNy, 0, false);
   page(f, kNx - 1, kNy, 1, false);
   TIFFClose(f);
-  const std::string e = errorOf("volume: {file: sizes.tif}\n", t.path.string());
+  const std::string e = loadError("volume: {file: sizes.tif}\n", t.path.string());
   EXPECT_NE(e.find("sizes.tif: page 2 is 12 x 11 uint16, the first 13 x 11 uint16: a stack's pages are one size and type"),
             std::string::npos) << e;
 }

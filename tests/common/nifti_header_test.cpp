@@ -1,0 +1,47 @@
+// nifticlib says only "bad header" (on stderr) when it refuses a file; the error says what is
+// wrong with the bytes (common/io/nifti_header.cpp).
+#include <gtest/gtest.h>
+#include <nifti2_io.h>
+
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "tests/common/load_error.h"
+#include "tests/common/temp_dir.h"
+
+namespace tessera {
+namespace {
+
+TEST(NiftiHeader, ABadHeaderIsSaidByWhatIsWrong) {
+  test::TempDir t("bad-nifti-bytes");
+  const int64_t dims[8] = {3, 4, 4, 4, 1, 1, 1, 1};
+  nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 1);
+  ASSERT_NE(nim, nullptr);
+  ASSERT_EQ(nifti_set_filenames(nim, t.file("good.nii").c_str(), 0, 1), 0);
+  nifti_image_write(nim);
+  nifti_image_free(nim);
+  std::string good;
+  {
+    std::ifstream in(t.file("good.nii"), std::ios::binary);
+    good.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  ASSERT_GT(good.size(), 352u);
+  ASSERT_EQ(test::loadError("volume: {file: good.nii}\n", t.path.string()), "<no error>");
+  auto write = [&](const std::string& name, std::string bytes) {
+    std::ofstream(t.file(name), std::ios::binary) << bytes;
+    return test::loadError("volume: {file: " + name + "}\n", t.path.string());
+  };
+  auto expectSays = [](const std::string& error, const std::string& what) {
+    EXPECT_NE(error.find(what), std::string::npos) << "expected: " << what << "\ngot: " << error;
+  };
+  expectSays(write("cut.nii", good.substr(0, 200)), "cut.nii: not a readable NIfTI file: cut short: 200 bytes of its 348-byte NIfTI-1 header");
+  std::string dim0 = good;
+  dim0[40] = 9, dim0[41] = 0;  // little-endian int16, as nifticlib wrote it here
+  expectSays(write("dim0.nii", dim0), "dim0.nii: not a readable NIfTI file: dim[0] = 9, must be in 1..7");
+  expectSays(write("text.nii", "a text file, not a volume, named .nii by mistake\n"),
+             "text.nii: not a readable NIfTI file: its first 4 bytes give a header size of");
+}
+
+}  // namespace
+}  // namespace tessera
