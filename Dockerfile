@@ -6,7 +6,7 @@ ENV DEBIAN_FRONTEND=noninteractive
 WORKDIR /opt/tessera/src
 # Packages first, in their own layer, so a source edit does not reinstall them.
 COPY setup.sh ./
-RUN TESSERA_MINIMAL=1 ./setup.sh deps && rm -rf /var/lib/apt/lists/*
+RUN ./setup.sh deps && rm -rf /var/lib/apt/lists/*
 COPY . .
 # One image for every x86-64 host: the hot loops pick their instruction set at run time.
 RUN cmake -S . -B /opt/tessera/build -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_UNITY_BUILD=ON \

@@ -5,7 +5,9 @@
 #   ./setup.sh run      ... and run the farm (compose.yaml) on the built-in default scene
 #   ./setup.sh test     ... and run every test (ctest, fuzzers for a bounded time, compose check,
 #                       the unit tests again under ASan + UBSan)
-# TESSERA_MINIMAL=1 installs only what building and running need (the Docker image).
+#   ./setup.sh deps     install what building and running need, and nothing else (the Docker image)
+# Only `test` installs the test tools (clang, Xvfb, chromium, a one-host Slurm, docker-compose...):
+# running the farm on a workstation does not put Slurm daemons on it.
 set -euo pipefail
 CALLER_DIR=$PWD  # `run` starts the farm from here: TESSERA_SCENE/TESSERA_OUT are the user's paths
 cd "$(dirname "$0")"
@@ -24,18 +26,18 @@ PKGS=(
 # Tests, fuzzing, benchmarks' plots, the window test under Xvfb, compose validation, the
 # one-host Slurm cluster of the Slurm tests. libclang-rt-14-dev holds the fuzzers' runtimes
 # (libFuzzer, ASan, UBSan): clang only recommends it, and recommends are not installed.
-[ "${TESSERA_MINIMAL:-0}" = 1 ] || PKGS+=(gnuplot-nox xvfb x11-apps imagemagick clang libclang-rt-14-dev docker-compose procps iproute2
+mode=${1:-build}
+[ "$mode" != test ] || PKGS+=(gnuplot-nox xvfb x11-apps imagemagick clang libclang-rt-14-dev docker-compose procps iproute2
   slurmctld slurmd slurm-client munge chromium curl)
 missing=()
 for p in "${PKGS[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
 # Node.js drives chromium in the web view's tests: Debian's, unless one is installed already.
-if [ "${TESSERA_MINIMAL:-0}" != 1 ] && ! command -v npm >/dev/null; then missing+=(nodejs npm); fi
+if [ "$mode" = test ] && ! command -v npm >/dev/null; then missing+=(nodejs npm); fi
 if [ ${#missing[@]} -gt 0 ]; then
   $SUDO apt-get update -q
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-mode=${1:-build}
 [ "$mode" = deps ] && exit 0
 BUILD=${BUILD:-build}
 werror=OFF

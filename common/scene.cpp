@@ -200,7 +200,7 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
   // Left out: fitted to the volume's box (a mesh is fitted to the unit box) and the image.
   s.camera_fitted = !root["camera"];
   s.camera = root["camera"] ? p.camera(root["camera"])
-                            : fittedCamera(sceneHalfExtent(s), (double)s.width / s.height);
+                            : fittedCamera(s, (double)s.width / s.height);
   if (root["quality"]) s.quality = p.quality(root["quality"]);
   if (root["orbit"]) s.orbit = p.orbit(root["orbit"]);
   if (root["time"] && is_mesh) p.fail("time", "plays a volume's time steps; a mesh scene has none");

@@ -154,5 +154,8 @@ std::array<int, 3> volumeDims(const Scene& scene);
 // Half extents of the scene's box from the volume's dims and spacing (no voxel read); a mesh
 // scene's unit box.
 Vec3 sceneHalfExtent(const Scene& s);
+// The camera a scene without `camera` gets for an image of this aspect: fittedCamera of its
+// box, seen as image viewers show slices when they are TIFF pages or DICOM images.
+Camera fittedCamera(const Scene& s, double aspect);
 
 }  // namespace tessera

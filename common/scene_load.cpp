@@ -19,6 +19,9 @@ Scene loadScene(const std::string& path) {
     Scene s = parseScene("volume: {file: " + nlohmann::json(abs.filename().string()).dump() + "}\n",
                          abs.parent_path().string(), path);
     s.path = path;
+    // The built-in scene's orbit, so that a farm shown a file alone turns it the same way (a
+    // 4-D file keeps its steps' pass instead).
+    if (s.series.steps <= 1) s.orbit = defaultScene().orbit;
     return s;
   }
   std::ifstream in(path, std::ios::binary);
@@ -38,6 +41,12 @@ Vec3 sceneHalfExtent(const Scene& s) {
   const auto* raw = std::get_if<RawVolumeSpec>(&s.volume);
   shape.spacing = raw ? raw->spacing : std::get<GeneratorSpec>(s.volume).spacing;
   return shape.halfExtent();
+}
+
+Camera fittedCamera(const Scene& s, double aspect) {
+  const auto* raw = s.has_volume && !s.mesh ? std::get_if<RawVolumeSpec>(&s.volume) : nullptr;
+  const bool images = raw && (raw->format == VolumeFormat::Tiff || raw->format == VolumeFormat::Dicom);
+  return fittedCamera(sceneHalfExtent(s), aspect, images);
 }
 
 Scene defaultScene() {

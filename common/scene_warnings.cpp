@@ -62,6 +62,15 @@ std::vector<std::string> volumeWarnings(const Scene& scene, const Volume& shape)
                   raw->dicom_tilt_degrees);
     out.push_back(where + b);
   }
+  if (const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume)) {
+    for (const std::string& note : raw->notes) out.push_back(where + "volume: " + note);
+    std::string lacks;
+    for (int a = 0; a < 3; ++a)
+      if (!raw->spacing_known[a]) lacks += std::string(lacks.empty() ? "" : ", ") + "xyz"[a];
+    if (!lacks.empty() && !raw->spacing_given)
+      out.push_back(where + "volume: " + raw->file + " gives no voxel spacing along " + lacks +
+                    ": 1 assumed there, so the volume's proportions may be wrong; give volume.spacing: [x, y, z]");
+  }
   return out;
 }
 

@@ -119,7 +119,7 @@ std::string sceneYaml(const Scene& s) {
   e << YAML::Key << "orbit" << YAML::Value << YAML::BeginMap << YAML::Key << "frames" << YAML::Value << s.orbit.frames
     << YAML::Key << "axis" << YAML::Value;
   vec(e, s.orbit.axis);
-  if (s.orbit.degrees != 360) e << YAML::Key << "degrees" << YAML::Value << num(s.orbit.degrees);
+  e << YAML::Key << "degrees" << YAML::Value << num(s.orbit.degrees);
   e << YAML::EndMap;
   const Playback& t = s.time;
   if (t != Playback{})

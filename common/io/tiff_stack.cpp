@@ -209,6 +209,7 @@ RawVolumeSpec readStack(const std::string& path) {
   RawVolumeSpec spec;
   spec.format = VolumeFormat::Tiff;
   spec.file = path;
+  spec.spacing = {0, 0, 0};  // what the metadata gives; 0: not given
   std::vector<std::string> files;
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
@@ -270,12 +271,24 @@ RawVolumeSpec readStack(const std::string& path) {
     }
   } else if (description.rfind("ImageJ=", 0) == 0) {
     const double channels = imageJValue(description, "channels", 1), frames = imageJValue(description, "frames", 1);
-    if (channels > 1)
+    const double slices = imageJValue(description, "slices", 1);
+    // One axis only, but not z: a stack saved without its axes (tifffile's imagej=True calls
+    // every page a channel) or labelled wrongly. Read as z, and said.
+    if ((channels > 1) + (frames > 1) + (slices > 1) == 1 && slices == 1) {
+      const bool c = channels > 1;
+      spec.notes.push_back("ImageJ's metadata in " + fs::path(files[0]).filename().string() + " calls its " +
+                           std::to_string((int)(c ? channels : frames)) + (c ? " pages channels" : " pages time points") +
+                           "; Tessera reads them as z slices (to say so in the file: Fiji's Image > Properties, or "
+                           "tifffile's metadata={'axes': 'ZYX'}). If they are " +
+                           (c ? "channels, split them (Fiji: Image > Color > Split Channels)"
+                              : "a time-lapse of one plane, this stacks time along z"));
+    } else if (channels > 1) {
       fail(files[0], "an ImageJ hyperstack of " + std::to_string((int)channels) +
                          " channels: Tessera renders one; save one channel (Fiji: Image > Color > Split Channels)");
-    if (frames > 1)
+    } else if (frames > 1) {
       fail(files[0], "an ImageJ hyperstack of " + std::to_string((int)frames) +
                          " time points: save each as its own stack and list them as the scene's volume.series");
+    }
     const double images = imageJValue(description, "images", (double)spec.slices.size());
     if (images > (double)spec.slices.size())
       fail(files[0], "ImageJ wrote " + std::to_string((long long)images) + " images but the file has " +
@@ -284,8 +297,11 @@ RawVolumeSpec readStack(const std::string& path) {
     // Resolution in pixels per unit; the same unit for the slices' spacing.
     if (xres > 0) spec.spacing[0] = 1.0 / xres;
     if (yres > 0) spec.spacing[1] = 1.0 / yres;
-    spec.spacing[2] = std::fabs(imageJValue(description, "spacing", 1.0));  // ImageJ keeps a negative one's size
+    spec.spacing[2] = std::fabs(imageJValue(description, "spacing", 0));  // ImageJ keeps a negative one's size
   }
+  // What neither ImageJ's nor OME's metadata gave: 1, and a warning (volumeWarnings).
+  for (int a = 0; a < 3; ++a)
+    if (!(spec.spacing[a] > 0)) spec.spacing[a] = 1, spec.spacing_known[a] = false;
   return spec;
 }
 

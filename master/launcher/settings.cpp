@@ -55,7 +55,6 @@ const Setting kSettings[] = {
     {"TESSERA_BACKGROUND", Kind::Free},  // the display's --background R,G,B
     {"TESSERA_SERVICE", Kind::Free},  // set by tessera-up for its children
     {"TESSERA_REPLICA", Kind::Free},
-    {"TESSERA_MINIMAL", Kind::Free},  // setup.sh
     {"TESSERA_FUZZ_SECONDS", Kind::Free},
     {"TESSERA_FUZZ_SEEDS", Kind::Free},
     {"TESSERA_KEEP_TEST_DIRS", Kind::Free},

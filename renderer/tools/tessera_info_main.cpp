@@ -72,15 +72,15 @@ void printRendererMemory(const std::array<int, 3>& dims, bool shaded) {
     }
     line += " " + bytesText((double)per_voxel * (double)most) + " for " + std::to_string(n) + (n < 8 ? "," : "");
   }
-  std::printf("%s renderers\n", line.c_str());
+  std::printf("# %s renderers\n", line.c_str());
 }
 
 void printHistogram(const ValueHistogram& h) {
   const uint64_t peak = *std::max_element(h.counts.begin(), h.counts.end());
-  std::printf("histogram (%zu bins; bars on a log scale):\n", h.counts.size());
+  std::printf("# histogram (%zu bins; bars on a log scale):\n", h.counts.size());
   for (size_t b = 0; b < h.counts.size(); ++b) {
     const int bar = h.counts[b] ? (int)std::lround(40 * std::log1p((double)h.counts[b]) / std::log1p((double)peak)) : 0;
-    std::printf("  %12.6g .. %-12.6g %12llu %s\n", h.edge(b), h.edge(b + 1),
+    std::printf("#   %12.6g .. %-12.6g %12llu %s\n", h.edge(b), h.edge(b + 1),
                 (unsigned long long)h.counts[b], std::string(bar, '#').c_str());
   }
 }
@@ -113,6 +113,7 @@ int run(int argc, char** argv) {
   app.add_option("--plot", plot, "also write the histogram as a PNG");
   CLI11_PARSE(app, argc, argv);
   Scene scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
+  // All but the scene is YAML comments: the output saved as a file is that scene.
   std::printf("# scene %s, every default filled in\n%s\n", scene_path.empty() ? "(built-in)" : scene_path.c_str(),
               sceneYaml(scene).c_str());
   if (!scene.has_volume) return 0;
@@ -132,23 +133,23 @@ int run(int argc, char** argv) {
   }
   shape.dims = volumeDims(scene);
   shape.mapped_range = raw && raw->has_range ? raw->range : raw ? shape.data_range : std::array<double, 2>{0, 1};
-  std::printf("volume: %d x %d x %d voxels, %s, spacing %g %g %g\n", shape.dims[0], shape.dims[1], shape.dims[2],
+  std::printf("# volume: %d x %d x %d voxels, %s, spacing %g %g %g\n", shape.dims[0], shape.dims[1], shape.dims[2],
               raw ? voxelTypeName(raw->type) : "generated (float)", shape.spacing[0], shape.spacing[1], shape.spacing[2]);
-  std::printf("values: %.9g .. %.9g; mapped to the transfer function: %.9g .. %.9g%s\n", shape.data_range[0],
+  std::printf("# values: %.9g .. %.9g; mapped to the transfer function: %.9g .. %.9g%s\n", shape.data_range[0],
               shape.data_range[1], shape.mapped_range[0], shape.mapped_range[1],
               raw && !raw->has_range ? " (no range given: the data's own)" : "");
   if (scene.series.steps > 1)
-    std::printf("time steps: %d; the values, warnings and histogram here are step 0's, and so is the range every step "
+    std::printf("# time steps: %d; the values, warnings and histogram here are step 0's, and so is the range every step "
                 "is mapped with unless the scene gives `range`\n",
                 scene.series.steps);
-  for (const std::string& w : volumeWarnings(scene, shape)) std::printf("warning: %s\n", w.c_str());
+  for (const std::string& w : volumeWarnings(scene, shape)) std::printf("# warning: %s\n", w.c_str());
   const bool integral = raw && storesIntegers(*raw);
   const auto [h, fine] = histograms(unclipped, shape.data_range, bins, integral);
-  if (std::string advice = rangeSuggestion(scene, fine); !advice.empty()) std::printf("warning: %s\n", advice.c_str());
+  if (std::string advice = rangeSuggestion(scene, fine); !advice.empty()) std::printf("# warning: %s\n", advice.c_str());
   printHistogram(h);
   if (!plot.empty()) {
     plotHistogram(h, plot);
-    std::printf("wrote %s\n", plot.c_str());
+    std::printf("# wrote %s\n", plot.c_str());
   }
   printRendererMemory(shape.dims, scene.shading.on);
   return 0;

@@ -204,7 +204,7 @@ int run(int argc, char** argv) {
   int w = scene.width, h = scene.height;
   if (!a.size.empty()) parseSize(a.size, w, h);
   // A camera fitted to the scene's image is fitted again to the size asked for (a tall one).
-  if (scene.camera_fitted) scene.camera = fittedCamera(sceneHalfExtent(scene), (double)w / h);
+  if (scene.camera_fitted) scene.camera = fittedCamera(scene, (double)w / h);
   if (!scene.mesh) return renderVolume(scene, a, w, h, bg);
   renderer::MeshToolOptions mo;
   mo.out = a.out;

@@ -87,6 +87,10 @@ TEST(DicomSeries, AFolderIsAVolumeOfItsSlicesInOrderScaled) {
     const bool compressed = syntax != gdcm::TransferSyntax::ExplicitVRLittleEndian &&
                             syntax != gdcm::TransferSyntax::ImplicitVRLittleEndian;
     EXPECT_EQ(spec.slices[0].encoded, compressed);
+    // Seen as a radiology viewer shows an axial series: from the feet (slice 0's side), anterior
+    // (row 0) up. tiff_view_test.cpp checks the same view by projecting the page's corners.
+    EXPECT_EQ(scene.camera.up, (Vec3{0, -1, 0}));
+    EXPECT_LT(scene.camera.eye.z, 0);
     RawVolumeReader reader(spec);
     const VoxelBox whole{{0, 0, 0}, spec.dims};
     expectValues(reader.readValues(whole), whole, 2, -1024);

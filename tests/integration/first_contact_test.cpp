@@ -216,7 +216,7 @@ std::vector<unsigned long long> histogramCounts(const std::string& output) {
   for (std::string l; std::getline(in, l);) {
     double a, b;
     unsigned long long c;
-    if (std::sscanf(l.c_str(), " %lf .. %lf %llu", &a, &b, &c) == 3) counts.push_back(c);
+    if (std::sscanf(l.c_str(), "# %lf .. %lf %llu", &a, &b, &c) == 3) counts.push_back(c);
   }
   return counts;
 }
@@ -243,6 +243,10 @@ TEST(FirstContact, TesseraInfoReportsTheValuesAndTheirHistogramExactly) {
   EXPECT_EQ(counts, (std::vector<unsigned long long>{256, 0, 192, 64})) << r.output;
   EXPECT_NE(r.output.find("transfer_function:"), std::string::npos) << "the effective scene is missing\n" << r.output;
   EXPECT_NE(r.output.find("camera:"), std::string::npos) << r.output;
+  // Saved, the output is the scene: the rest is comments.
+  std::ofstream(dir.path() / "again.yaml") << r.output;
+  const Scene again = loadScene((dir.path() / "again.yaml").string());
+  EXPECT_EQ(sceneYaml(again), sceneYaml(loadScene(scene.string()))) << r.output;
   const Image8 plot = readPng(png);
   EXPECT_EQ(plot.width, 16);
 
