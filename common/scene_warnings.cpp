@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numeric>
+#include <optional>
 
 #include "common/transfer_function.h"
 
@@ -30,12 +32,46 @@ std::string thinProblem(const Scene& scene, const Volume& shape) {
   return b;
 }
 
+// A microscope image's background (a camera's offset and its noise): one peak at the low end
+// holding most voxels, which the transfer function gives enough opacity that, seen through
+// the whole volume, it is a haze over the signal. The advice starts the range where the peak
+// has fallen to 1% of its height. (CT's air is such a peak too, but the presets give it no
+// opacity.) `tf` maps h.lo..h.hi to 0..1, as it does with no `range`.
+std::optional<RangeAdvice> backgroundHaze(const ValueHistogram& h, const TransferFunction& tf) {
+  const std::vector<uint64_t>& c = h.counts;
+  const uint64_t total = h.total();
+  const size_t n = c.size();
+  if (total == 0 || !(h.hi > h.lo) || n < 64) return std::nullopt;
+  // Heights over 8 bins: integers leave some of the fine bins empty.
+  auto height = [&](size_t b) { return std::accumulate(c.begin() + (long)b, c.begin() + (long)std::min(n, b + 8), uint64_t{0}); };
+  size_t mode = 0;
+  for (size_t b = 1; b + 8 <= n; ++b)
+    if (height(b) > height(mode)) mode = b;
+  if (mode >= n / 5) return std::nullopt;
+  size_t end = mode + 1;
+  while (end < n / 2 && 100 * height(end) >= height(mode)) ++end;
+  uint64_t held = 0;
+  for (size_t b = 0; b < end; ++b) held += c[b];
+  if (2 * held < total || end >= n / 2) return std::nullopt;  // not most voxels, or no end to the peak
+  // Opacity per 1/256 of the box: over a ray across it (256 of them) 0.0004 gathers 10%.
+  const double alpha = tf.maxAlpha(0, (double)end / n);
+  if (alpha < 4e-4) return std::nullopt;
+  const auto [a, b] = std::array<double, 2>{h.integral ? std::ceil(h.edge(end)) : h.edge(end), h.hi};
+  char why[300];
+  std::snprintf(why, sizeof why,
+                "%.0f%% of the voxels lie in one peak at the low end, %.9g .. %.9g (a background?), where the transfer "
+                "function's opacity reaches %.2g: seen through the volume it is a haze over the rest",
+                100.0 * held / total, h.lo, a, alpha);
+  return RangeAdvice{{a, b}, 1.0 - (double)held / total, why};
+}
+
 }  // namespace
 
 std::string rangeSuggestion(const Scene& scene, const ValueHistogram& fine) {
   const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume);
   if (!raw || raw->has_range) return "";
-  const auto advice = suggestedRange(fine);
+  auto advice = suggestedRange(fine);
+  if (!advice) advice = backgroundHaze(fine, scene.tf);
   if (!advice) return "";
   char b[600];
   std::snprintf(b, sizeof b,

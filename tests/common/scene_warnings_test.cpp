@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdlib>
+
 #include "common/transfer_function.h"
 #include "tests/common/raw_spec.h"
 
@@ -75,6 +78,29 @@ TEST(VolumeWarnings, ARangeIsSuggestedForCtPaddingUnlessTheSceneGivesOne) {
             "transfer function spans the data's whole -3024 .. 1500: `range: [-1024, 1500]` (79.1123% of the voxels) "
             "spends it on the rest (values outside clamp to its ends)");
   EXPECT_EQ(rangeSuggestion(sceneOf(true, {-1000, 1000}), h), "");
+}
+
+// A microscope's background: most voxels in one peak at the low end (a camera offset of 100
+// and noise of 40), the cell's values spread above it. The default colour map gives the peak
+// enough opacity to be a haze; the advice starts the range past its tail (where it falls to
+// 1% of its height: 100 + 40 * sqrt(2 ln 100) = 221). A colour map that leaves it
+// transparent, or a scene that gives a range, gets none.
+TEST(VolumeWarnings, ARangeIsSuggestedPastABackgroundThePresetMakesAHaze) {
+  ValueHistogram h(0, 4000, 4096, true);
+  for (int v = 0; v <= 400; ++v) h.counts[std::min<size_t>(4095, (size_t)(v * 4096 / 4000))] +=
+      (uint64_t)std::llround(1e6 * std::exp(-0.5 * (v - 100) * (v - 100) / 1600.0));
+  for (int v = 300; v <= 4000; ++v) h.counts[std::min<size_t>(4095, (size_t)(v * 4096 / 4000))] += 10000;  // 27%
+  const std::string advice = rangeSuggestion(sceneOf(false), h);
+  EXPECT_NE(advice.find("lie in one peak at the low end, 0 .. "), std::string::npos) << advice;
+  const size_t at = advice.find("`range: [");
+  ASSERT_NE(at, std::string::npos) << advice;
+  const double start = std::atof(advice.c_str() + at + 9);
+  EXPECT_GE(start, 210) << advice;
+  EXPECT_LE(start, 230) << advice;
+  Scene clear = sceneOf(false);
+  clear.tf = TransferFunction({{0, 0, 0, 0, 0}, {0.2, 0, 0, 0, 0}, {1, 1, 1, 1, 0.5}});
+  EXPECT_EQ(rangeSuggestion(clear, h), "");
+  EXPECT_EQ(rangeSuggestion(sceneOf(true, {0, 4000}), h), "");
 }
 
 }  // namespace
