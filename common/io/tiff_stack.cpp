@@ -1,7 +1,7 @@
 // TIFF stacks through libtiff: a multi-page TIFF (one slice a page, as Fiji and most
 // microscopes and micro-CT scanners save a stack) or a folder of single-page TIFFs (one slice
 // a file, in natural name order: slice2 before slice10). Grayscale pages of one size and
-// sample type; ImageJ's or OME's metadata gives the spacing. A slice is read by the strips or
+// sample type; ImageJ's or OME's metadata gives the spacing (tiff_metadata.cpp). A slice is read by the strips or
 // tiles that hold the part a window needs, decoded by libtiff (any compression it decodes).
 #include <tiffio.h>
 
@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "common/io/tiff_metadata.h"
 #include "common/io/volume_files.h"
 
 namespace tessera {
@@ -134,26 +135,6 @@ std::vector<uint64_t> pagesOf(TIFF* t, const std::string& file) {
   }
 }
 
-// ImageJ writes its stack's layout and z spacing in the first page's description
-// ("ImageJ=1.54f\nimages=60\nchannels=2\nslices=30\nspacing=2.5\nunit=micron\n...").
-double imageJValue(const std::string& description, const std::string& key, double otherwise) {
-  const size_t at = description.find("\n" + key + "=");
-  return at == std::string::npos ? otherwise : std::atof(description.c_str() + at + key.size() + 2);
-}
-
-// An attribute of the OME-XML Pixels element ("<Pixels ... SizeC=\"2\" ...>"), or "".
-std::string omePixels(const std::string& xml, const std::string& attribute) {
-  size_t at = xml.find("Pixels ");
-  while (at != std::string::npos && at > 0 && xml[at - 1] != '<' && xml[at - 1] != ':') at = xml.find("Pixels ", at + 1);
-  if (at == std::string::npos) return "";
-  const size_t end = xml.find('>', at);
-  const std::string tag = xml.substr(at, end == std::string::npos ? std::string::npos : end - at);
-  const size_t a = tag.find(" " + attribute + "=\"");
-  if (a == std::string::npos) return "";
-  const size_t v = a + attribute.size() + 3;
-  return tag.substr(v, tag.find('"', v) - v);
-}
-
 // A name with its digit runs replaced by '#', and those runs: "z012_ch01.tif" -> "z#_ch#.tif",
 // {"012", "01"}.
 std::string namePattern(const std::string& name, std::vector<std::string>* numbers = nullptr) {
@@ -209,7 +190,6 @@ RawVolumeSpec readStack(const std::string& path) {
   RawVolumeSpec spec;
   spec.format = VolumeFormat::Tiff;
   spec.file = path;
-  spec.spacing = {0, 0, 0};  // what the metadata gives; 0: not given
   std::vector<std::string> files;
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
@@ -257,51 +237,7 @@ RawVolumeSpec readStack(const std::string& path) {
   if (first.width > 65536 || first.height > 65536) fail(files[0], "pages wider or taller than 65536 pixels");
   spec.dims = {(int)first.width, (int)first.height, (int)spec.slices.size()};
   spec.type = first.type;
-  if (description.find("<OME") != std::string::npos) {
-    // OME-TIFF (Bio-Formats, Micro-Manager): channels and time points are pages of the same
-    // size, interleaved by DimensionOrder; one channel at one time is a volume.
-    const int channels = std::atoi(omePixels(description, "SizeC").c_str()), times = std::atoi(omePixels(description, "SizeT").c_str());
-    if (channels > 1 || times > 1)
-      fail(files[0], "an OME-TIFF of " + std::to_string(std::max(channels, 1)) + " channels and " + std::to_string(std::max(times, 1)) +
-                         " time points: Tessera renders one channel at one time; save it as its own stack (Fiji: Image > "
-                         "Color > Split Channels, Image > Duplicate)");
-    for (int a = 0; a < 3; ++a) {
-      const double v = std::atof(omePixels(description, std::string("PhysicalSize") + "XYZ"[a]).c_str());
-      if (v > 0) spec.spacing[a] = v;
-    }
-  } else if (description.rfind("ImageJ=", 0) == 0) {
-    const double channels = imageJValue(description, "channels", 1), frames = imageJValue(description, "frames", 1);
-    const double slices = imageJValue(description, "slices", 1);
-    // One axis only, but not z: a stack saved without its axes (tifffile's imagej=True calls
-    // every page a channel) or labelled wrongly. Read as z, and said.
-    if ((channels > 1) + (frames > 1) + (slices > 1) == 1 && slices == 1) {
-      const bool c = channels > 1;
-      spec.notes.push_back("ImageJ's metadata in " + fs::path(files[0]).filename().string() + " calls its " +
-                           std::to_string((int)(c ? channels : frames)) + (c ? " pages channels" : " pages time points") +
-                           "; Tessera reads them as z slices (to say so in the file: Fiji's Image > Properties, or "
-                           "tifffile's metadata={'axes': 'ZYX'}). If they are " +
-                           (c ? "channels, split them (Fiji: Image > Color > Split Channels)"
-                              : "a time-lapse of one plane, this stacks time along z"));
-    } else if (channels > 1) {
-      fail(files[0], "an ImageJ hyperstack of " + std::to_string((int)channels) +
-                         " channels: Tessera renders one; save one channel (Fiji: Image > Color > Split Channels)");
-    } else if (frames > 1) {
-      fail(files[0], "an ImageJ hyperstack of " + std::to_string((int)frames) +
-                         " time points: save each as its own stack and list them as the scene's volume.series");
-    }
-    const double images = imageJValue(description, "images", (double)spec.slices.size());
-    if (images > (double)spec.slices.size())
-      fail(files[0], "ImageJ wrote " + std::to_string((long long)images) + " images but the file has " +
-                         std::to_string(spec.slices.size()) + " pages (ImageJ saves a stack over 4 GB that way): save it as raw "
-                         "data and give volume.dims and type");
-    // Resolution in pixels per unit; the same unit for the slices' spacing.
-    if (xres > 0) spec.spacing[0] = 1.0 / xres;
-    if (yres > 0) spec.spacing[1] = 1.0 / yres;
-    spec.spacing[2] = std::fabs(imageJValue(description, "spacing", 0));  // ImageJ keeps a negative one's size
-  }
-  // What neither ImageJ's nor OME's metadata gave: 1, and a warning (volumeWarnings).
-  for (int a = 0; a < 3; ++a)
-    if (!(spec.spacing[a] > 0)) spec.spacing[a] = 1, spec.spacing_known[a] = false;
+  applyTiffMetadata(description, xres, yres, files[0], spec);
   return spec;
 }
 
