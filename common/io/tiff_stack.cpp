@@ -278,6 +278,9 @@ class Blocks : public SliceBytes {
     last_error.clear();
     if (!TIFFSetSubDirectory(t_.get(), s.offset)) throw std::runtime_error(where(s, z) + ": its page cannot be read: " + last_error);
     tiled_ = TIFFIsTiled(t_.get());
+    uint16_t compression = COMPRESSION_NONE;
+    TIFFGetFieldDefaulted(t_.get(), TIFFTAG_COMPRESSION, &compression);
+    compressed_ = compression != COMPRESSION_NONE;
     uint32_t w = 0, h = 0;
     if (tiled_) {
       TIFFGetField(t_.get(), TIFFTAG_TILEWIDTH, &w);
@@ -315,7 +318,7 @@ class Blocks : public SliceBytes {
                                " expected (the file is cut short or damaged" + (last_error.empty() ? "" : ": " + last_error) + ")");
     }
     b.resize(want);
-    decoded_bytes += want;
+    if (compressed_) decoded_bytes += want;  // an uncompressed block is read, not decoded
     return b;
   }
 
@@ -324,7 +327,7 @@ class Blocks : public SliceBytes {
   File t_;
   std::string file_;
   uint64_t dir_ = UINT64_MAX;
-  bool tiled_ = false;
+  bool tiled_ = false, compressed_ = false;
   size_t block_w_ = 1, block_h_ = 1, block_row_ = SIZE_MAX;
   std::vector<std::vector<unsigned char>> blocks_;  // the decoded blocks of row block_row_ (empty: not yet)
 };
