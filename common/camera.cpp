@@ -87,15 +87,14 @@ bool RayGenerator::project(const Vec3& p, double& sx, double& sy) const {
   return !cam_.orthographic || z >= 0;
 }
 
-Camera fittedCamera(const Vec3& half_extent, double aspect, bool slices_are_images) {
+Camera fittedCamera(const Vec3& half_extent, double aspect, const Vec3& front, const Vec3& up) {
   Camera c;
   const double radius = length(half_extent);  // the box's bounding sphere
   // The fov is vertical; a portrait image sees less across (tan scales with the aspect).
   const double half_angle = std::atan(std::min(1.0, aspect) * std::tan(c.fov / 2 * std::numbers::pi / 180));
   const double distance = 1.05 * radius / std::sin(half_angle);
-  const double turn = slices_are_images ? -1 : 1;
-  c.eye = normalize(Vec3{0, 0.3 * turn, turn}) * distance;
-  c.up = {0, turn, 0};
+  c.eye = normalize(normalize(front) + normalize(up) * 0.3) * distance;
+  c.up = normalize(up);
   c.target = {0, 0, 0};
   return c;
 }

@@ -19,13 +19,11 @@ struct Camera {
 };
 
 // The camera ParaView's Reset Camera gives: looking at the centre of a box with these half
-// extents from the front and a little above (+z, +y), far enough that the whole box fits
-// the 30-degree view with a margin, across the narrower of the image's two sides
-// (aspect = width / height). `slices_are_images`: the volume's slices are pictures with row 0
-// at the top (TIFF, DICOM); then it is seen as Fiji and radiology viewers show slice 0, from
-// before it (-z) with the rows going down: the same view turned 180 degrees about x, so
-// nothing is mirrored.
-Camera fittedCamera(const Vec3& half_extent, double aspect = 1.0, bool slices_are_images = false);
+// extents from the front and a little above (from `front`, raised towards `up`: +z and +y
+// unless the data says where its front is), far enough that the whole box fits the
+// 30-degree view with a margin, across the narrower of the image's two sides
+// (aspect = width / height).
+Camera fittedCamera(const Vec3& half_extent, double aspect = 1.0, const Vec3& front = {0, 0, 1}, const Vec3& up = {0, 1, 0});
 
 struct Ray {
   Vec3 origin, dir;  // dir normalized

@@ -154,8 +154,15 @@ std::array<int, 3> volumeDims(const Scene& scene);
 // Half extents of the scene's box from the volume's dims and spacing (no voxel read); a mesh
 // scene's unit box.
 Vec3 sceneHalfExtent(const Scene& s);
+// Where a volume's front and up are, in the box: a DICOM series' anterior and superior (a
+// patient seen from the front, head up, as a 3D viewer first shows one); a TIFF stack's
+// slice 0 and row 0 (as Fiji shows a stack: rows going down, slice 0 in front); else +z, +y.
+struct SceneView {
+  Vec3 front, up;
+};
+SceneView sceneView(const Scene& s);
 // The camera a scene without `camera` gets for an image of this aspect: fittedCamera of its
-// box, seen as image viewers show slices when they are TIFF pages or DICOM images.
+// box from its sceneView.
 Camera fittedCamera(const Scene& s, double aspect);
 
 }  // namespace tessera

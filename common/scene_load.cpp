@@ -19,9 +19,9 @@ Scene loadScene(const std::string& path) {
     Scene s = parseScene("volume: {file: " + nlohmann::json(abs.filename().string()).dump() + "}\n",
                          abs.parent_path().string(), path);
     s.path = path;
-    // The built-in scene's orbit, so that a farm shown a file alone turns it the same way (a
-    // 4-D file keeps its steps' pass instead).
-    if (s.series.steps <= 1) s.orbit = defaultScene().orbit;
+    // The built-in scene's orbit, so that a farm shown a file alone turns it the same way,
+    // about the data's up (a 4-D file keeps its steps' pass instead).
+    if (s.series.steps <= 1) s.orbit = Orbit{defaultScene().orbit.frames, sceneView(s).up};
     return s;
   }
   std::ifstream in(path, std::ios::binary);
@@ -43,10 +43,17 @@ Vec3 sceneHalfExtent(const Scene& s) {
   return shape.halfExtent();
 }
 
-Camera fittedCamera(const Scene& s, double aspect) {
+SceneView sceneView(const Scene& s) {
   const auto* raw = s.has_volume && !s.mesh ? std::get_if<RawVolumeSpec>(&s.volume) : nullptr;
-  const bool images = raw && (raw->format == VolumeFormat::Tiff || raw->format == VolumeFormat::Dicom);
-  return fittedCamera(sceneHalfExtent(s), aspect, images);
+  if (raw && raw->format == VolumeFormat::Dicom && length(raw->anterior) > 0.5 && length(raw->superior) > 0.5)
+    return {raw->anterior, raw->superior};
+  if (raw && raw->format == VolumeFormat::Tiff) return {{0, 0, -1}, {0, -1, 0}};
+  return {{0, 0, 1}, {0, 1, 0}};
+}
+
+Camera fittedCamera(const Scene& s, double aspect) {
+  const SceneView v = sceneView(s);
+  return fittedCamera(sceneHalfExtent(s), aspect, v.front, v.up);
 }
 
 Scene defaultScene() {

@@ -235,6 +235,10 @@ RawVolumeSpec readSeries(const std::string& path) {
     const Vec3 in_plane = d - normal * dot(d, normal);
     spec.dicom_tilt_degrees = std::atan2(length(in_plane), dot(d, normal)) * 180 / std::numbers::pi;
   }
+  // DICOM's patient axes (LPS: +x left, +y posterior, +z superior) along the volume's x (a
+  // row), y (down the rows) and z (the normal): where the default camera puts the front.
+  spec.anterior = {-row.y, -col.y, -normal.y};
+  spec.superior = {row.z, col.z, normal.z};
   spec.format = VolumeFormat::Dicom;
   spec.file = path;
   spec.dims = {columns, rows, (int)slices.size()};

@@ -95,10 +95,13 @@ TEST(DicomSeries, AFolderIsAVolumeOfItsSlicesInOrderScaled) {
     const bool compressed = syntax != gdcm::TransferSyntax::ExplicitVRLittleEndian &&
                             syntax != gdcm::TransferSyntax::ImplicitVRLittleEndian;
     EXPECT_EQ(spec.slices[0].encoded, compressed);
-    // Seen as a radiology viewer shows an axial series: from the feet (slice 0's side), anterior
-    // (row 0) up. tiff_view_test.cpp checks the same view by projecting the page's corners.
-    EXPECT_EQ(scene.camera.up, (Vec3{0, -1, 0}));
-    EXPECT_LT(scene.camera.eye.z, 0);
+    // Seen as a 3D viewer first shows a patient: from the front (anterior: -y, up the rows of
+    // an axial slice) and a little above, head (+z, along the normal) up; a folder given
+    // alone turns about that axis.
+    EXPECT_EQ(scene.camera.up, (Vec3{0, 0, 1}));
+    EXPECT_LT(scene.camera.eye.y, 0);
+    EXPECT_GT(std::abs(scene.camera.eye.y), 3 * std::abs(scene.camera.eye.x));
+    EXPECT_EQ(loadScene(dir.string()).orbit.axis, (Vec3{0, 0, 1}));
     RawVolumeReader reader(spec);
     const VoxelBox whole{{0, 0, 0}, spec.dims};
     expectValues(reader.readValues(whole), whole, 2, -1024);
