@@ -158,6 +158,27 @@ Shading Parser::shading(const YAML::Node& n) const {
   return sh;
 }
 
+// A CT preset is in Hounsfield units: it sets the range, and shading unless the scene says;
+// a DICOM CT series given neither a colour map nor a range gets ct-bone, and a note says so.
+void ctPreset(const Parser& p, const YAML::Node& root, Scene& s) {
+  const YAML::Node tf = root["transfer_function"];
+  const std::string name = tf && tf.IsScalar() ? tf.Scalar() : "";
+  auto* raw = s.has_volume && !s.mesh ? std::get_if<RawVolumeSpec>(&s.volume) : nullptr;
+  const bool ct_default = raw && !tf && !raw->has_range && raw->modality == "CT";
+  if (!isCtPreset(name) && !ct_default) return;
+  if (!raw) p.fail("transfer_function", name + " is in Hounsfield units, for a CT file's volume");
+  if (raw->has_range)
+    p.fail("volume.range", "transfer_function " + name + " is in Hounsfield units over its own range (" +
+                               std::to_string((int)kCtRange[0]) + ".." + std::to_string((int)kCtRange[1]) + "); leave range out");
+  raw->has_range = true, raw->range = kCtRange;
+  if (!root["shading"]) s.shading.on = true;
+  if (ct_default) {
+    s.tf = transferFunctionPreset("ct-bone");
+    raw->notes.push_back("a CT series with no transfer_function: shown with ct-bone (Hounsfield units, shaded); "
+                         "give transfer_function (ct-soft-tissue, or points over a range) to change it");
+  }
+}
+
 }  // namespace detail
 
 Scene parseScene(const std::string& yaml_text, const std::string& base_dir, const std::string& name_for_errors) {
@@ -190,6 +211,7 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
   if (root["antialiasing"]) s.antialiasing = p.antialiasing(root["antialiasing"]);
   if (root["shading"] && is_mesh) p.fail("shading", "shades volume samples; a mesh is lit by `light` alone");
   if (root["shading"]) s.shading = p.shading(root["shading"]);
+  detail::ctPreset(p, root, s);
   if (root["image"]) {
     YAML::Node im = root["image"];
     if (!im.IsSequence() || im.size() != 2) p.fail("image", "expected [width, height], got " + detail::Parser::describe(im));

@@ -56,7 +56,31 @@ double correctOpacity(double alpha, double d) {
   return -std::expm1(std::log1p(-alpha) * (d / kL0));
 }
 
+bool isCtPreset(const std::string& name) { return name == "ct-bone" || name == "ct-soft-tissue"; }
+
+namespace {
+
+// Points (HU, r, g, b, opacity) mapped to s over kCtRange.
+TransferFunction inHounsfield(const std::vector<std::array<double, 5>>& hu) {
+  std::vector<TfPoint> points;
+  for (const auto& [v, r, g, b, a] : hu) points.push_back({(v - kCtRange[0]) / (kCtRange[1] - kCtRange[0]), r, g, b, a});
+  return TransferFunction(std::move(points));
+}
+
+}  // namespace
+
 TransferFunction transferFunctionPreset(const std::string& name) {
+  if (name == "ct-bone")
+    return inHounsfield({{-3024, 0, 0, 0, 0},
+                         {150, 0.729412, 0.254902, 0.301961, 0},
+                         {641.385, 0.905882, 0.815686, 0.552941, 0.715686},
+                         {3071, 1, 1, 1, 0.705882}});
+  if (name == "ct-soft-tissue")
+    return inHounsfield({{-3024, 0, 0, 0, 0},
+                         {-155.407, 0.54902, 0.25098, 0.14902, 0},
+                         {217.641, 0.882353, 0.603922, 0.290196, 0.676471},
+                         {419.736, 1, 0.937033, 0.954531, 0.833333},
+                         {3071, 0.827451, 0.658824, 1, 0.803922}});
   // Colour control points (s, r, g, b); opacity is added as a linear ramp.
   using Stops = std::vector<std::array<double, 4>>;
   Stops stops;
@@ -71,7 +95,7 @@ TransferFunction transferFunctionPreset(const std::string& name) {
   else if (name == "grayscale")
     stops = {{0.0, 0.0, 0.0, 0.0}, {1.0, 1.0, 1.0, 1.0}};
   else
-    throw std::invalid_argument("unknown transfer function preset '" + name + "' (cool-to-warm | viridis | grayscale)");
+    throw std::invalid_argument("unknown transfer function preset '" + name + "' (cool-to-warm | viridis | grayscale | ct-bone | ct-soft-tissue)");
   std::vector<TfPoint> points;
   for (const auto& [sv, r, g, b] : stops) points.push_back({sv, r, g, b, kPresetOpacity * sv});
   return TransferFunction(std::move(points));

@@ -43,7 +43,17 @@ double correctOpacity(double alpha, double d);
 //   viridis       perceptually uniform (van der Walt and Smith, matplotlib 2.0)
 //   grayscale     black to white
 // Throws std::invalid_argument naming the word and the choices.
+// Also the CT presets below.
 inline constexpr double kPresetOpacity = 0.02;
 TransferFunction transferFunctionPreset(const std::string& name);
+
+// Colour maps in Hounsfield units for CT, after 3D Slicer's volume-rendering presets: their
+// points in HU over kCtRange (which they set as the volume's range), their opacities taken
+// as opacity per 1/256 of the box, and shading on, as those presets have it:
+//   ct-bone         Slicer's CT-Bone colours, its opacity starting at 150 HU instead of -16
+//                   (Slicer's own makes soft tissue, 40 HU, a red wall in front of the bones)
+//   ct-soft-tissue  muscle and skin, bone bright (Slicer's CT-Muscle)
+inline constexpr std::array<double, 2> kCtRange{-3024, 3071};
+bool isCtPreset(const std::string& name);
 
 }  // namespace tessera

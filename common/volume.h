@@ -79,6 +79,7 @@ struct RawVolumeSpec {
   std::vector<SliceFile> slices;        // a DICOM series (k along the slices' normal) or a TIFF stack: slice k
   double dicom_tilt_degrees = 0;        // how far its slices shift in their plane (a gantry tilt): drawn unsheared
   Vec3 anterior{0, 0, 0}, superior{0, 0, 0};  // a DICOM series: those patient directions along x, y, z (else 0)
+  std::string modality;                 // a DICOM series' Modality (CT: values in Hounsfield units)
   std::vector<std::string> notes;       // what the header left to a guess (an ImageJ stack's axes): warnings
   std::array<bool, 3> spacing_known{true, true, true};  // false: the file lacks that axis's spacing (1; a warning)
   const std::string& samples() const { return data_file.empty() ? file : data_file; }

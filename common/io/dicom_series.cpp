@@ -33,7 +33,7 @@ const gdcm::Tag kSeries(0x0020, 0x000e), kDescription(0x0008, 0x103e), kPosition
     kOrientation(0x0020, 0x0037), kRows(0x0028, 0x0010), kColumns(0x0028, 0x0011), kBits(0x0028, 0x0100),
     kSigned(0x0028, 0x0103), kSamples(0x0028, 0x0002), kSlope(0x0028, 0x1053), kIntercept(0x0028, 0x1052),
     kPixelSpacing(0x0028, 0x0030), kFrames(0x0028, 0x0008), kThickness(0x0018, 0x0050), kPixelData(0x7fe0, 0x0010),
-    kBitsStored(0x0028, 0x0101), kHighBit(0x0028, 0x0102);
+    kBitsStored(0x0028, 0x0101), kHighBit(0x0028, 0x0102), kModality(0x0008, 0x0060);
 
 // A multi-valued DICOM string ("0.5\0.5"): its numbers, or none when one does not parse.
 std::vector<double> numbers(const char* text) {
@@ -123,7 +123,7 @@ RawVolumeSpec readSeries(const std::string& path) {
   if (folder.empty()) folder = ".";
   gdcm::Scanner sc;
   for (const gdcm::Tag& t : {kSeries, kDescription, kPosition, kOrientation, kRows, kColumns, kBits, kSigned, kSamples,
-                             kSlope, kIntercept, kPixelSpacing, kFrames, kThickness, kBitsStored, kHighBit})
+                             kSlope, kIntercept, kPixelSpacing, kFrames, kThickness, kBitsStored, kHighBit, kModality})
     sc.AddTag(t);
   // The folder's files; none an image (a CD's DICOMDIR beside a DICOM/ tree): its sub-folders'.
   std::vector<std::string> files, images;  // images: DICOM files with an image (not a DICOMDIR, not a report)
@@ -239,6 +239,7 @@ RawVolumeSpec readSeries(const std::string& path) {
   // row), y (down the rows) and z (the normal): where the default camera puts the front.
   spec.anterior = {-row.y, -col.y, -normal.y};
   spec.superior = {row.z, col.z, normal.z};
+  spec.modality = value(first, kModality);
   spec.format = VolumeFormat::Dicom;
   spec.file = path;
   spec.dims = {columns, rows, (int)slices.size()};

@@ -228,7 +228,11 @@ TEST(DicomSeries, AGantryTiltIsNamedByItsAngle) {
     d.y = -30 + 2.0 * k * std::tan(15 * std::numbers::pi / 180);
     test::writeDicomSlice(t.path / "tilt" / numbered("S", k), d);
   }
-  Scene scene = sceneOf(t.path / "tilt");
+  // A colour map given: a CT series alone would also get a note on its default (below).
+  auto withColours = [](const fs::path& dir) {
+    return parseScene("volume: {file: " + dir.string() + "}\ntransfer_function: grayscale\n", ".", "dicom.yaml");
+  };
+  Scene scene = withColours(t.path / "tilt");
   const auto& spec = std::get<RawVolumeSpec>(scene.volume);
   EXPECT_NEAR(spec.dicom_tilt_degrees, 15, 1e-3);
   EXPECT_NEAR(spec.spacing[2], 2.0, 1e-9) << "the distance along the normal";
@@ -240,7 +244,40 @@ TEST(DicomSeries, AGantryTiltIsNamedByItsAngle) {
                       "tilt of 15 degrees)"),
             std::string::npos)
       << w[0];
-  EXPECT_TRUE(volumeWarnings(sceneOf(writeSeries(t, "straight", 2)), shape).empty());
+  EXPECT_TRUE(volumeWarnings(withColours(writeSeries(t, "straight", 2)), shape).empty());
+}
+
+// A CT series given no colour map and no range is shown as 3D Slicer's CT-Bone shows it: the
+// preset's points in Hounsfield units over its own range, shaded, and a note says so. A
+// scene's own colour map or range is left alone; a CT preset with a range, or on a volume
+// without Hounsfield units, is refused.
+TEST(DicomSeries, ACtSeriesAloneIsShownWithTheBonePresetInHounsfieldUnits) {
+  test::TempDir t("dicom-ct");
+  const fs::path dir = writeSeries(t, "ct", 4);
+  const Scene alone = sceneOf(dir);
+  const auto& spec = std::get<RawVolumeSpec>(alone.volume);
+  EXPECT_EQ(spec.modality, "CT");
+  EXPECT_EQ(alone.tf, transferFunctionPreset("ct-bone"));
+  EXPECT_TRUE(spec.has_range);
+  EXPECT_EQ(spec.range, kCtRange);
+  EXPECT_TRUE(alone.shading.on);
+  ASSERT_EQ(spec.notes.size(), 1u);
+  EXPECT_NE(spec.notes[0].find("a CT series with no transfer_function: shown with ct-bone"), std::string::npos);
+  // 641 HU (the preset's opaque bone point) at its place in the range.
+  EXPECT_NEAR(alone.tf.points()[2].s, (641.385 + 3024) / 6095, 1e-12);
+
+  const auto scene = [&](const std::string& more) {
+    return parseScene("volume: {file: " + dir.string() + more, ".", "dicom.yaml");
+  };
+  EXPECT_FALSE(scene(", range: [-200, 1200]}\n").shading.on) << "the scene's range keeps the default colour map";
+  EXPECT_EQ(scene("}\ntransfer_function: viridis\n").tf, transferFunctionPreset("viridis"));
+  const Scene soft = scene("}\ntransfer_function: ct-soft-tissue\nshading: false\n");
+  EXPECT_EQ(soft.tf, transferFunctionPreset("ct-soft-tissue"));
+  EXPECT_FALSE(soft.shading.on);
+  EXPECT_TRUE(std::get<RawVolumeSpec>(soft.volume).notes.empty());
+  EXPECT_THROW(scene(", range: [0, 1000]}\ntransfer_function: ct-bone\n"), SceneError);
+  EXPECT_THROW(parseScene("volume: {generator: {name: head, size: 16}}\ntransfer_function: ct-bone\n", ".", "g.yaml"),
+               SceneError);
 }
 
 // A CD's export: DICOMDIR at the top, the images in sub-folders; a multi-frame file refused.

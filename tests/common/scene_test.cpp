@@ -134,7 +134,7 @@ TEST(Scene, TransferFunctionPresetsByName) {
     EXPECT_EQ(s.tf, transferFunctionPreset(name)) << name;
   }
   EXPECT_ERROR("volume: {generator: {name: hollow-shell, size: 16}}\ntransfer_function: jet\n",
-               "transfer_function: unknown transfer function preset 'jet' (cool-to-warm | viridis | grayscale)");
+               "transfer_function: unknown transfer function preset 'jet' (cool-to-warm | viridis | grayscale | ct-bone | ct-soft-tissue)");
 }
 
 TEST(Scene, EffectiveSceneYamlParsesBackToTheSameScene) {
