@@ -76,7 +76,7 @@ std::string rangeSuggestion(const Scene& scene, const ValueHistogram& fine) {
   char b[600];
   std::snprintf(b, sizeof b,
                 "%s: volume: %s; with no `range` the transfer function spans the data's whole %.9g .. %.9g: "
-                "`range: [%.9g, %.9g]` (%.6g%% of the voxels) spends it on the rest (values outside clamp to its ends)",
+                "`range: [%.9g, %.9g]` (%.3g%% of the voxels) spends it on the rest (values outside clamp to its ends)",
                 scene.path.empty() ? "<default scene>" : scene.path.c_str(), advice->why.c_str(), fine.lo, fine.hi,
                 advice->range[0], advice->range[1], 100 * advice->inside);
   return b;

@@ -13,8 +13,8 @@ Camera applyInput(const Camera& cam, const proto::Input& in);
 
 // What the master says as an interactive run starts: how to steer and stop it.
 inline constexpr const char* kSteeringNotice =
-    "interactive run: a frame is rendered when the display window sends input (drag: orbit, wheel: zoom, Space: play "
-    "a series, h: help); without a window only the first frame is rendered (a series plays on). Ctrl-C or closing the "
-    "window stops it";
+    "interactive run: a frame is rendered when the display's window or web view sends input (drag: orbit, wheel: zoom, "
+    "Space: play a series, h: help); without either only the first frame is rendered (a series plays on). Ctrl-C or "
+    "closing the window stops it";
 
 }  // namespace tessera::master

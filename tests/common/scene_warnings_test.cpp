@@ -75,7 +75,7 @@ TEST(VolumeWarnings, ARangeIsSuggestedForCtPaddingUnlessTheSceneGivesOne) {
     for (int k = 0; k < 300; ++k) h.add(v);
   EXPECT_EQ(rangeSuggestion(sceneOf(false), h),
             "data/slice.yaml: volume: 21% of the voxels lie apart below the rest, at -3024 .. -3023; with no `range` the "
-            "transfer function spans the data's whole -3024 .. 1500: `range: [-1024, 1500]` (79.1123% of the voxels) "
+            "transfer function spans the data's whole -3024 .. 1500: `range: [-1024, 1500]` (79.1% of the voxels) "
             "spends it on the rest (values outside clamp to its ends)");
   EXPECT_EQ(rangeSuggestion(sceneOf(true, {-1000, 1000}), h), "");
 }

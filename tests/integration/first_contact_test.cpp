@@ -203,7 +203,7 @@ TEST(FirstContact, AnInteractiveRunWithoutAWindowSaysHowToSteerAndStopIt) {
   const auto scene =
       writeSceneFile(dir, "still.yaml", "volume: {generator: {name: hollow-shell, size: 24}}\nimage: [48, 32]\n");
   const auto r = dir.runFarm(scene, 1, 1, 0, 8);  // runs until stopped: timeout ends it
-  EXPECT_NE(r.output.find("without a window only the first frame is rendered"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("without either only the first frame is rendered"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("Ctrl-C or closing the window stops it"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(dir.frame(0))) << r.output;
   EXPECT_FALSE(fs::exists(dir.frame(1))) << "a frame without input";
