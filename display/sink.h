@@ -28,6 +28,7 @@ struct InputEvent {
   bool interacting = false;           // a drag, wheel or resize goes on (false: button released, a key)
   int width = 0, height = 0;          // the window's new size (0: unchanged)
   proto::TimeKey time = proto::TimeKey::None;  // Space, arrows, Home, End: a time series' playback
+  bool home = false;                  // r: the scene's camera again
   std::chrono::steady_clock::time_point at;  // when the (first merged) event reached the display
   // From a web page: the page's number for its load and the number it gave this (first merged)
   // input, so that the page can time input-to-present itself (page 0: not from a page).
@@ -49,7 +50,7 @@ struct Shown {
 
 // A drag and nothing else: consecutive ones collapse into one (the master needs the sum).
 inline bool isDrag(const InputEvent& ev) {
-  return ev.interacting && ev.zoom == 1 && !ev.quality && !ev.quit && ev.width == 0 && ev.time == proto::TimeKey::None;
+  return ev.interacting && ev.zoom == 1 && !ev.quality && !ev.quit && ev.width == 0 && ev.time == proto::TimeKey::None && !ev.home;
 }
 
 class Sink {

@@ -210,6 +210,7 @@ class Stage {
       in.width = e.width;
       in.height = e.height;
       in.time = e.time;
+      in.home = e.home;
       inputs_[in.seq] = e;
       if (inputs_.size() > 4096) inputs_.erase(inputs_.begin());  // inputs no frame showed
       link_.report(proto::encode(in, 0));

@@ -135,6 +135,7 @@ class WebSink final : public Sink {
       else if (key == "ArrowLeft") ev.time = proto::TimeKey::Back;
       else if (key == "Home") ev.time = proto::TimeKey::First;
       else if (key == "End") ev.time = proto::TimeKey::Last;
+      else if (key == "r") ev.home = true;
       else return false;
     }  // "release": interacting = false, the full frame now
     return true;

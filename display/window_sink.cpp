@@ -24,7 +24,7 @@ constexpr std::array<uint8_t, 4> kTextColor = {230, 230, 230, 255};
 constexpr const char* kHelp[] = {
     "drag: orbit    wheel: zoom    resize: re-render at the window's size",
     "while the mouse moves the farm shows reduced frames, then the full one",
-    "1 / 2 / 3: reference / default / fast quality",
+    "1 / 2 / 3: reference / default / fast quality    r: the scene's view again",
     "a time series: Space play/pause   <- -> step back/forward   Home/End first/last step",
     "h: this help    Esc, q or closing the window: stop the farm",
 };
@@ -263,6 +263,7 @@ class WindowSink final : public Sink {
           case SDLK_LEFT: ev.time = proto::TimeKey::Back; break;
           case SDLK_HOME: ev.time = proto::TimeKey::First; break;
           case SDLK_END: ev.time = proto::TimeKey::Last; break;
+          case SDLK_r: ev.home = true; break;
           case SDLK_h:
             help_ = !help_;
             draw();

@@ -47,7 +47,7 @@ void setView(proto::FrameParams& p, const FrameSpec& spec) {
 
 Refinement::Refinement(const Camera& camera, const Quality& quality, int width, int height, const Playback& time,
                        int steps)
-    : camera_(camera), quality_(quality), max_w_(width), max_h_(height), width_(width), height_(height),
+    : camera_(camera), home_(camera), quality_(quality), max_w_(width), max_h_(height), width_(width), height_(height),
       play_(time), steps_(steps), step_(time.stepAt(0, steps)) {}
 
 void Refinement::issued(const FrameSpec& s) {
@@ -91,7 +91,7 @@ std::pair<int, int> Refinement::fitWindow(int ww, int wh, int max_w, int max_h) 
 }
 
 void Refinement::input(const proto::Input& in, Clock::time_point now) {
-  Camera moved = applyInput(camera_, in);  // throws before anything changes
+  Camera moved = applyInput(in.home ? home_ : camera_, in);  // throws before anything changes
   if (in.interacting && !interacting(now)) std::fill(std::begin(seen_ms_), std::end(seen_ms_), 0.0);
   camera_ = moved;
   if (in.quality) quality_ = namedQuality(*in.quality);

@@ -78,7 +78,7 @@ class Refinement {
   static std::pair<int, int> fitWindow(int ww, int wh, int max_w, int max_h);
 
  private:
-  Camera camera_;
+  Camera camera_, home_;  // now, and the scene's (an input's `home`)
   Quality quality_;
   int max_w_, max_h_, width_, height_;
   bool held_ = false;

@@ -273,6 +273,7 @@ std::vector<std::byte> encode(const Input& m, uint32_t sender) {
     w.i32(m.width);
     w.i32(m.height);
     w.u8(static_cast<uint8_t>(m.time));
+    w.boolean(m.home);
   });
 }
 Result<Input> decodeInput(std::span<const std::byte> msg) {
@@ -296,6 +297,7 @@ Result<Input> decodeInput(std::span<const std::byte> msg) {
     const uint8_t t = r.u8("time");
     if (r.ok() && t > static_cast<uint8_t>(TimeKey::LastKey)) r.fail("time key " + std::to_string(t) + " not in 0..5");
     m.time = static_cast<TimeKey>(t);
+    m.home = r.boolean("home");
   });
 }
 

@@ -43,11 +43,11 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 13;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
+inline constexpr uint16_t kVersion = 14;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
   // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms); 5: time steps; 6: Stats
   // carry their FrameParams' epoch; 7: Piece pixels Up-filtered; 8: binary-swap plans in FrameParams; 9: swap
   // bands go to the display as Strips; 10: Strips strip-filtered, Heartbeats name the awaited swap partner;
-  // 11: Stats' wait_ms; 12: Welcome's volume_range; 13: Shutdown's run
+  // 11: Stats' wait_ms; 12: Welcome's volume_range; 13: Shutdown's run; 14: Input's home
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -328,6 +328,7 @@ struct FrameDone {                             // display -> master
 //   interacting         bool    1
 //   width, height       i32 x2  8    both 0 (unchanged) or both 1..16384
 //   time                u8      1    TimeKey 0..Last
+//   home                bool    1    back to the scene's camera first (the window's r)
 // A time series' playback keys (the window's Space, arrows, Home and End).
 enum class TimeKey : uint8_t { None = 0, PlayPause, Forward, Back, First, Last, LastKey = Last };
 struct Input {                                 // display -> master (interactive camera)
@@ -338,6 +339,7 @@ struct Input {                                 // display -> master (interactive
   bool interacting = false;                    // a drag (button held) or a wheel/resize burst goes on
   int width = 0, height = 0;                   // the window's new size (0: unchanged)
   TimeKey time = TimeKey::None;
+  bool home = false;                           // the scene's camera again, then the rest
   bool operator==(const Input&) const = default;
 };
 

@@ -179,7 +179,7 @@
   }, { passive: false });
   window.addEventListener('keydown', (e) => {
     if (e.key === 'h') helpEl.style.display = helpEl.style.display === 'block' ? 'none' : 'block';
-    else if (['1', '2', '3', ' ', 'ArrowRight', 'ArrowLeft', 'Home', 'End'].includes(e.key)) {
+    else if (['1', '2', '3', 'r', ' ', 'ArrowRight', 'ArrowLeft', 'Home', 'End'].includes(e.key)) {
       e.preventDefault();  // Space and the arrows would scroll the page
       send({ t: 'key', key: e.key });
     }

@@ -69,7 +69,7 @@ TEST(Protocol, EveryStructuredMessageRoundTrips) {
   expectRoundTrip(st, encode(st, 11), decodeStageStats, Type::Stats);
   FrameDone fd{1000, 16.5, 2.25, 33.5, 888888, 3, 1};
   expectRoundTrip(fd, encode(fd, 11), decodeFrameDone, Type::FrameDone);
-  Input in{12, -5.5, 10, 0.9, QualityName::Reference, true, 800, 600, TimeKey::Back};
+  Input in{12, -5.5, 10, 0.9, QualityName::Reference, true, 800, 600, TimeKey::Back, true};
   expectRoundTrip(in, encode(in, 11), decodeInput, Type::Input);
   EXPECT_EQ(decodeHeader(encode(sampleParams(), 11))->frame, 42u) << "FrameParams::frame travels in the header";
 }
@@ -116,7 +116,7 @@ TEST(Protocol, TruncatedAtEveryLengthFails) {
   expectTruncationsFail(encode(samplePiece(PixelFormat::RGBA8), 1, Codec::Lzo), decodePiece);
   expectTruncationsFail(encode(sampleStrips(), 1, Codec::Zstd), decodeStrips);
   expectTruncationsFail(encode(sampleFramebuffer(), 1, Codec::Lz4), decodeFramebuffer);
-  expectTruncationsFail(encode(Input{9, 1, 2, 3, QualityName::Fast, true, 640, 480, TimeKey::Last}, 1), decodeInput);
+  expectTruncationsFail(encode(Input{9, 1, 2, 3, QualityName::Fast, true, 640, 480, TimeKey::Last, true}, 1), decodeInput);
   expectTruncationsFail(encode(Probe{}, 1), decodeProbe);
 }
 

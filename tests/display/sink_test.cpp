@@ -264,11 +264,13 @@ TEST_F(WindowSinkXvfb, PollTranslatesInput) {
   e.type = SDL_KEYDOWN;
   e.key.keysym.sym = SDLK_h;
   SDL_PushEvent(&e);  // help: drawn by the window, nothing for the farm
+  e.key.keysym.sym = SDLK_r;
+  SDL_PushEvent(&e);  // the scene's view again
   e.key.keysym.sym = SDLK_q;
   SDL_PushEvent(&e);
 
   const auto ev = sink->poll();
-  ASSERT_EQ(ev.size(), 5u);
+  ASSERT_EQ(ev.size(), 6u);
   EXPECT_EQ(ev[0].quality, QualityName::Default);
   EXPECT_FALSE(ev[0].interacting);
   // 0.3 degree per pixel; 1e-12 covers double rounding of the products.
@@ -280,7 +282,10 @@ TEST_F(WindowSinkXvfb, PollTranslatesInput) {
   EXPECT_FALSE(ev[3].interacting);
   EXPECT_EQ(ev[3].orbit_dx, 0);
   EXPECT_FALSE(ev[3].quit);
-  EXPECT_TRUE(ev[4].quit);
+  EXPECT_FALSE(ev[3].home);
+  EXPECT_TRUE(ev[4].home);
+  EXPECT_FALSE(ev[4].interacting);
+  EXPECT_TRUE(ev[5].quit);
   EXPECT_TRUE(sink->poll().empty());
 }
 

@@ -119,6 +119,10 @@ TEST(InProcessFarm, InteractiveFramesFollowInputAndIdleFramesAreNotRendered) {
   user.report(proto::encode(in, 0));
   EXPECT_TRUE(waitFor(1, 30s)) << "no frame after the input";
   EXPECT_FALSE(waitFor(2, 500ms)) << "more than one frame for one input";
+  proto::Input home;  // the window's r: the scene's view again
+  home.home = true;
+  user.report(proto::encode(home, 0));
+  EXPECT_TRUE(waitFor(2, 30s)) << "no frame after r";
   stop = true;
   for (auto& f : stages) {
     ASSERT_EQ(f.wait_for(30s), std::future_status::ready);
@@ -134,6 +138,7 @@ TEST(InProcessFarm, InteractiveFramesFollowInputAndIdleFramesAreNotRendered) {
   // 1/255: the sort-last contract.
   EXPECT_TRUE(dir.matches(after, ref, 1, "after_input"));
   EXPECT_GT(maxAbsDiff(after, before), 16) << "the camera did not move";
+  EXPECT_TRUE(dir.matches(readPng(dir.frame(2).string()), before, 1, "home")) << "r did not bring back the scene's view";
 }
 
 }  // namespace

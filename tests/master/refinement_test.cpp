@@ -1,5 +1,7 @@
 #include "master/refinement.h"
 
+#include "master/interaction.h"
+
 #include <gtest/gtest.h>
 
 namespace tessera::master {
@@ -179,6 +181,36 @@ TEST(Refinement, RefusedInputChangesNothing) {
   EXPECT_THROW(r.input(bad, t), std::invalid_argument);
   EXPECT_FALSE(r.interacting(t));
   EXPECT_FALSE(r.next(t));
+}
+
+// The window's r: the scene's camera again, whatever the drags did; a drag in the same input
+// turns from there.
+TEST(Refinement, HomeGoesBackToTheScenesCamera) {
+  const Camera scene{{0.3, 0.5, 2.5}, {0, 0, 0}, {0, 1, 0}, 30, false, 1};
+  Refinement r(scene, namedQuality(QualityName::Default), 640, 480);
+  auto t = Clock::now();
+  auto camera = [&] {  // the next frame's camera, issued
+    const auto s = r.next(t);
+    EXPECT_TRUE(s.has_value());
+    if (!s) return Camera{};
+    r.issued(*s);
+    return s->camera;
+  };
+  EXPECT_EQ(camera(), scene);
+  for (uint64_t k = 1; k <= 3; ++k) r.input(drag(k, 25), t);
+  proto::Input zoom;
+  zoom.seq = 4, zoom.zoom = 0.5;
+  r.input(zoom, t);
+  EXPECT_FALSE(camera() == scene);
+  proto::Input home;
+  home.seq = 5, home.home = true;
+  r.input(home, t);
+  EXPECT_EQ(camera(), scene);
+  r.input(drag(6, 40), t);
+  proto::Input both = drag(7, 25);
+  both.home = true;
+  r.input(both, t);
+  EXPECT_EQ(camera(), applyInput(scene, drag(8, 25)));
 }
 
 proto::Input key(uint64_t seq, proto::TimeKey k) {
