@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Sets up Tessera on Debian 12: installs every package the build, tests and benchmarks
-# need (idempotent; as root, or with sudo), configures and builds into build/, then:
+# Sets up Tessera on Debian 12: installs the packages the build needs, and for `test` those
+# the tests and benchmarks need (idempotent; as root, or with sudo), builds into build/, then:
 #   ./setup.sh          set up and build only
 #   ./setup.sh run      ... and run the farm (compose.yaml) on the built-in default scene
 #   ./setup.sh test     ... and run every test (ctest, fuzzers for a bounded time, compose check,

@@ -158,8 +158,9 @@ Shading Parser::shading(const YAML::Node& n) const {
   return sh;
 }
 
-// A CT preset is in Hounsfield units: it sets the range, and shading unless the scene says;
-// a DICOM CT series given neither a colour map nor a range gets ct-bone, and a note says so.
+// A CT preset is in Hounsfield units: it sets the range. A DICOM CT series given neither a
+// colour map nor a range gets ct-bone, and a note says so. Shading stays the scene's choice
+// (it more than doubles a renderer's memory, and the OSMesa backend has none).
 void ctPreset(const Parser& p, const YAML::Node& root, Scene& s) {
   const YAML::Node tf = root["transfer_function"];
   const std::string name = tf && tf.IsScalar() ? tf.Scalar() : "";
@@ -171,11 +172,10 @@ void ctPreset(const Parser& p, const YAML::Node& root, Scene& s) {
     p.fail("volume.range", "transfer_function " + name + " is in Hounsfield units over its own range (" +
                                std::to_string((int)kCtRange[0]) + ".." + std::to_string((int)kCtRange[1]) + "); leave range out");
   raw->has_range = true, raw->range = kCtRange;
-  if (!root["shading"]) s.shading.on = true;
   if (ct_default) {
     s.tf = transferFunctionPreset("ct-bone");
-    raw->notes.push_back("a CT series with no transfer_function: shown with ct-bone (Hounsfield units, shaded); "
-                         "give transfer_function (ct-soft-tissue, or points over a range) to change it");
+    raw->notes.push_back("a CT series with no transfer_function: shown with ct-bone (Hounsfield units; `shading: true` "
+                         "lights it); give transfer_function (ct-soft-tissue, or points over a range) to change it");
   }
 }
 

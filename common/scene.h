@@ -155,8 +155,9 @@ std::array<int, 3> volumeDims(const Scene& scene);
 // scene's unit box.
 Vec3 sceneHalfExtent(const Scene& s);
 // Where a volume's front and up are, in the box: a DICOM series' anterior and superior (a
-// patient seen from the front, head up, as a 3D viewer first shows one); a TIFF stack's
-// slice 0 and row 0 (as Fiji shows a stack: rows going down, slice 0 in front); else +z, +y.
+// patient seen from the front, head up, as a 3D viewer first shows one); a TIFF stack's (or
+// a single DICOM slice's) slice 0 and row 0 (as Fiji shows a stack: rows going down, slice 0
+// in front); else +z, +y.
 struct SceneView {
   Vec3 front, up;
 };

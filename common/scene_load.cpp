@@ -20,7 +20,7 @@ Scene loadScene(const std::string& path) {
                          abs.parent_path().string(), path);
     s.path = path;
     // The built-in scene's orbit, so that a farm shown a file alone turns it the same way,
-    // about the data's up (a 4-D file keeps its steps' pass instead).
+    // about the data's up (a 4-D file stays still: `time: {play: true}` plays its steps).
     if (s.series.steps <= 1) s.orbit = Orbit{defaultScene().orbit.frames, sceneView(s).up};
     return s;
   }
@@ -45,9 +45,12 @@ Vec3 sceneHalfExtent(const Scene& s) {
 
 SceneView sceneView(const Scene& s) {
   const auto* raw = s.has_volume && !s.mesh ? std::get_if<RawVolumeSpec>(&s.volume) : nullptr;
-  if (raw && raw->format == VolumeFormat::Dicom && length(raw->anterior) > 0.5 && length(raw->superior) > 0.5)
+  const bool images = raw && (raw->format == VolumeFormat::Tiff || raw->format == VolumeFormat::Dicom);
+  // A patient seen from the front needs a volume: one slice (a localizer) is seen as an image.
+  if (images && raw->format == VolumeFormat::Dicom && raw->dims[2] > 1 && length(raw->anterior) > 0.5 &&
+      length(raw->superior) > 0.5)
     return {raw->anterior, raw->superior};
-  if (raw && raw->format == VolumeFormat::Tiff) return {{0, 0, -1}, {0, -1, 0}};
+  if (images) return {{0, 0, -1}, {0, -1, 0}};
   return {{0, 0, 1}, {0, 1, 0}};
 }
 

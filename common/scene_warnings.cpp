@@ -42,10 +42,13 @@ std::optional<RangeAdvice> backgroundHaze(const ValueHistogram& h, const Transfe
   const uint64_t total = h.total();
   const size_t n = c.size();
   if (total == 0 || !(h.hi > h.lo) || n < 64) return std::nullopt;
-  // Heights over 8 bins: integers leave some of the fine bins empty.
-  auto height = [&](size_t b) { return std::accumulate(c.begin() + (long)b, c.begin() + (long)std::min(n, b + 8), uint64_t{0}); };
+  // Heights over w bins: integers spanning fewer values than bins leave bins between them
+  // empty (8-bit data: 15 of every 16), so a window holds at least two values.
+  const size_t w = std::max<size_t>(8, h.integral ? 2 * (size_t)std::ceil(n / (h.hi - h.lo + 1)) : 8);
+  if (w > n / 8) return std::nullopt;
+  auto height = [&](size_t b) { return std::accumulate(c.begin() + (long)b, c.begin() + (long)std::min(n, b + w), uint64_t{0}); };
   size_t mode = 0;
-  for (size_t b = 1; b + 8 <= n; ++b)
+  for (size_t b = 1; b + w <= n; ++b)
     if (height(b) > height(mode)) mode = b;
   if (mode >= n / 5) return std::nullopt;
   size_t end = mode + 1;

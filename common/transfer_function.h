@@ -49,7 +49,7 @@ TransferFunction transferFunctionPreset(const std::string& name);
 
 // Colour maps in Hounsfield units for CT, after 3D Slicer's volume-rendering presets: their
 // points in HU over kCtRange (which they set as the volume's range), their opacities taken
-// as opacity per 1/256 of the box, and shading on, as those presets have it:
+// as opacity per 1/256 of the box (those presets also shade: give `shading: true`):
 //   ct-bone         Slicer's CT-Bone colours, its opacity starting at 150 HU instead of -16
 //                   (Slicer's own makes soft tissue, 40 HU, a red wall in front of the bones)
 //   ct-soft-tissue  muscle and skin, bone bright (Slicer's CT-Muscle)

@@ -237,8 +237,9 @@ RawVolumeSpec readSeries(const std::string& path) {
   }
   // DICOM's patient axes (LPS: +x left, +y posterior, +z superior) along the volume's x (a
   // row), y (down the rows) and z (the normal): where the default camera puts the front.
-  spec.anterior = {-row.y, -col.y, -normal.y};
-  spec.superior = {row.z, col.z, normal.z};
+  // A single slice without ImageOrientationPatient has no patient axes: left at 0 (seen as
+  // an image is).
+  if (orientation.size() == 6) spec.anterior = {-row.y, -col.y, -normal.y}, spec.superior = {row.z, col.z, normal.z};
   spec.modality = value(first, kModality);
   spec.format = VolumeFormat::Dicom;
   spec.file = path;

@@ -178,6 +178,7 @@
     notches = Math.max(-20, Math.min(20, notches - e.deltaY * scale));
   }, { passive: false });
   window.addEventListener('keydown', (e) => {
+    if (e.ctrlKey || e.metaKey || e.altKey) return;  // the browser's own (Ctrl+R reloads)
     if (e.key === 'h') helpEl.style.display = helpEl.style.display === 'block' ? 'none' : 'block';
     else if (['1', '2', '3', 'r', ' ', 'ArrowRight', 'ArrowLeft', 'Home', 'End'].includes(e.key)) {
       e.preventDefault();  // Space and the arrows would scroll the page

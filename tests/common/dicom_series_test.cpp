@@ -248,7 +248,7 @@ TEST(DicomSeries, AGantryTiltIsNamedByItsAngle) {
 }
 
 // A CT series given no colour map and no range is shown as 3D Slicer's CT-Bone shows it: the
-// preset's points in Hounsfield units over its own range, shaded, and a note says so. A
+// preset's points in Hounsfield units over its own range, and a note says so. A
 // scene's own colour map or range is left alone; a CT preset with a range, or on a volume
 // without Hounsfield units, is refused.
 TEST(DicomSeries, ACtSeriesAloneIsShownWithTheBonePresetInHounsfieldUnits) {
@@ -260,7 +260,7 @@ TEST(DicomSeries, ACtSeriesAloneIsShownWithTheBonePresetInHounsfieldUnits) {
   EXPECT_EQ(alone.tf, transferFunctionPreset("ct-bone"));
   EXPECT_TRUE(spec.has_range);
   EXPECT_EQ(spec.range, kCtRange);
-  EXPECT_TRUE(alone.shading.on);
+  EXPECT_FALSE(alone.shading.on) << "shading is the scene's choice";
   ASSERT_EQ(spec.notes.size(), 1u);
   EXPECT_NE(spec.notes[0].find("a CT series with no transfer_function: shown with ct-bone"), std::string::npos);
   // 641 HU (the preset's opaque bone point) at its place in the range.
@@ -269,15 +269,20 @@ TEST(DicomSeries, ACtSeriesAloneIsShownWithTheBonePresetInHounsfieldUnits) {
   const auto scene = [&](const std::string& more) {
     return parseScene("volume: {file: " + dir.string() + more, ".", "dicom.yaml");
   };
-  EXPECT_FALSE(scene(", range: [-200, 1200]}\n").shading.on) << "the scene's range keeps the default colour map";
+  EXPECT_EQ(scene(", range: [-200, 1200]}\n").tf, transferFunctionPreset("cool-to-warm")) << "the scene's range keeps the default colour map";
   EXPECT_EQ(scene("}\ntransfer_function: viridis\n").tf, transferFunctionPreset("viridis"));
-  const Scene soft = scene("}\ntransfer_function: ct-soft-tissue\nshading: false\n");
+  const Scene soft = scene("}\ntransfer_function: ct-soft-tissue\nshading: true\n");
   EXPECT_EQ(soft.tf, transferFunctionPreset("ct-soft-tissue"));
-  EXPECT_FALSE(soft.shading.on);
+  EXPECT_EQ(std::get<RawVolumeSpec>(soft.volume).range, kCtRange);
+  EXPECT_TRUE(soft.shading.on);
   EXPECT_TRUE(std::get<RawVolumeSpec>(soft.volume).notes.empty());
   EXPECT_THROW(scene(", range: [0, 1000]}\ntransfer_function: ct-bone\n"), SceneError);
   EXPECT_THROW(parseScene("volume: {generator: {name: head, size: 16}}\ntransfer_function: ct-bone\n", ".", "g.yaml"),
                SceneError);
+  // One slice (a localizer) is seen face on, as an image: not edge-on from the patient's front.
+  const Scene one = sceneOf(writeSeries(t, "one", 1));
+  EXPECT_EQ(one.camera.up, (Vec3{0, -1, 0}));
+  EXPECT_LT(one.camera.eye.z, 0);
 }
 
 // A CD's export: DICOMDIR at the top, the images in sub-folders; a multi-frame file refused.

@@ -101,6 +101,18 @@ TEST(VolumeWarnings, ARangeIsSuggestedPastABackgroundThePresetMakesAHaze) {
   clear.tf = TransferFunction({{0, 0, 0, 0, 0}, {0.2, 0, 0, 0, 0}, {1, 1, 1, 1, 0.5}});
   EXPECT_EQ(rangeSuggestion(clear, h), "");
   EXPECT_EQ(rangeSuggestion(sceneOf(true, {0, 4000}), h), "");
+
+  // 8-bit data in the same 4096 bins: 15 of every 16 bins empty between the values. The peak
+  // (10 +- 3) ends at 10 + 3 * 3.03 = 19.1; a window of 8 bins used to stop inside it.
+  ValueHistogram b(0, 255, 4096, true);
+  for (int v = 0; v <= 30; ++v) b.add(v), b.counts[(size_t)(v * 4096 / 256)] += (uint64_t)std::llround(1e6 * std::exp(-0.5 * (v - 10) * (v - 10) / 9.0));
+  for (int v = 25; v <= 255; ++v) b.counts[(size_t)(v * 4096 / 256)] += 10000;
+  const std::string byte_advice = rangeSuggestion(sceneOf(false), b);
+  const size_t byte_at = byte_advice.find("`range: [");
+  ASSERT_NE(byte_at, std::string::npos) << byte_advice;
+  const double byte_start = std::atof(byte_advice.c_str() + byte_at + 9);
+  EXPECT_GE(byte_start, 18) << byte_advice;
+  EXPECT_LE(byte_start, 22) << byte_advice;
 }
 
 }  // namespace

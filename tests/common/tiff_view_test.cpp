@@ -81,6 +81,10 @@ TEST(TiffView, PagesImageJCallsChannelsOrTimePointsAreReadAsSlicesAndSaid) {
   writePages(t.file("cf.tif"), 0, 6, o);
   const std::string e = test::loadError("volume: {file: cf.tif}\n", t.path.string());
   EXPECT_NE(e.find("an ImageJ hyperstack of 2 channels"), std::string::npos) << e;
+  o.description = "ImageJ=1.54f\nimages=7\nchannels=1e20\n";  // not a count: refused, not cast
+  writePages(t.file("huge.tif"), 0, kNz, o);
+  const std::string huge = test::loadError("volume: {file: huge.tif}\n", t.path.string());
+  EXPECT_NE(huge.find("ImageJ's metadata says channels="), std::string::npos) << huge;
 }
 
 // A spacing the file does not give is 1, and said, unless the scene gives one.

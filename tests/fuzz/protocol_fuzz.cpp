@@ -90,6 +90,7 @@ void writeSeeds(const std::string& dir) {
   writeSeed(dir, n, encode(st, 1));
   writeSeed(dir, n, encode(FrameDone{3, 1, 2, 3, 4, 5}, 1));
   writeSeed(dir, n, encode(Input{3, 1, 2, 1.5, QualityName::Fast, true, 640, 480, TimeKey::Forward}, 1));
+  writeSeed(dir, n, encode(Input{4, 0, 0, 1, std::nullopt, false, 0, 0, TimeKey::None, true}, 1));
   for (uint8_t c = 0; c < kCodecCount; ++c) {
     Piece p;
     p.region = {0, 0, 16, 16};

@@ -20,7 +20,7 @@ done
 # Exit 77 (the tests skip) only without root; as root a missing package is a failure.
 [ "$(id -u)" = 0 ] || { echo "one_host_slurm.sh: needs root (SlurmUser=root)" >&2; exit 77; }
 for b in munged slurmctld slurmd sbatch srun; do
-  command -v "$b" >/dev/null || { echo "one_host_slurm.sh: $b is not installed (./setup.sh deps)" >&2; exit 1; }
+  command -v "$b" >/dev/null || { echo "one_host_slurm.sh: $b is not installed (./setup.sh test installs it)" >&2; exit 1; }
 done
 own_dir=0
 [ -n "$dir" ] || { dir=$(mktemp -d /tmp/tessera-slurm.XXXXXX); own_dir=1; }
