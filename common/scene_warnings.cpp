@@ -48,11 +48,12 @@ std::optional<RangeAdvice> backgroundHaze(const ValueHistogram& h, const Transfe
   if (w > n / 8) return std::nullopt;
   auto height = [&](size_t b) { return std::accumulate(c.begin() + (long)b, c.begin() + (long)std::min(n, b + w), uint64_t{0}); };
   size_t mode = 0;
+  uint64_t peak = height(0);
   for (size_t b = 1; b + w <= n; ++b)
-    if (height(b) > height(mode)) mode = b;
+    if (const uint64_t hb = height(b); hb > peak) mode = b, peak = hb;
   if (mode >= n / 5) return std::nullopt;
   size_t end = mode + 1;
-  while (end < n / 2 && 100 * height(end) >= height(mode)) ++end;
+  while (end < n / 2 && 100 * height(end) >= peak) ++end;
   uint64_t held = 0;
   for (size_t b = 0; b < end; ++b) held += c[b];
   if (2 * held < total || end >= n / 2) return std::nullopt;  // not most voxels, or no end to the peak
@@ -93,14 +94,6 @@ std::vector<std::string> volumeWarnings(const Scene& scene, const Volume& shape)
     out.push_back(where + (raw && raw->has_range ? "volume.range: " : "volume: ") + why);
   }
   if (std::string why = thinProblem(scene, shape); !why.empty()) out.push_back(where + why);
-  if (const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume); raw && std::abs(raw->dicom_tilt_degrees) > 0.01) {
-    char b[300];
-    std::snprintf(b, sizeof b,
-                  "volume: the DICOM slices shift in their own plane from one to the next (a gantry tilt of %.3g "
-                  "degrees); Tessera stacks them straight, so the volume is drawn sheared by that angle",
-                  raw->dicom_tilt_degrees);
-    out.push_back(where + b);
-  }
   if (const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume)) {
     for (const std::string& note : raw->notes) out.push_back(where + "volume: " + note);
     std::string lacks;

@@ -77,7 +77,7 @@ struct RawVolumeSpec {
   double slope = 1, inter = 0;          // value = slope * stored + inter (NIfTI scl_slope, scl_inter)
   bool read_once = false;               // a series' step: what is not in the page cache bypasses it
   std::vector<SliceFile> slices;        // a DICOM series (k along the slices' normal) or a TIFF stack: slice k
-  double dicom_tilt_degrees = 0;        // how far its slices shift in their plane (a gantry tilt): drawn unsheared
+  double dicom_tilt_degrees = 0;        // how far its slices shift in their plane (a gantry tilt): drawn unsheared, a note says so
   Vec3 anterior{0, 0, 0}, superior{0, 0, 0};  // a DICOM series: those patient directions along x, y, z (else 0)
   std::string modality;                 // a DICOM series' Modality (CT: values in Hounsfield units)
   std::vector<std::string> notes;       // what the header left to a guess (an ImageJ stack's axes): warnings

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -234,6 +235,14 @@ RawVolumeSpec readSeries(const std::string& path) {
     const Vec3 d = slices.back().position - slices.front().position;
     const Vec3 in_plane = d - normal * dot(d, normal);
     spec.dicom_tilt_degrees = std::atan2(length(in_plane), dot(d, normal)) * 180 / std::numbers::pi;
+    if (std::abs(spec.dicom_tilt_degrees) > 0.01) {
+      char b[300];
+      std::snprintf(b, sizeof b,
+                    "the DICOM slices shift in their own plane from one to the next (a gantry tilt of %.3g degrees); "
+                    "Tessera stacks them straight, so the volume is drawn sheared by that angle",
+                    spec.dicom_tilt_degrees);
+      spec.notes.push_back(b);
+    }
   }
   // DICOM's patient axes (LPS: +x left, +y posterior, +z superior) along the volume's x (a
   // row), y (down the rows) and z (the normal): where the default camera puts the front.

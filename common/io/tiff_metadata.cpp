@@ -14,8 +14,6 @@ namespace tessera {
 namespace {
 namespace tiff_metadata {  // a unity build joins this file's helpers with others'
 
-namespace fs = std::filesystem;
-
 [[noreturn]] void fail(const std::string& file, const std::string& what) { throw std::runtime_error(file + ": " + what); }
 
 // ImageJ writes its stack's layout and z spacing in the first page's description

@@ -138,12 +138,7 @@ TEST(TiffStack, TiledPagesLoadAsTheRawFileWindowByWindow) {
   ASSERT_NE(f, nullptr);
   std::vector<uint16_t> raw;
   for (int z = 0; z < d; ++z) {
-    TIFFSetField(f, TIFFTAG_IMAGEWIDTH, (uint32_t)w);
-    TIFFSetField(f, TIFFTAG_IMAGELENGTH, (uint32_t)h);
-    TIFFSetField(f, TIFFTAG_BITSPERSAMPLE, (uint16_t)16);
-    TIFFSetField(f, TIFFTAG_SAMPLESPERPIXEL, (uint16_t)1);
-    TIFFSetField(f, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
-    TIFFSetField(f, TIFFTAG_COMPRESSION, COMPRESSION_LZW);
+    test::tiff_writer::pageFields(f, w, h, COMPRESSION_LZW);
     TIFFSetField(f, TIFFTAG_TILEWIDTH, (uint32_t)tile);
     TIFFSetField(f, TIFFTAG_TILELENGTH, (uint32_t)tile);
     for (int ty = 0; ty < h; ty += tile)

@@ -11,6 +11,18 @@
 
 namespace tessera::test::tiff_writer {
 
+// The fields of a page of 16-bit unsigned samples, `samples` a pixel (3: RGB, else grayscale).
+inline void pageFields(TIFF* t, uint32_t width, uint32_t height, uint16_t compression, uint16_t samples = 1) {
+  TIFFSetField(t, TIFFTAG_IMAGEWIDTH, width);
+  TIFFSetField(t, TIFFTAG_IMAGELENGTH, height);
+  TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, (uint16_t)16);
+  TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, (uint16_t)SAMPLEFORMAT_UINT);
+  TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, samples);
+  TIFFSetField(t, TIFFTAG_PHOTOMETRIC, samples == 3 ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK);
+  TIFFSetField(t, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+  TIFFSetField(t, TIFFTAG_COMPRESSION, compression);
+}
+
 constexpr int kNx = 13, kNy = 11, kNz = 7;
 
 // A different value at every voxel, so any axis mix-up shows.
@@ -38,14 +50,7 @@ inline void writePages(const std::string& path, int z0, int z1, const PageOption
   ASSERT_NE(t, nullptr);
   const auto v = samples();
   for (int z = z0; z < z1; ++z) {
-    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)kNx);
-    TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)kNy);
-    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, (uint16_t)16);
-    TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, (uint16_t)SAMPLEFORMAT_UINT);
-    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, o.samples_per_pixel);
-    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, o.samples_per_pixel == 3 ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK);
-    TIFFSetField(t, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
-    TIFFSetField(t, TIFFTAG_COMPRESSION, o.compression);
+    pageFields(t, kNx, kNy, o.compression, o.samples_per_pixel);
     if (o.compression == COMPRESSION_LZW) TIFFSetField(t, TIFFTAG_PREDICTOR, PREDICTOR_HORIZONTAL);
     if (z == z0 && !o.description.empty()) TIFFSetField(t, TIFFTAG_IMAGEDESCRIPTION, o.description.c_str());
     if (o.bottom_up) TIFFSetField(t, TIFFTAG_ORIENTATION, ORIENTATION_BOTLEFT);

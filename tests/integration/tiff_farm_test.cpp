@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/common/tiff_writer.h"
 #include "tests/integration/farm_util.h"
 
 namespace tessera::test {
@@ -24,12 +25,7 @@ fs::path writeStack(const FarmDir& dir) {
   EXPECT_NE(t, nullptr);
   std::vector<uint16_t> row(kW);
   for (int z = 0; z < kD; ++z) {
-    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)kW);
-    TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)kH);
-    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, (uint16_t)16);
-    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, (uint16_t)1);
-    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
-    TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_LZW);
+    tiff_writer::pageFields(t, kW, kH, COMPRESSION_LZW);
     TIFFSetField(t, TIFFTAG_PREDICTOR, PREDICTOR_HORIZONTAL);
     TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, (uint32_t)4);
     TIFFSetField(t, TIFFTAG_XRESOLUTION, 2.0f);
