@@ -181,6 +181,8 @@ void ctPreset(const Parser& p, const YAML::Node& root, Scene& s) {
 
 }  // namespace detail
 
+const char* blendName(Blend b) { return b == Blend::Maximum ? "maximum" : "composite"; }
+
 Scene parseScene(const std::string& yaml_text, const std::string& base_dir, const std::string& name_for_errors) {
   detail::Parser p(name_for_errors, base_dir);
   YAML::Node root;
@@ -192,7 +194,7 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
   if (!root.IsMap()) p.fail("", "expected a map of scene keys at the top level");
   p.checkKeys(root, "",
               {"volume", "transfer_function", "camera", "image", "quality", "orbit", "mesh", "light", "antialiasing",
-               "shading", "time"});
+               "shading", "time", "blend"});
   Scene s;
   s.path = name_for_errors;
   s.quality = namedQuality(QualityName::Default);
@@ -211,6 +213,14 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
   if (root["antialiasing"]) s.antialiasing = p.antialiasing(root["antialiasing"]);
   if (root["shading"] && is_mesh) p.fail("shading", "shades volume samples; a mesh is lit by `light` alone");
   if (root["shading"]) s.shading = p.shading(root["shading"]);
+  if (root["blend"]) {
+    if (is_mesh) p.fail("blend", "blends volume samples; a mesh scene has none");
+    const std::string b = p.string(root["blend"], "blend");
+    if (b == "maximum") s.blend = Blend::Maximum;
+    else if (b != "composite") p.fail("blend", "'" + b + "': expected composite or maximum (maximum intensity projection)");
+    if (s.blend == Blend::Maximum && s.shading.on)
+      p.fail("blend", "maximum shows each ray's largest value, which is not lit: leave `shading` out");
+  }
   detail::ctPreset(p, root, s);
   if (root["image"]) {
     YAML::Node im = root["image"];

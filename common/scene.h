@@ -66,6 +66,12 @@ struct Shading {
   bool operator==(const Shading&) const = default;
 };
 
+// `blend:` how a ray's samples make its pixel, as VTK's and ParaView's blend modes: `composite`
+// (front-to-back emission and absorption, the default) or `maximum` (maximum intensity
+// projection: the colour map at the largest value along the ray; common/max_intensity.h).
+enum class Blend { Composite, Maximum };
+const char* blendName(Blend b);
+
 struct Scene {
   std::string path;  // file it was loaded from ("" for built-in)
   std::variant<RawVolumeSpec, GeneratorSpec> volume;
@@ -73,6 +79,7 @@ struct Scene {
   std::optional<MeshSpec> mesh;     // set: a geometry scene
   Vec3 light{0, 0, 0};              // world direction towards the light; zero: headlight
   Shading shading;                  // volumes only
+  Blend blend = Blend::Composite;   // volumes only
   Antialiasing antialiasing;
   TransferFunction tf;
   Camera camera;

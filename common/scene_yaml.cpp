@@ -135,6 +135,7 @@ std::string sceneYaml(const Scene& s) {
       << YAML::Value << num(s.shading.ambient) << YAML::Key << "diffuse" << YAML::Value << num(s.shading.diffuse)
       << YAML::Key << "specular" << YAML::Value << num(s.shading.specular) << YAML::Key << "shininess"
       << YAML::Value << num(s.shading.shininess) << YAML::EndMap;
+  if (s.blend != Blend::Composite) e << YAML::Key << "blend" << YAML::Value << blendName(s.blend);
   if (s.mesh) {
     e << YAML::Key << "antialiasing" << YAML::Value << YAML::BeginMap << YAML::Key << "method" << YAML::Value
       << aaMethodName(s.antialiasing.method);

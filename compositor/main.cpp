@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
     const Scene parsed = args.scene();
     opt.width = parsed.width;
     opt.height = parsed.height;
+    if (parsed.blend == Blend::Maximum) opt.maximum.emplace(parsed.tf);
     opt.endpoints = endpoints;
     return compositor::runStage(opt, ctx, stop);
   });

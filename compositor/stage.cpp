@@ -122,7 +122,8 @@ class Stage {
     if (frame_.width != r.params.width || frame_.height != r.params.height)
       frame_ = Image8(r.params.width, r.params.height);
     const proto::SortLastWork* sort_last = r.params.sortLast();  // else sort-first: r.tiles are routed
-    if (sort_last) st.active_pixels = compositeRegion(reg, sort_last->order, r.pieces, row_, frame_);
+    if (sort_last) st.active_pixels = compositeRegion(reg, sort_last->order, r.pieces, row_, frame_,
+                                                          opt_.maximum ? &*opt_.maximum : nullptr);
     else route(r, st);
     st.work_ms = msSince(t0);
     for (const auto& p : r.pieces) st.active = unite(st.active, p.active);

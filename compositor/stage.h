@@ -2,6 +2,9 @@
 // from every brick, composites them in the master's visibility order (never arrival
 // order), encodes the region as strips with headers, compresses and sends it on.
 #pragma once
+#include <optional>
+
+#include "common/max_intensity.h"
 #include <atomic>
 
 #include <zmq.hpp>
@@ -15,6 +18,9 @@ struct StageOptions {
   std::string advertise_host;  // tcp: host renderers use to reach this compositor ("" = the base host)
   // The scene's image size (every process loads the same scene): bounds what peers may send.
   int width = 512, height = 512;
+  // The scene's `blend: maximum`: pieces are value pixels, merged by their maxima and mapped
+  // through this colour map (common/max_intensity.h).
+  std::optional<MaxIntensity> maximum;
 };
 
 int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);

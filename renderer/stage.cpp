@@ -35,6 +35,8 @@ class Stage {
       images_ = std::make_unique<BrickImages>(scene_, opt.backend, opt.cache_mb, opt.threads);
       swap_ = std::make_unique<SwapExchange>(ctx, maxPixelMessageBytes(scene_.width, scene_.height),
                                              2 * 16 * size_t(scene_.width) * size_t(scene_.height));
+      swap_->setMaximum(scene_.blend == Blend::Maximum);
+      if (scene_.blend == Blend::Maximum) mip_.emplace(scene_.tf);
       bindSwap();
     }
   }
@@ -332,12 +334,12 @@ class Stage {
   }
 
   // A finished band goes to the display as a compositor's region would.
-  void sendBand(const proto::FrameParams& p, const Layer& band, proto::StageStats& st) {
+  void sendBand(const proto::FrameParams& p, Layer& band, proto::StageStats& st) {
     proto::Strips s;
     s.frame = p.frame;
     s.epoch = p.epoch;
     s.sender = link_.rank();
-    bandStrips(band, p.width, p.height, band8_, s);
+    bandStrips(band, p.width, p.height, band8_, s, mip_ ? &*mip_ : nullptr);
     s.render_ms = st.work_ms;
     s.composite_ms = st.decode_ms;  // the swap's decoding and blending
     auto bytes = proto::encode(s, link_.rank(), p.codec);
@@ -358,6 +360,7 @@ class Stage {
   Image8 band8_;                   // a binary swap's band, quantized (the frame's size: strips name screen rows)
   Outbox outbox_{ctx_, link_.dataIdentity()};  // to compositors, swap partners and the display
   std::unique_ptr<SwapExchange> swap_;  // volume scenes
+  std::optional<MaxIntensity> mip_;     // blend: maximum: maps the bands this renderer finishes
   size_t swap_size_logged_ = 0;  // renderers in the swap, when last said
   std::string swap_endpoint_;  // what Hello tells the master
   std::deque<proto::FrameParams> queued_;

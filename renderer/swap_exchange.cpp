@@ -100,7 +100,7 @@ void SwapExchange::start(const proto::FrameParams& p, uint32_t me, const SwapPla
   Run& r = *run_;
   r.p = p, r.me = me, r.plan = plan, r.img = &img, r.active = active;
   if (plan.rounds.empty())  // a swap of one: the image is the band
-    r.mine = blendLayer(viewOf(img, active, plan.band), {}, Rect{}, swapFormat(p.format), false, takeSpare());
+    r.mine = blendLayer(viewOf(img, active, plan.band), {}, Rect{}, swapFormat(p.format), false, takeSpare(), maximum_);
 }
 
 std::optional<uint32_t> SwapExchange::advance(const Send& send, proto::StageStats& st, DropCounter& drops) {
@@ -158,7 +158,8 @@ std::optional<uint32_t> SwapExchange::advance(const Send& send, proto::StageStat
       }
       if (!in) return (front ? front : back)->rank;
       auto t1 = Clock::now();
-      Layer blended = blendLayer(partOf(r.keep), in->piece.pixels, in->piece.active, format, from->offset < 0, takeSpare());
+      Layer blended =
+          blendLayer(partOf(r.keep), in->piece.pixels, in->piece.active, format, from->offset < 0, takeSpare(), maximum_);
       recycle(std::move(run.mine));
       run.mine = std::move(blended);
       ++(from->offset < 0 ? run.front : run.back);

@@ -33,6 +33,7 @@ class SwapExchange {
   zmq::socket_t& socket() { return inbox_.socket(); }
   // Pieces older than this are of no use (the renderer's newest epoch and first wanted frame).
   void setWanted(uint32_t epoch, uint64_t first_wanted) { epoch_ = epoch, first_wanted_ = first_wanted; }
+  void setMaximum(bool maximum) { maximum_ = maximum; }  // blend: maximum (blendLayer)
   void setRoster(const proto::Roster& roster, DropCounter& drops);
   void receive(DropCounter& drops);  // drains the socket (non-blocking)
 
@@ -86,6 +87,7 @@ class SwapExchange {
   size_t max_held_ = kMaxHeld;
   uint32_t epoch_ = 0;
   uint64_t first_wanted_ = 0;
+  bool maximum_ = false;
   std::vector<Held> held_;
   size_t held_bytes_ = 0;
   std::vector<std::byte> packed_;

@@ -33,12 +33,18 @@ void packView(const LayerView& v, proto::PixelFormat f, std::vector<std::byte>& 
 }
 
 Layer blendLayer(const LayerView& mine, std::span<const std::byte> pixels, const Rect& theirs, proto::PixelFormat f,
-                 bool partner_in_front, std::vector<float>&& storage) {
+                 bool partner_in_front, std::vector<float>&& storage, bool maximum) {
   Layer out;
   out.rect = unite(mine.rect, theirs);
   if (out.rect.empty()) return out;
   const Rect at = local(mine.rect, out.rect);
   auto row = [&](int y) { return mine.img->at(mine.rect.x - mine.covers.x, mine.rect.y - mine.covers.y + y); };
+  if (maximum) {  // order does not matter: mine copied, theirs merged into it
+    out.img = clearedOutside(out.rect.w, out.rect.h, std::move(storage), at);
+    for (int y = 0; y < at.h; ++y) std::memcpy(out.img.at(at.x, at.y + y), row(y), sizeof(float) * 4 * at.w);
+    if (!theirs.empty()) compositeMaximum(out.img, out.rect, pixels, theirs, f);
+    return out;
+  }
   if (!partner_in_front) {  // mine first, theirs under it
     out.img = clearedOutside(out.rect.w, out.rect.h, std::move(storage), at);
     for (int y = 0; y < at.h; ++y) std::memcpy(out.img.at(at.x, at.y + y), row(y), sizeof(float) * 4 * at.w);
@@ -58,11 +64,12 @@ Layer blendLayer(const LayerView& mine, std::span<const std::byte> pixels, const
   return out;
 }
 
-void bandStrips(const Layer& band, int width, int height, Image8& frame8, proto::Strips& out) {
+void bandStrips(Layer& band, int width, int height, Image8& frame8, proto::Strips& out, const MaxIntensity* mip) {
   if (frame8.width != width || frame8.height != height) frame8 = Image8(width, height);
   const Rect& r = band.rect;
   out.active_pixels = 0;
   for (int y = 0; y < r.h; ++y) {
+    if (mip) mip->map(band.img.at(0, y), (size_t)r.w);
     uint8_t* row = frame8.at(r.x, r.y + y);
     quantizeToUnorm8(band.img.at(0, y), row, 4 * (size_t)r.w);
     for (int x = 0; x < r.w; ++x) out.active_pixels += row[4 * x + 3] != 0;

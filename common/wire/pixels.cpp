@@ -169,4 +169,24 @@ void compositeUnder(ImageF& dst, const Rect& dst_rect, std::span<const std::byte
     compositeUnderRow(dst.at(0, src_rect.y - dst_rect.y + y), dst_rect.x, src, src_rect, y, f);
 }
 
+void compositeMaximumRow(float* d, int dst_x, std::span<const std::byte> src, const Rect& src_rect, int row,
+                         proto::PixelFormat f) {
+  const auto* b = reinterpret_cast<const uint8_t*>(src.data());
+  const size_t values = (size_t)src_rect.area() * 4, first = (size_t)row * src_rect.w * 4;
+  d += 4 * (size_t)(src_rect.x - dst_x);
+  for (size_t i = 0; i < 4 * (size_t)src_rect.w; ++i) {
+    float v;
+    if (f == proto::PixelFormat::RGBA8) v = b[first + i] * (1.0f / 255.0f);
+    else if (f == proto::PixelFormat::RGBA16F) v = halfToFloat((uint16_t)(b[first + i] | b[values + first + i] << 8));
+    else std::memcpy(&v, b + 4 * (first + i), 4);
+    d[i] = std::max(d[i], v);
+  }
+}
+
+void compositeMaximum(ImageF& dst, const Rect& dst_rect, std::span<const std::byte> src, const Rect& src_rect,
+                      proto::PixelFormat f) {
+  for (int y = 0; y < src_rect.h; ++y)
+    compositeMaximumRow(dst.at(0, src_rect.y - dst_rect.y + y), dst_rect.x, src, src_rect, y, f);
+}
+
 }  // namespace tessera

@@ -24,6 +24,13 @@ void compositeUnder(ImageF& dst, const Rect& dst_rect, std::span<const std::byte
 void compositeUnderRow(float* dst_row, int dst_x, std::span<const std::byte> src, const Rect& src_rect, int row,
                        proto::PixelFormat f);
 
+// The same for value pixels of a maximum intensity projection (common/max_intensity.h):
+// dst = max(dst, src) per channel, in any order of the pieces.
+void compositeMaximumRow(float* dst_row, int dst_x, std::span<const std::byte> src, const Rect& src_rect, int row,
+                         proto::PixelFormat f);
+void compositeMaximum(ImageF& dst, const Rect& dst_rect, std::span<const std::byte> src, const Rect& src_rect,
+                      proto::PixelFormat f);
+
 uint16_t floatToHalf(float f);
 float halfToFloat(uint16_t h);
 

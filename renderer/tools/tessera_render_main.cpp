@@ -19,6 +19,7 @@
 #include "common/clock.h"
 #include "common/cpu.h"
 #include "common/io/image_io.h"
+#include "common/max_intensity.h"
 #include "common/scene.h"
 #include "common/scene_warnings.h"
 #include "common/volume_summary.h"
@@ -45,24 +46,35 @@ void parseSize(const std::string& s, int& w, int& h) {
 // rectangle outside which the image is transparent. `recycled`: the image before, transparent
 // (ImageF::clear), whose memory this one takes, as a renderer's frames do: fresh pages for a
 // 1024^2 image were ~9 ms of a ~150 ms frame here, which a frame in a running farm, or in
-// VTK's window, does not pay.
+// VTK's window, does not pay. `mip` (blend: maximum): the bricks' value pixels are merged by
+// their maxima and mapped once, as the farm's compositors do.
 ImageF renderScene(const renderer::VolumeBackend& rc, const Volume& vol, const BrickTree& tree, const Camera& cam,
-                   int w, int h, const renderer::RenderOptions& opt, renderer::RenderStats* stats, Rect* drawn = nullptr,
-                   ImageF recycled = {}) {
-  if (tree.bricks.size() <= 1) return rc.render(cam, w, h, renderer::wholeVolume(vol), opt, stats, drawn, std::move(recycled));
+                   int w, int h, const renderer::RenderOptions& opt, renderer::RenderStats* stats, const MaxIntensity* mip,
+                   Rect* drawn = nullptr, ImageF recycled = {}) {
+  auto mapped = [&](ImageF img, const Rect& r) {
+    if (mip)
+      for (int y = r.y; y < r.y + r.h; ++y) mip->map(img.at(r.x, y), (size_t)r.w);
+    return img;
+  };
+  if (tree.bricks.size() <= 1) {
+    Rect r;
+    ImageF img = rc.render(cam, w, h, renderer::wholeVolume(vol), opt, stats, &r, std::move(recycled));
+    if (drawn) *drawn = r;
+    return mapped(std::move(img), r);
+  }
   ImageF out = renderer::takeRecycled(w, h, std::move(recycled)), part;
   Rect all;
   for (int leaf : tree.visibilityOrder(vol, cam)) {
     renderer::RenderStats s;
     Rect active;
     part = rc.render(cam, w, h, tree.bricks[leaf], opt, stats ? &s : nullptr, &active, std::move(part));
-    if (!active.empty()) compositeOver(out, part, active);
+    if (!active.empty()) mip ? compositeMaximum(out, part, active) : compositeOver(out, part, active);
     part.clear(active);  // transparent again for the next brick
     all = unite(all, active);
     if (stats) *stats += s;
   }
   if (drawn) *drawn = all;
-  return out;
+  return mapped(std::move(out), all);
 }
 
 struct Args {
@@ -127,7 +139,11 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   const int step = a.step >= 0 ? a.step : scene.time.stepAt(a.frame, scene.series.steps);
   auto vol = std::make_shared<const Volume>(loadVolume(fixed, VoxelBox{{0, 0, 0}, volumeDims(scene)}, step));
   for (const std::string& said : volumeWarnings(scene, *vol)) std::fprintf(stderr, "tessera-render: warning: %s\n", said.c_str());
-  auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, scene.tf, scene.shading, scene.light);
+  auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, scene.tf, scene.shading, scene.light,
+                                            scene.blend);
+  std::optional<MaxIntensity> mip;
+  if (scene.blend == Blend::Maximum) mip.emplace(scene.tf);
+  const MaxIntensity* mp = mip ? &*mip : nullptr;
   // Split once, outside the timed renders, as the farm's master does once per run (no tree:
   // the whole volume, and no classification of every voxel for it).
   const BrickTree tree = a.bricks > 1 ? splitBricks(*vol, a.bricks, &scene.tf) : BrickTree{};
@@ -144,7 +160,7 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
     const auto t0 = std::chrono::steady_clock::now();
     const std::clock_t c0 = std::clock();
     img.clear(drawn);  // each render in the memory of the one before (renderScene)
-    img = renderScene(*chosen, *vol, tree, cam, w, h, opt, nullptr, &drawn, std::move(img));
+    img = renderScene(*chosen, *vol, tree, cam, w, h, opt, nullptr, mp, &drawn, std::move(img));
     best_cpu_ms = std::min(best_cpu_ms, 1000.0 * (double)(std::clock() - c0) / CLOCKS_PER_SEC);
     const double ms = msSince(t0);
     best_ms = std::min(best_ms, ms);
@@ -152,7 +168,7 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   }
   // The counts from one more, untimed render: counting every skipped sample exactly costs
   // (4% of a default frame), and the times are those of a render as the farm runs it.
-  if (a.print_stats) renderScene(*chosen, *vol, tree, cam, w, h, opt, &stats);
+  if (a.print_stats) renderScene(*chosen, *vol, tree, cam, w, h, opt, &stats, mp);
   writePng(a.out, img, bg);
   std::printf("wrote %s (%dx%d, quality %s, %d brick%s, frame %d, step %d, backend %s)\n", a.out.c_str(), w, h,
               qualityName(opt.quality.name), a.bricks, a.bricks == 1 ? "" : "s", a.frame, step, a.backend.c_str());
@@ -176,7 +192,7 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
     renderer::RenderOptions ropt = opt;
     ropt.quality = namedQuality(QualityName::Reference);
     const auto t0 = std::chrono::steady_clock::now();
-    const ImageF ref = renderScene(*chosen, *vol, tree, cam, w, h, ropt, nullptr);
+    const ImageF ref = renderScene(*chosen, *vol, tree, cam, w, h, ropt, nullptr, mp);
     const double ref_ms = msSince(t0);
     const ImageError e = compare(img, ref);
     std::printf("vs reference: max_abs=%.6f rmse=%.6f psnr=%.2f dB (reference %.0f ms)\n", e.max_abs, e.rmse, e.psnr,

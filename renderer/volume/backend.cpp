@@ -60,14 +60,16 @@ const char* backendName(BackendKind kind) { return kind == BackendKind::Cpu ? "c
 
 std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_ptr<const Volume> volume,
                                                  TransferFunction tf, const Shading& shading,
-                                                 const Vec3& light) {
+                                                 const Vec3& light, Blend blend) {
   if (kind == BackendKind::Osmesa) {
     if (shading.on)
       throw std::invalid_argument("the osmesa volume backend does not shade; use backend cpu or leave out `shading`");
+    if (blend != Blend::Composite)
+      throw std::invalid_argument("the osmesa volume backend composites only; use backend cpu for `blend: maximum`");
     return std::make_unique<GlVolumeRenderer>(std::move(volume), std::move(tf));
   }
   cpuIsa();  // a bad TESSERA_SIMD fails here, on the caller's thread, not in a ray-casting thread
-  return std::make_unique<Raycaster>(std::move(volume), std::move(tf), shading, light);
+  return std::make_unique<Raycaster>(std::move(volume), std::move(tf), shading, light, blend);
 }
 
 }  // namespace tessera::renderer

@@ -63,9 +63,10 @@ enum class BackendKind { Cpu, Osmesa };
 // "cpu" | "osmesa"; throws std::invalid_argument naming the value otherwise.
 BackendKind parseBackend(const std::string& name);
 const char* backendName(BackendKind kind);
-// Shading (with `light`, zero: a headlight) is the cpu backend's; osmesa refuses it by name.
+// Shading (with `light`, zero: a headlight) and `blend: maximum` (value pixels, see
+// common/max_intensity.h) are the cpu backend's; osmesa refuses them by name.
 std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_ptr<const Volume> volume,
                                                  TransferFunction tf, const Shading& shading = {},
-                                                 const Vec3& light = {0, 0, 0});
+                                                 const Vec3& light = {0, 0, 0}, Blend blend = Blend::Composite);
 
 }  // namespace tessera::renderer

@@ -18,6 +18,16 @@ struct SampleCounts {
   uint64_t taken = 0, skipped = 0, terminated = 0;
 };
 
+// Maximum intensity projection's skipping (max_kernel.cpp): per brick of VolumeAccel an upper
+// bound of its 16-bit values (quantizedUpperBound of the hierarchy's block maximum), the
+// volume's, and the floor below which nothing shows (MaxIntensity::floorQ).
+struct MaxSkip {
+  const uint16_t* brick_ub = nullptr;
+  uint32_t volume_ub = 65535, floor_q = 0;
+};
+// At least VolumeAccel's 16-bit value of any voxel whose normalised value is at most `value`.
+uint32_t quantizedUpperBound(float value);
+
 struct FastContext {
   const Volume* volume = nullptr;
   const VolumeAccel* accel = nullptr;                     // quantized values, hierarchy
@@ -29,6 +39,7 @@ struct FastContext {
   const GradientVolume* gradients = nullptr;              // of `volume`, with `shade`
   const HighlightTable* highlight = nullptr;              // of shade->shininess, with `shade`
   const uint64_t* occupancy = nullptr;                    // cellOccupancy of `emptiness` (null: none)
+  const MaxSkip* maximum = nullptr;                       // blend: maximum (castMaximum)
 };
 
 // Samples span.k_first..k_end-1; out receives premultiplied RGBA. Returns true if the ray
@@ -39,6 +50,13 @@ bool castFast(const FastContext& c, const RaySpan& span, float out[4], SampleCou
 // chains overlap in the CPU. terminated[i]: castFast's result for ray i.
 void castFastBatch(const FastContext& c, const RaySpan* spans, float* const* out, int n, SampleCounts& counts,
                    bool* terminated);
+
+// Maximum intensity projection (c.maximum set): the ray's value pixel (common/max_intensity.h), its
+// largest value in 16-bit units / 65535, or transparent when none reaches the floor. Samples in
+// bricks that cannot raise the maximum count as skipped. Returns false.
+bool castMaximum(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);
+// The same in double precision on the volume's values, with every sample: `floor` in [0, 1].
+void castReferenceMaximum(const Volume& v, double floor, const RaySpan& span, double out[4], SampleCounts& counts);
 
 // Double precision, exact transfer function, no skipping, no early termination; `shade`
 // (null: unlit) lights each sample with its exact gradient (sampleGradient).

@@ -17,6 +17,7 @@
 #include <string>
 #include <thread>
 
+#include "common/max_intensity.h"
 #include "renderer/volume/depth_bounds.h"
 #include "renderer/volume/kernels.h"
 #include "renderer/volume/minmax.h"
@@ -37,10 +38,14 @@ struct Raycaster::Impl {
   Shading shading;
   Vec3 light;
   std::unique_ptr<const GradientVolume> gradients;  // with shading
+  Blend blend = Blend::Composite;
+  double max_floor = 0;                // blend: maximum: MaxIntensity::floor
+  MaxSkip max_skip;                    // blend: maximum, pointing into brick_ub
+  std::vector<uint16_t> brick_ub;
 };
 
 Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, const Shading& shading,
-                     const Vec3& light)
+                     const Vec3& light, Blend blend)
     : impl_(std::make_unique<Impl>()) {
   if (!volume) throw std::invalid_argument("Raycaster: null volume");
   const Volume& v = *volume;
@@ -66,10 +71,29 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, 
   impl_->tf = std::move(tf);
   impl_->shading = shading;
   impl_->light = light;
+  impl_->blend = blend;
+  if (blend == Blend::Maximum && shading.on) throw std::invalid_argument("Raycaster: blend maximum is not lit (no shading)");
   if (shading.on) impl_->gradients = std::make_unique<const GradientVolume>(v);
   const TransferFunction& f = impl_->tf;
-  impl_->emptiness = impl_->accel->hierarchy.classify([&f](float lo, float hi) { return TfTable::rangeIsEmpty(f, lo, hi); });
-  impl_->occupancy = cellOccupancy(*impl_->accel, impl_->emptiness, f);
+  if (blend == Blend::Maximum) {
+    // A block is empty when its values cannot reach the floor: nothing below it shows.
+    const MaxIntensity mip(f);
+    const uint32_t floor_q = mip.floorQ();
+    impl_->max_floor = mip.floor();
+    impl_->emptiness =
+        impl_->accel->hierarchy.classify([floor_q](float, float hi) { return quantizedUpperBound(hi) < floor_q; });
+    const MinMaxHierarchy& h = impl_->accel->hierarchy;
+    const auto d = h.dims(0);
+    impl_->brick_ub.resize((size_t)d[0] * d[1] * d[2]);
+    for (int z = 0; z < d[2]; ++z)
+      for (int y = 0; y < d[1]; ++y)
+        for (int x = 0; x < d[0]; ++x) impl_->brick_ub[h.index(0, x, y, z)] = (uint16_t)quantizedUpperBound(h.maxValue(0, x, y, z));
+    const uint16_t top = *std::max_element(impl_->brick_ub.begin(), impl_->brick_ub.end());
+    impl_->max_skip = MaxSkip{impl_->brick_ub.data(), top, floor_q};
+  } else {
+    impl_->emptiness = impl_->accel->hierarchy.classify([&f](float lo, float hi) { return TfTable::rangeIsEmpty(f, lo, hi); });
+    impl_->occupancy = cellOccupancy(*impl_->accel, impl_->emptiness, f);
+  }
   // Block b holds the samples at voxel coordinates [8b, 8b+8) (clamped at the border); the
   // cell box [8b, 8b+9) holds them with half a voxel to spare, far above the kernel's float
   // error (< 1e-3 voxel), so samples outside it have exactly zero opacity.
@@ -111,6 +135,7 @@ struct FrameRays {
   bool clipping;          // rays are cut to `clip`; the samples cut off count as skipped
   const DepthBounds* depth;  // per-cell depth bounds of non-empty nodes (perspective + skipping)
   const FastContext& fast;
+  const double* max_floor;   // blend: maximum (the reference's floor); null: composite
   const ShadeParams* shade;  // null: unlit
   ImageF& img;
   bool count;  // count the samples skipped outside the rays cast (stats were asked for)
@@ -134,7 +159,8 @@ class TileWorker {
         if (f_.q.reference) {
           float* o = f_.img.at(px, py);
           double d[4];
-          castReference(f_.volume, f_.tf, f_.q.step, f_.shade, span, d, counts);
+          if (f_.max_floor) castReferenceMaximum(f_.volume, *f_.max_floor, span, d, counts);
+          else castReference(f_.volume, f_.tf, f_.q.step, f_.shade, span, d, counts);
           for (int c = 0; c < 4; ++c) o[c] = (float)d[c];
           mark(px, py);
         } else {
@@ -225,7 +251,11 @@ class TileWorker {
     float* outs[kBatch];
     bool terminated[kBatch];
     for (int i = 0; i < n_pending_; ++i) outs[i] = f_.img.at(pending_[i].px, pending_[i].py);
-    castFastBatch(f_.fast, spans_, outs, n_pending_, counts, terminated);
+    if (f_.fast.maximum) {
+      for (int i = 0; i < n_pending_; ++i) terminated[i] = castMaximum(f_.fast, spans_[i], outs[i], counts);
+    } else {
+      castFastBatch(f_.fast, spans_, outs, n_pending_, counts, terminated);
+    }
     for (int i = 0; i < n_pending_; ++i) finish(pending_[i], terminated[i]);
     n_pending_ = 0;
   }
@@ -266,7 +296,8 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
     fast.accel = impl_->accel.get();
     fast.table = &*table;
     fast.emptiness = &impl_->emptiness;
-    fast.occupancy = impl_->occupancy.data();
+    fast.occupancy = impl_->occupancy.empty() ? nullptr : impl_->occupancy.data();
+    if (impl_->blend == Blend::Maximum) fast.maximum = &impl_->max_skip;
     fast.skip = q.skip_empty;
     fast.early_termination = (float)std::min(q.early_termination, 2.0);
   }
@@ -289,7 +320,8 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   SampleCounts total;
   Rect act;
 
-  const FrameRays rays{v, impl_->tf, q, gen, geom, brick, clip, clipping, depth ? &*depth : nullptr, fast,
+  const double* max_floor = impl_->blend == Blend::Maximum ? &impl_->max_floor : nullptr;
+  const FrameRays rays{v, impl_->tf, q, gen, geom, brick, clip, clipping, depth ? &*depth : nullptr, fast, max_floor,
                         shade ? &*shade : nullptr, img, stats != nullptr,
                         SpanRow(gen, geom, brick, clipping ? clip : brick, q.step)};
   auto worker = [&] {

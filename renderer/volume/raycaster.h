@@ -26,8 +26,10 @@ class Raycaster final : public VolumeBackend {
   // Builds the min-max hierarchy and classification tables once per volume/transfer function,
   // and with shading on the gradient volume (8 bytes per voxel). `light`: world direction
   // towards the light; zero: a headlight.
+  // `blend`: Maximum renders value pixels (common/max_intensity.h), mapped by the caller once
+  // every brick's are merged.
   Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, const Shading& shading = {},
-            const Vec3& light = {0, 0, 0});
+            const Vec3& light = {0, 0, 0}, Blend blend = Blend::Composite);
   ~Raycaster();
 
   // Renders `brick` as seen by `cam` into a width x height image. Pixels outside the

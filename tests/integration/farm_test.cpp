@@ -189,7 +189,7 @@ TEST(FarmFaults, RendererSurvivesAFrameThatThrows) {
   mo.renderers = 1;
   renderer::StageOptions ro{scene, ep, 1};
   FarmDir dir("survives");
-  compositor::StageOptions co{ep, ""};
+  compositor::StageOptions co{ep, "", 512, 512, std::nullopt};
   display::StageOptions dopt{ep, (dir.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
   auto master_done = std::async(std::launch::async, [&] { return master::run(mo, ctx, &stop); });
   auto renderer_done = std::async(std::launch::async, [&] { return renderer::runStage(ro, ctx, &stop); });

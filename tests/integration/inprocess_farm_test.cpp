@@ -41,7 +41,7 @@ TEST(InProcessFarm, LostRendererIsDetectedAndItsWorkReassigned) {
   mo.heartbeat_timeout_s = 0.5;
   mo.metrics_path = (dir.path() / "metrics.jsonl").string();
   renderer::StageOptions ro{scene, ep, 1};
-  compositor::StageOptions co{ep, ""};
+  compositor::StageOptions co{ep, "", 512, 512, std::nullopt};
   display::StageOptions dopt{ep, (dir.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
 
   std::vector<std::future<int>> stages;
@@ -95,7 +95,7 @@ TEST(InProcessFarm, InteractiveFramesFollowInputAndIdleFramesAreNotRendered) {
   mo.endpoints = ep;
   mo.frames = 0;  // interactive
   renderer::StageOptions ro{scene, ep, 1};
-  compositor::StageOptions co{ep, ""};
+  compositor::StageOptions co{ep, "", 512, 512, std::nullopt};
   display::StageOptions dopt{ep, (dir.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
   std::vector<std::future<int>> stages;
   stages.push_back(std::async(std::launch::async, [&] { return master::run(mo, ctx, &stop); }));

@@ -146,7 +146,7 @@ class Farm {
   std::atomic<bool> stop_{false};
   master::MasterOptions mo_;
   renderer::StageOptions ro_{scene_, ep_, 1};
-  compositor::StageOptions co_{ep_, ""};
+  compositor::StageOptions co_{ep_, "", 512, 512, std::nullopt};
   display::StageOptions do_{ep_, (dir_.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
   std::future<int> master_;
   std::vector<std::future<int>> stages_;

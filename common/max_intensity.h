@@ -1,0 +1,40 @@
+// Maximum intensity projection (scene `blend: maximum`), as VTK's MAXIMUM_INTENSITY_BLEND and
+// ParaView's "Maximum Intensity": a pixel shows the colour map at the largest value along its
+// ray. In the farm a ray's pieces are merged by their maxima (exact, in any order) and only the
+// merged value is mapped, so the farm's image is tessera-render's to the bit.
+//
+// Until it is mapped a ray's result is a "value pixel" (s, 0, 0, 1), s the largest value in
+// [0, 1] (a valid premultiplied pixel, so it travels and crops as any piece does), or
+// transparent black where no value reaches `floor()`: below it every value maps to transparent,
+// so no piece needs to carry it. Values compare in the ray caster's 16-bit units (q = s * 65535).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+#include "common/image.h"
+#include "common/transfer_function.h"
+
+namespace tessera {
+
+class MaxIntensity {
+ public:
+  explicit MaxIntensity(const TransferFunction& tf);
+  // Smallest 16-bit value a ray must reach to be kept: values below it map to transparent
+  // (alpha 0 up to the colour map's first opacity). UINT32_MAX when no value has opacity.
+  uint32_t floorQ() const { return floor_q_; }
+  double floor() const { return floor_; }
+  // Value pixels to premultiplied RGBA, in place: colour and opacity of the map at s, the
+  // opacity scaled so that the map's largest is 1 (a composite map's opacity is per 1/256 of
+  // the box, 0.02 for the presets: as a pixel's it would hardly show). Transparent pixels stay.
+  void map(float* rgba, size_t pixels) const;
+
+ private:
+  TransferFunction tf_;
+  double floor_ = 0, alpha_scale_ = 0;
+  uint32_t floor_q_ = 0;
+};
+
+// Value pixels merged: dst = max(dst, src) per channel, within rect r (same sizes).
+void compositeMaximum(ImageF& dst, const ImageF& src, const Rect& r);
+
+}  // namespace tessera

@@ -1,0 +1,66 @@
+// The farm's maximum intensity projection (scene `blend: maximum`) against tessera-render's:
+// pieces carry each ray's largest value, merged by maxima in the compositors or in the
+// renderers' binary swap, and mapped once, so the frames match the one-process render.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "tests/integration/farm_util.h"
+
+namespace tessera::test {
+namespace {
+
+// A colour map steep where most rays' largest values of the Marschner-Lobb volume lie (0.8 to
+// 0.9, opacity 0 to 1): a value rounded as rgba16f pieces would round it (by up to 1/2048)
+// moves the colour by more than a level, so only exact values match.
+fs::path writeMipScene(const FarmDir& dir, int frames) {
+  const fs::path scene = dir.path() / "mip.yaml";
+  std::ofstream(scene) << "volume: {generator: {name: marschner-lobb, size: 48}}\n"
+                          "transfer_function: [[0, 0, 0, 0, 0], [0.8, 0.1, 0.2, 0.9, 0], [0.9, 1, 0.6, 0.1, 1],"
+                          " [1, 1, 1, 0.8, 1]]\n"
+                          "blend: maximum\nimage: [64, 48]\norbit: {frames: "
+                       << frames << ", degrees: 90}\n";
+  return scene;
+}
+
+void expectFramesMatch(const FarmDir& dir, const fs::path& scene, int frames, const CommandResult& run) {
+  for (int k = 0; k < frames; ++k) {
+    ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " missing\n" << run.output;
+    const Image8 farm = dir.farmFrame(k);
+    // Merging by maxima is exact and the values travel as rgba32f: the farm's rays reach the
+    // same largest values, so no level of the contract's 1/255 is needed.
+    EXPECT_TRUE(dir.matches(farm, dir.reference(scene, k), 0, "mip_" + std::to_string(k))) << "frame " << k;
+    EXPECT_GT(activeRegion(farm).area(), 400) << "frame " << k << " is (nearly) empty";
+  }
+}
+
+TEST(MaxIntensityFarm, CompositorsMergeMaximaAsTesseraRenderDoes) {
+  FarmDir dir("mip-direct");
+  const int frames = 3;
+  const fs::path scene = writeMipScene(dir, frames);
+  const auto run = dir.runFarm(scene, 4, 2, frames, 120, "--env TESSERA_COMPOSITING=direct-send");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  expectFramesMatch(dir, scene, frames, run);
+}
+
+TEST(MaxIntensityFarm, BinarySwapMergesMaximaAsTesseraRenderDoes) {
+  FarmDir dir("mip-swap");
+  const int frames = 3;
+  const fs::path scene = writeMipScene(dir, frames);
+  const auto run = dir.runFarm(scene, 3, 0, frames, 120, "--env TESSERA_COMPOSITING=binary-swap");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  expectFramesMatch(dir, scene, frames, run);
+}
+
+TEST(MaxIntensityFarm, TheOsmesaBackendRefusesItByName) {
+  FarmDir dir("mip-osmesa");
+  const fs::path scene = writeMipScene(dir, 1);
+  const auto r = runCommand(bin("tessera-render") + " " + scene.string() + " --backend osmesa -o " +
+                                (dir.path() / "x.png").string(),
+                            60);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("use backend cpu for `blend: maximum`"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace tessera::test
