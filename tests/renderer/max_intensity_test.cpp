@@ -1,0 +1,125 @@
+// The ray caster's maximum intensity projection (blend: maximum, renderer/volume/max_kernel.cpp):
+// value pixels against the double-precision reference, the brick split against the whole
+// volume, skipping against none, and the floor below which nothing shows.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "common/bricks.h"
+#include "common/max_intensity.h"
+#include "renderer/volume/raycaster.h"
+#include "tests/renderer/render_test_util.h"
+
+namespace tessera::renderer {
+namespace {
+
+using test::options;
+
+// 0 up to 0.4 (the floor), then a ramp: the Marschner-Lobb volume's values span 0..1.
+const TransferFunction kTf({{0, 0, 0, 0, 0}, {0.4, 0.2, 0.3, 0.9, 0}, {1, 1, 0.8, 0.2, 0.05}});
+
+Camera orbitCamera(int frame) { return Orbit{12, {0.2, 1, 0.1}}.at(test::defaultCamera(), frame); }
+
+// Largest difference of value pixels' s (channel 0) and whether the same pixels show.
+double maxValueDiff(const ImageF& a, const ImageF& b, int* shown_differently) {
+  double d = 0;
+  *shown_differently = 0;
+  for (size_t i = 0; i < a.px.size(); i += 4) {
+    if ((a.px[i + 3] > 0) != (b.px[i + 3] > 0)) ++*shown_differently;
+    else d = std::max(d, (double)std::fabs(a.px[i] - b.px[i]));
+  }
+  return d;
+}
+
+TEST(MaxIntensity, FastValuesMatchTheReferenceWithinTheSixteenBitQuantization) {
+  auto vol = test::generated("marschner-lobb", 40);
+  const Raycaster rc(vol, kTf, {}, {0, 0, 0}, Blend::Maximum);
+  RenderOptions same_step = options("reference");
+  same_step.quality.step = options("default").quality.step;
+  for (int frame : {0, 5}) {
+    const ImageF fast = rc.render(orbitCamera(frame), 48, 40, wholeVolume(*vol), options("default"));
+    const ImageF ref = rc.render(orbitCamera(frame), 48, 40, wholeVolume(*vol), same_step);
+    int shown_differently = 0;
+    ASSERT_GT(activeRegion(ref).area(), 600);
+    // Voxels are kept as round(v * 65535): half a unit, and float interpolation's error.
+    EXPECT_LT(maxValueDiff(fast, ref, &shown_differently), 1.0 / 65535) << "frame " << frame;
+    // Rays whose largest value lies within that error of the floor may show on one side only.
+    EXPECT_LE(shown_differently, 2) << "frame " << frame;
+    for (size_t i = 0; i < fast.px.size(); i += 4) {
+      if (fast.px[i + 3] == 0) continue;
+      EXPECT_EQ(fast.px[i + 3], 1.0f);  // value pixels: (s, 0, 0, 1)
+      EXPECT_EQ(fast.px[i + 1], 0.0f);
+      EXPECT_GE(fast.px[i], 0.4f - 1.0f / 65535);  // nothing below the floor is kept
+    }
+  }
+}
+
+// Against the reference's 16 times finer step (maxima between the default step's samples), the
+// mapped images agree as the accuracy contract asks of the default quality.
+TEST(MaxIntensity, MappedImagesAreWithinTheContractOfTheFinerReference) {
+  auto vol = test::generated("marschner-lobb", 40);
+  const Raycaster rc(vol, kTf, {}, {0, 0, 0}, Blend::Maximum);
+  const MaxIntensity map(kTf);
+  for (int frame : {0, 5}) {
+    ImageF fast = rc.render(orbitCamera(frame), 48, 40, wholeVolume(*vol), options("default"));
+    ImageF ref = rc.render(orbitCamera(frame), 48, 40, wholeVolume(*vol), options("reference"));
+    map.map(fast.px.data(), fast.px.size() / 4);
+    map.map(ref.px.data(), ref.px.size() / 4);
+    ASSERT_GT(activeRegion(ref).area(), 600);
+    EXPECT_GE(compare(fast, ref).psnr, 40.0) << "frame " << frame;
+  }
+}
+
+TEST(MaxIntensity, BricksMergedByMaximaEqualTheWholeVolume) {
+  auto vol = test::generated("marschner-lobb", 40);
+  const Raycaster rc(vol, kTf, {}, {0, 0, 0}, Blend::Maximum);
+  for (int frame : {0, 3, 7}) {
+    const Camera cam = orbitCamera(frame);
+    const ImageF whole = rc.render(cam, 48, 40, wholeVolume(*vol), options("default"));
+    for (int n : {2, 3, 8}) {
+      const BrickTree tree = splitBricks(*vol, n, &kTf);
+      ImageF merged(48, 40);
+      for (const Brick& b : tree.bricks) {  // any order: the maximum does not care
+        Rect active;
+        const ImageF part = rc.render(cam, 48, 40, b, options("default"), nullptr, &active);
+        compositeMaximum(merged, part, active);
+      }
+      EXPECT_EQ(merged, whole) << "frame " << frame << ", " << n << " bricks";
+    }
+  }
+}
+
+TEST(MaxIntensity, SkippingChangesNoValue) {
+  auto vol = test::generated("hollow-shell", 48);
+  const Raycaster rc(vol, kTf, {}, {0, 0, 0}, Blend::Maximum);
+  RenderOptions all = options("default");
+  all.quality.skip_empty = false;
+  RenderStats skipping, none;
+  const ImageF a = rc.render(orbitCamera(2), 48, 40, wholeVolume(*vol), options("default"), &skipping);
+  const ImageF b = rc.render(orbitCamera(2), 48, 40, wholeVolume(*vol), all, &none);
+  EXPECT_EQ(a, b);
+  // The same samples either way; bricks that cannot raise a ray's maximum are passed over in
+  // both (their exactness is the reference's test above), and no sample is counted twice.
+  EXPECT_GT(skipping.samples_skipped, skipping.samples / 4);
+  EXPECT_EQ(skipping.samples + skipping.samples_skipped + skipping.samples_terminated,
+            none.samples + none.samples_skipped + none.samples_terminated);
+}
+
+TEST(MaxIntensity, AColourMapWithoutOpacityShowsNothing) {
+  auto vol = test::generated("hollow-shell", 24);
+  const TransferFunction clear({{0, 1, 1, 1, 0}, {1, 1, 1, 1, 0}});
+  const Raycaster rc(vol, clear, {}, {0, 0, 0}, Blend::Maximum);
+  EXPECT_TRUE(activeRegion(rc.render(orbitCamera(0), 24, 24, wholeVolume(*vol), options("default"))).empty());
+  EXPECT_TRUE(activeRegion(rc.render(orbitCamera(0), 24, 24, wholeVolume(*vol), options("reference"))).empty());
+}
+
+TEST(MaxIntensity, ShadingIsRefused) {
+  Shading lit;
+  lit.on = true;
+  EXPECT_THROW(Raycaster(test::generated("hollow-shell", 16), kTf, lit, {0, 0, 0}, Blend::Maximum), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace tessera::renderer
