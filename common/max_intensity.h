@@ -1,7 +1,8 @@
 // Maximum intensity projection (scene `blend: maximum`), as VTK's MAXIMUM_INTENSITY_BLEND and
 // ParaView's "Maximum Intensity": a pixel shows the colour map at the largest value along its
 // ray. In the farm a ray's pieces are merged by their maxima (exact, in any order) and only the
-// merged value is mapped, so the farm's image is tessera-render's to the bit.
+// merged value is mapped, so the farm's image is tessera-render's (the windows' rounding of
+// sample positions aside: within the accuracy contract, to the bit in the tests' frames).
 //
 // Until it is mapped a ray's result is a "value pixel" (s, 0, 0, 1), s the largest value in
 // [0, 1] (a valid premultiplied pixel, so it travels and crops as any piece does), or

@@ -1,6 +1,7 @@
 // The farm's maximum intensity projection (scene `blend: maximum`) against tessera-render's:
 // pieces carry each ray's largest value, merged by maxima in the compositors or in the
-// renderers' binary swap, and mapped once, so the frames match the one-process render.
+// renderers' binary swap, and mapped once, so the frames match the one-process render within
+// the accuracy contract.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -27,9 +28,9 @@ void expectFramesMatch(const FarmDir& dir, const fs::path& scene, int frames, co
   for (int k = 0; k < frames; ++k) {
     ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " missing\n" << run.output;
     const Image8 farm = dir.farmFrame(k);
-    // Merging by maxima is exact and the values travel as rgba32f: the farm's rays reach the
-    // same largest values, so no level of the contract's 1/255 is needed.
-    EXPECT_TRUE(dir.matches(farm, dir.reference(scene, k), 0, "mip_" + std::to_string(k))) << "frame " << k;
+    // The contract's 1/255. Merging by maxima is exact and the values travel as rgba32f (these
+    // frames come out equal to the bit); as rgba16f pieces they differed by 2 levels.
+    EXPECT_TRUE(dir.matches(farm, dir.reference(scene, k), 1, "mip_" + std::to_string(k))) << "frame " << k;
     EXPECT_GT(activeRegion(farm).area(), 400) << "frame " << k << " is (nearly) empty";
   }
 }
