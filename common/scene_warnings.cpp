@@ -75,7 +75,8 @@ std::string rangeSuggestion(const Scene& scene, const ValueHistogram& fine) {
   const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume);
   if (!raw || raw->has_range) return "";
   auto advice = suggestedRange(fine);
-  if (!advice) advice = backgroundHaze(fine, scene.tf);
+  // A haze is opacity summed along rays; a maximum intensity projection sums none.
+  if (!advice && scene.blend == Blend::Composite) advice = backgroundHaze(fine, scene.tf);
   if (!advice) return "";
   char b[600];
   std::snprintf(b, sizeof b,
@@ -93,7 +94,9 @@ std::vector<std::string> volumeWarnings(const Scene& scene, const Volume& shape)
     const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume);
     out.push_back(where + (raw && raw->has_range ? "volume.range: " : "volume: ") + why);
   }
-  if (std::string why = thinProblem(scene, shape); !why.empty()) out.push_back(where + why);
+  // A thin stack is faint when opacity adds up along few samples; a projection's is scaled to 1.
+  if (scene.blend == Blend::Composite)
+    if (std::string why = thinProblem(scene, shape); !why.empty()) out.push_back(where + why);
   if (const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume)) {
     for (const std::string& note : raw->notes) out.push_back(where + "volume: " + note);
     std::string lacks;

@@ -18,12 +18,12 @@ struct SampleCounts {
   uint64_t taken = 0, skipped = 0, terminated = 0;
 };
 
-// Maximum intensity projection's skipping (max_kernel.cpp): per brick of VolumeAccel an upper
-// bound of its 16-bit values (quantizedUpperBound of the hierarchy's block maximum), the
-// volume's, and the floor below which nothing shows (MaxIntensity::floorQ).
+// Maximum intensity projection's skipping (max_kernel.cpp): per brick of VolumeAccel its
+// largest 16-bit value (of its 9^3, apron included: all a sample in it reads), the volume's,
+// and the floor below which nothing shows (MaxIntensity::floorQ).
 struct MaxSkip {
-  const uint16_t* brick_ub = nullptr;
-  uint32_t volume_ub = 65535, floor_q = 0;
+  const uint16_t* brick_max = nullptr;
+  uint32_t volume_max = 65535, floor_q = 0;
 };
 // At least VolumeAccel's 16-bit value of any voxel whose normalised value is at most `value`.
 uint32_t quantizedUpperBound(float value);
@@ -52,8 +52,9 @@ void castFastBatch(const FastContext& c, const RaySpan* spans, float* const* out
                    bool* terminated);
 
 // Maximum intensity projection (c.maximum set): the ray's value pixel (common/max_intensity.h), its
-// largest value in 16-bit units / 65535, or transparent when none reaches the floor. Samples in
-// bricks that cannot raise the maximum count as skipped. Returns false.
+// largest value in 16-bit units / 65535, or transparent when none reaches the floor. With
+// c.skip, samples in bricks that cannot raise the maximum are passed over (counted as skipped);
+// once the volume's largest value is reached the rest count as terminated. Returns false.
 bool castMaximum(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);
 // The same in double precision on the volume's values, with every sample: `floor` in [0, 1].
 void castReferenceMaximum(const Volume& v, double floor, const RaySpan& span, double out[4], SampleCounts& counts);

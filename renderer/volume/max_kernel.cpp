@@ -43,7 +43,8 @@ TESSERA_CLONES bool castMaximum(const FastContext& c, const RaySpan& span, float
       f[a] = u - (float)i[a];
     }
     const int64_t brick = (i[0] >> 3) + (int64_t)nb_x * (i[1] >> 3) + (int64_t)nb_xy * (i[2] >> 3);
-    if (brick != last_brick) last_brick = brick, pass = (float)m.brick_ub[brick] <= best;
+    // A trilinear value lies within its corners' range, so such a brick holds nothing larger.
+    if (brick != last_brick) last_brick = brick, pass = c.skip && (float)m.brick_max[brick] <= best;
     if (pass) {
       ++skipped;
       continue;
@@ -56,7 +57,7 @@ TESSERA_CLONES bool castMaximum(const FastContext& c, const RaySpan& span, float
     const float s = lerp(lerp(x00, x10, f[1]), lerp(x01, x11, f[1]), f[2]);
     if (s > best) {
       best = s;
-      if (best >= (float)m.volume_ub) {  // nothing further can be larger
+      if (best >= (float)m.volume_max) {  // nothing further can be larger
         counts.terminated += (uint64_t)(span.k_end - k - 1);
         break;
       }

@@ -40,8 +40,8 @@ struct Raycaster::Impl {
   std::unique_ptr<const GradientVolume> gradients;  // with shading
   Blend blend = Blend::Composite;
   double max_floor = 0;                // blend: maximum: MaxIntensity::floor
-  MaxSkip max_skip;                    // blend: maximum, pointing into brick_ub
-  std::vector<uint16_t> brick_ub;
+  MaxSkip max_skip;                    // blend: maximum, pointing into brick_max
+  std::vector<uint16_t> brick_max;
 };
 
 Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, const Shading& shading,
@@ -82,14 +82,15 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, 
     impl_->max_floor = mip.floor();
     impl_->emptiness =
         impl_->accel->hierarchy.classify([floor_q](float, float hi) { return quantizedUpperBound(hi) < floor_q; });
-    const MinMaxHierarchy& h = impl_->accel->hierarchy;
-    const auto d = h.dims(0);
-    impl_->brick_ub.resize((size_t)d[0] * d[1] * d[2]);
-    for (int z = 0; z < d[2]; ++z)
-      for (int y = 0; y < d[1]; ++y)
-        for (int x = 0; x < d[0]; ++x) impl_->brick_ub[h.index(0, x, y, z)] = (uint16_t)quantizedUpperBound(h.maxValue(0, x, y, z));
-    const uint16_t top = *std::max_element(impl_->brick_ub.begin(), impl_->brick_ub.end());
-    impl_->max_skip = MaxSkip{impl_->brick_ub.data(), top, floor_q};
+    // Each brick's largest 16-bit value, exactly: the kernel's skip and its early end compare
+    // the values it interpolates (one pass over the bricked copy per volume and colour map).
+    const auto& bricks = impl_->accel->nb;
+    const uint16_t* q = impl_->accel->bricked.data();
+    impl_->brick_max.resize((size_t)bricks[0] * bricks[1] * bricks[2]);
+    for (size_t b = 0; b < impl_->brick_max.size(); ++b, q += VolumeAccel::kBrickSize)
+      impl_->brick_max[b] = *std::max_element(q, q + VolumeAccel::kBrickSize);
+    const uint16_t top = *std::max_element(impl_->brick_max.begin(), impl_->brick_max.end());
+    impl_->max_skip = MaxSkip{impl_->brick_max.data(), top, floor_q};
   } else {
     impl_->emptiness = impl_->accel->hierarchy.classify([&f](float lo, float hi) { return TfTable::rangeIsEmpty(f, lo, hi); });
     impl_->occupancy = cellOccupancy(*impl_->accel, impl_->emptiness, f);

@@ -57,7 +57,8 @@ Scene sceneFor(const std::string& generator, int size, const std::string& scenes
       }
       auto* g = std::get_if<GeneratorSpec>(&s.volume);
       // Geometry scenes (an isosurface of a generated volume) carry no transfer function.
-      if (g && g->name == generator && !s.mesh && !s.tf.points().empty()) {
+      // A maximum intensity projection (mip.yaml) is not the composite frame the sweep times.
+      if (g && g->name == generator && !s.mesh && !s.tf.points().empty() && s.blend == Blend::Composite) {
         g->size = size;
         return s;
       }

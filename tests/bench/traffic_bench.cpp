@@ -193,6 +193,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   const Scene scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
+  if (scene.blend != Blend::Composite) {  // its pieces are blended "over" below
+    std::fprintf(stderr, "tessera-traffic-bench: composite scenes only, not blend: maximum\n");
+    return 2;
+  }
   auto vol = std::make_shared<const Volume>(loadVolume(scene, VoxelBox{{0, 0, 0}, volumeDims(scene)}, 0));
   auto backend = renderer::makeVolumeBackend(renderer::BackendKind::Cpu, vol, scene.tf, scene.shading, scene.light);
   const BrickTree tree = splitBricks(*vol, renderers, &scene.tf);
