@@ -46,7 +46,7 @@ def load_case(args):
     """The compared case: generator, transfer function, camera, shading and light, from
     --scene (a generator scene file) or the built-in default scene."""
     case = {"generator": args.generator, "volume_size": args.volume_size, "tf": DEFAULT_TF,
-            "camera": DEFAULT_CAMERA, "shading": None, "light": None}
+            "camera": DEFAULT_CAMERA, "shading": None, "light": None, "blend": "composite"}
     if not args.scene:
         return case
     import yaml
@@ -73,6 +73,10 @@ def load_case(args):
     if sh and not args.no_shading:
         case["shading"] = dict(SHADING_DEFAULTS, **(sh if isinstance(sh, dict) else {}))
     case["light"] = sc.get("light")
+    case["blend"] = sc.get("blend", "composite")
+    if case["blend"] == "maximum" and max(p[4] for p in case["tf"]) != 1:
+        sys.exit(f"vtk_compare: {args.scene}: for blend: maximum give the transfer function an opacity of 1 at its "
+                 f"top (Tessera scales a projection's opacity so that its largest is 1, VTK does not)")
     return case
 
 
@@ -139,6 +143,8 @@ def vtk_worker(args):
     mapper.SetImageSampleDistance(1.0)  # one ray per pixel
     mapper.SetIntermixIntersectingGeometry(0)  # no geometry in the scene: skip the depth read
     mapper.SetNumberOfThreads(args.threads)
+    if case["blend"] == "maximum":  # Tessera's blend: maximum; VTK maps the largest value as Tessera does
+        mapper.SetBlendModeToMaximumIntensity()
     volume = vtk.vtkVolume()
     volume.SetMapper(mapper)
     volume.SetProperty(prop)
@@ -204,6 +210,8 @@ def scene_yaml(case, size):
         text += "shading: {" + ", ".join(f"{k}: {v}" for k, v in sh.items()) + "}\n"
     if case["light"]:
         text += f"light: {list(case['light'])}\n"
+    if case["blend"] != "composite":
+        text += f"blend: {case['blend']}\n"
     return text
 
 
@@ -332,7 +340,7 @@ def main():
             json.dump(case, f)
         shading = "shading " + json.dumps(case["shading"]) if case["shading"] else "no shading"
         print(f"case: {args.scene or 'built-in scene'}: {case['generator']} {case['volume_size']}^3, {shading}, "
-              f"light {case['light'] or 'headlight'}, {args.size}x{args.size}, one-voxel step, "
+              f"light {case['light'] or 'headlight'}, blend {case['blend']}, {args.size}x{args.size}, one-voxel step, "
               f"{args.threads} threads; {args.rounds} rounds of (VTK, Tessera skip, Tessera no-skip), "
               f"best of {args.frames} frames each", flush=True)
         rows = []

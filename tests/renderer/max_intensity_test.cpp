@@ -72,6 +72,62 @@ TEST(MaxIntensity, MappedImagesAreWithinTheContractOfTheFinerReference) {
   }
 }
 
+// Rays along an axis and a hair off it: the kernel jumps to the last sample of a brick that
+// cannot raise the maximum, and a ray that barely moves across on an axis must not jump past
+// that axis' brick boundary. Every value must equal the unskipped reference's at the same step.
+TEST(MaxIntensity, BrickJumpsMissNoValueOnRaysNearlyAlongAnAxis) {
+  // The shell's front reaches the maximum its back cannot raise: most samples are jumped over.
+  auto vol = test::generated("hollow-shell", 48);
+  const Raycaster rc(vol, kTf, {}, {0, 0, 0}, Blend::Maximum);
+  RenderOptions same_step = options("reference");
+  same_step.quality.step = options("default").quality.step;
+  for (const double tilt : {0.0, 1e-7, 1e-4, 3e-3}) {
+    Camera cam;
+    cam.eye = {tilt, -0.5 * tilt, 3};
+    cam.target = {0, 0, 0};
+    cam.orthographic = true;
+    cam.height = 0.9;
+    RenderStats st;
+    const ImageF fast = rc.render(cam, 40, 40, wholeVolume(*vol), options("default"), &st);
+    const ImageF ref = rc.render(cam, 40, 40, wholeVolume(*vol), same_step);
+    int shown_differently = 0;
+    EXPECT_LT(maxValueDiff(fast, ref, &shown_differently), 1.0 / 65535) << "tilt " << tilt;
+    EXPECT_LE(shown_differently, 2) << "tilt " << tilt;
+    EXPECT_GT(st.samples_skipped, st.samples / 4) << "tilt " << tilt << ": no jumps to test";
+  }
+}
+
+// A plateau at 0.5 fills the first brick a ray down -z meets (voxels 24..32), so the kernel jumps
+// to that brick's last sample; the brightest voxel, at z = 23, is the first of the next brick. At
+// one voxel a step, samples down z land on voxel centres: a jump two samples too far misses it.
+TEST(MaxIntensity, ABrickJumpStopsBeforeTheNextBricksFirstSample) {
+  Volume v = *test::constant({8, 8, 256}, 0.0f);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) {
+      for (int z = 26; z <= 30; ++z) v.values[v.index(x, y, z)] = 0.5f;
+      v.values[v.index(x, y, 23)] = 1.0f;
+    }
+  auto vol = std::make_shared<const Volume>(v);
+  const Raycaster rc(vol, kTf, {}, {0, 0, 0}, Blend::Maximum);
+  RenderOptions same_step = options("reference");
+  same_step.quality.step = options("default").quality.step;
+  for (const double tilt : {0.0, 1e-6, 1e-3}) {
+    Camera cam;
+    cam.eye = {tilt, 0.5 * tilt, 3};
+    cam.target = {0, 0, 0};
+    cam.orthographic = true;
+    cam.height = 0.025;  // the volume is 1/32 wide
+    RenderStats st;
+    const ImageF fast = rc.render(cam, 16, 16, wholeVolume(*vol), options("default"), &st);
+    const ImageF ref = rc.render(cam, 16, 16, wholeVolume(*vol), same_step);
+    int shown_differently = 0;
+    EXPECT_LT(maxValueDiff(fast, ref, &shown_differently), 1.0 / 65535) << "tilt " << tilt;
+    EXPECT_EQ(shown_differently, 0) << "tilt " << tilt;
+    EXPECT_GT(fast.at(8, 8)[0], 0.75f) << "tilt " << tilt;  // the bright voxel's samples
+    EXPECT_GT(st.samples_skipped, 0u) << "tilt " << tilt << ": no jump to test";
+  }
+}
+
 TEST(MaxIntensity, BricksMergedByMaximaEqualTheWholeVolume) {
   auto vol = test::generated("marschner-lobb", 40);
   const Raycaster rc(vol, kTf, {}, {0, 0, 0}, Blend::Maximum);
