@@ -7,6 +7,8 @@ camera, shading and light), the volume dumped exactly by tessera-dump-volume, a 
 image, a one-voxel step (Tessera's L0 = 1/256 of the unit box = one voxel), 2 threads.
 Shading maps to VTK's ShadeOn with the same ambient/diffuse/specular/specular power, under
 VTK's headlight or, for a scene `light`, one directional scene light from that direction.
+A scene's `blend: maximum` maps to VTK's SetBlendModeToMaximumIntensity (its colour map must
+reach opacity 1, where Tessera's scaling of a projection's opacity leaves it as VTK takes it).
 Each round runs, back to back: VTK (a fresh process: warm-up render, then --frames timed
 renders), tessera-render with empty-space skipping, tessera-render with --no-skip. A round's
 figure is each side's best frame (wall) and CPU ms per frame (all threads; Tessera's from the
