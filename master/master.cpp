@@ -254,9 +254,7 @@ class Master {
     p.epoch = members_.epoch();
     setView(p, spec);
     p.codec = opt_.codec;
-    // A maximum intensity projection's pieces carry each ray's largest value, which rgba16f
-    // would round by up to 1/2048 (a steep colour map makes that more than 1/255) and rgba8
-    // by 1/255: they travel exact.
+    // Projections' values travel exact: rgba16f rounds by up to 1/2048, > 1/255 on steep maps.
     p.format = opt_.scene.blend == Blend::Maximum ? proto::PixelFormat::RGBA32F : opt_.format;
     p.first_wanted = first_wanted_;
     plan_->fill(p, w);

@@ -35,23 +35,20 @@ void expectFramesMatch(const FarmDir& dir, const fs::path& scene, int frames, co
   }
 }
 
-TEST(MaxIntensityFarm, CompositorsMergeMaximaAsTesseraRenderDoes) {
-  FarmDir dir("mip-direct");
+// A 3-frame orbit on `renderers` + `compositors` with `compositing`, frame by frame.
+void runAndCompare(const char* name, int renderers, int compositors, const char* compositing) {
+  FarmDir dir(name);
   const int frames = 3;
   const fs::path scene = writeMipScene(dir, frames);
-  const auto run = dir.runFarm(scene, 4, 2, frames, 120, "--env TESSERA_COMPOSITING=direct-send");
+  const auto run = dir.runFarm(scene, renderers, compositors, frames, 120,
+                               std::string("--env TESSERA_COMPOSITING=") + compositing);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   expectFramesMatch(dir, scene, frames, run);
 }
 
-TEST(MaxIntensityFarm, BinarySwapMergesMaximaAsTesseraRenderDoes) {
-  FarmDir dir("mip-swap");
-  const int frames = 3;
-  const fs::path scene = writeMipScene(dir, frames);
-  const auto run = dir.runFarm(scene, 3, 0, frames, 120, "--env TESSERA_COMPOSITING=binary-swap");
-  ASSERT_EQ(run.exit_code, 0) << run.output;
-  expectFramesMatch(dir, scene, frames, run);
-}
+TEST(MaxIntensityFarm, CompositorsMergeMaximaAsTesseraRenderDoes) { runAndCompare("mip-direct", 4, 2, "direct-send"); }
+
+TEST(MaxIntensityFarm, BinarySwapMergesMaximaAsTesseraRenderDoes) { runAndCompare("mip-swap", 3, 0, "binary-swap"); }
 
 TEST(MaxIntensityFarm, TheOsmesaBackendRefusesItByName) {
   FarmDir dir("mip-osmesa");

@@ -22,6 +22,16 @@ const TransferFunction kTf({{0, 0, 0, 0, 0}, {0.4, 0.2, 0.3, 0.9, 0}, {1, 1, 0.8
 
 Camera orbitCamera(int frame) { return Orbit{12, {0.2, 1, 0.1}}.at(test::defaultCamera(), frame); }
 
+// Orthographic, looking down -z from a hair (`tilt`) off the axis.
+Camera alongZ(double tilt, double height) {
+  Camera cam;
+  cam.eye = {tilt, 0.5 * tilt, 3};
+  cam.target = {0, 0, 0};
+  cam.orthographic = true;
+  cam.height = height;
+  return cam;
+}
+
 // Largest difference of value pixels' s (channel 0) and whether the same pixels show.
 double maxValueDiff(const ImageF& a, const ImageF& b, int* shown_differently) {
   double d = 0;
@@ -82,11 +92,7 @@ TEST(MaxIntensity, BrickJumpsMissNoValueOnRaysNearlyAlongAnAxis) {
   RenderOptions same_step = options("reference");
   same_step.quality.step = options("default").quality.step;
   for (const double tilt : {0.0, 1e-7, 1e-4, 3e-3}) {
-    Camera cam;
-    cam.eye = {tilt, -0.5 * tilt, 3};
-    cam.target = {0, 0, 0};
-    cam.orthographic = true;
-    cam.height = 0.9;
+    const Camera cam = alongZ(tilt, 0.9);
     RenderStats st;
     const ImageF fast = rc.render(cam, 40, 40, wholeVolume(*vol), options("default"), &st);
     const ImageF ref = rc.render(cam, 40, 40, wholeVolume(*vol), same_step);
@@ -112,11 +118,7 @@ TEST(MaxIntensity, ABrickJumpStopsBeforeTheNextBricksFirstSample) {
   RenderOptions same_step = options("reference");
   same_step.quality.step = options("default").quality.step;
   for (const double tilt : {0.0, 1e-6, 1e-3}) {
-    Camera cam;
-    cam.eye = {tilt, 0.5 * tilt, 3};
-    cam.target = {0, 0, 0};
-    cam.orthographic = true;
-    cam.height = 0.025;  // the volume is 1/32 wide
+    const Camera cam = alongZ(tilt, 0.025);  // the volume is 1/32 wide
     RenderStats st;
     const ImageF fast = rc.render(cam, 16, 16, wholeVolume(*vol), options("default"), &st);
     const ImageF ref = rc.render(cam, 16, 16, wholeVolume(*vol), same_step);
