@@ -174,8 +174,9 @@ void ctPreset(const Parser& p, const YAML::Node& root, Scene& s) {
   raw->has_range = true, raw->range = kCtRange;
   if (ct_default) {
     s.tf = transferFunctionPreset("ct-bone");
-    raw->notes.push_back("a CT series with no transfer_function: shown with ct-bone (Hounsfield units; `shading: true` "
-                         "lights it); give transfer_function (ct-soft-tissue, or points over a range) to change it");
+    raw->notes.push_back(std::string("a CT series with no transfer_function: shown with ct-bone (Hounsfield units") +
+                         (s.blend == Blend::Composite ? "; `shading: true` lights it" : "") +
+                         "); give transfer_function (ct-soft-tissue, or points over a range) to change it");
   }
 }
 
