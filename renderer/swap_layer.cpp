@@ -39,16 +39,13 @@ Layer blendLayer(const LayerView& mine, std::span<const std::byte> pixels, const
   if (out.rect.empty()) return out;
   const Rect at = local(mine.rect, out.rect);
   auto row = [&](int y) { return mine.img->at(mine.rect.x - mine.covers.x, mine.rect.y - mine.covers.y + y); };
-  if (maximum) {  // order does not matter: mine copied, theirs merged into it
+  if (maximum || !partner_in_front) {  // mine first, theirs under it (or merged: order does not matter)
     out.img = clearedOutside(out.rect.w, out.rect.h, std::move(storage), at);
     for (int y = 0; y < at.h; ++y) std::memcpy(out.img.at(at.x, at.y + y), row(y), sizeof(float) * 4 * at.w);
-    if (!theirs.empty()) compositeMaximum(out.img, out.rect, pixels, theirs, f);
-    return out;
-  }
-  if (!partner_in_front) {  // mine first, theirs under it
-    out.img = clearedOutside(out.rect.w, out.rect.h, std::move(storage), at);
-    for (int y = 0; y < at.h; ++y) std::memcpy(out.img.at(at.x, at.y + y), row(y), sizeof(float) * 4 * at.w);
-    if (!theirs.empty()) compositeUnder(out.img, out.rect, pixels, theirs, f);
+    if (!theirs.empty()) {
+      if (maximum) compositeMaximum(out.img, out.rect, pixels, theirs, f);
+      else compositeUnder(out.img, out.rect, pixels, theirs, f);
+    }
     return out;
   }
   out.img = ImageF(out.rect.w, out.rect.h, std::move(storage));

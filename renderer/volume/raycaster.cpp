@@ -292,10 +292,10 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
     fast.shade = shade ? &*shade : nullptr;
     fast.gradients = impl_->gradients.get();
     if (shade) fast.highlight = &highlight.emplace(shade->shininess);
-    table.emplace(impl_->tf, q.step);
+    if (impl_->blend == Blend::Composite) table.emplace(impl_->tf, q.step);  // a projection maps no samples
     fast.volume = &v;
     fast.accel = impl_->accel.get();
-    fast.table = &*table;
+    fast.table = table ? &*table : nullptr;
     fast.emptiness = &impl_->emptiness;
     fast.occupancy = impl_->occupancy.empty() ? nullptr : impl_->occupancy.data();
     if (impl_->blend == Blend::Maximum) fast.maximum = &impl_->max_skip;
