@@ -120,6 +120,11 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir,
 Scene loadScene(const std::string& path);
 // The scene as YAML with every default filled in; parseScene of it gives the same Scene.
 std::string sceneYaml(const Scene& s);
+// What every stage of one farm must have read alike (stages read their own copy of the scene
+// file, on their own hosts): sceneYaml less what the master sends with each frame (camera,
+// quality, orbit, time playback), each file named by its name alone. The master refuses a
+// stage whose identity differs from its own (Hello.scene).
+std::string sceneIdentity(const Scene& s);
 // The built-in default scene (a hollow shell) that runs with no file.
 Scene defaultScene();
 // "" when a farm of `renderers` (one brick each, or more) renders `q` within the accuracy

@@ -148,4 +148,17 @@ std::string sceneYaml(const Scene& s) {
   return std::string(e.c_str()) + "\n";
 }
 
+std::string sceneIdentity(const Scene& scene) {
+  Scene s = scene;
+  // The master sends these with every frame; a stage's own are never used.
+  s.camera = Camera{}, s.camera_fitted = false, s.quality = Quality{}, s.orbit = Orbit{}, s.time = Playback{};
+  // Each host keeps its files where it likes: a file is known by its name (as "/name", which
+  // sceneYaml leaves as it is).
+  auto name = [](std::string& f) { f = (std::filesystem::path("/") / std::filesystem::path(f).filename()).string(); };
+  if (auto* raw = std::get_if<RawVolumeSpec>(&s.volume)) name(raw->file);
+  for (std::string& f : s.series.files) name(f);
+  if (s.mesh && !s.mesh->file.empty()) name(s.mesh->file);
+  return sceneYaml(s);
+}
+
 }  // namespace tessera

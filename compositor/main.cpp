@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
     opt.width = parsed.width;
     opt.height = parsed.height;
     if (parsed.blend == Blend::Maximum) opt.maximum.emplace(parsed.tf);
+    opt.scene = sceneIdentity(parsed);
     opt.endpoints = endpoints;
     return compositor::runStage(opt, ctx, stop);
   });

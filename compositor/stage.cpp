@@ -22,7 +22,7 @@ namespace {
 class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
-      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Compositor, opt.advertise_host),
+      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Compositor, opt.scene, opt.advertise_host),
         inbox_(ctx, {proto::Role::Renderer}, maxPixelMessageBytes(opt.width, opt.height),
                Gather::waitingBudget(opt.width, opt.height)),
         gather_(0) {

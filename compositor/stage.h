@@ -21,6 +21,7 @@ struct StageOptions {
   // The scene's `blend: maximum`: pieces are value pixels, merged by their maxima and mapped
   // through this colour map (common/max_intensity.h).
   std::optional<MaxIntensity> maximum;
+  std::string scene{};  // its sceneIdentity, said in Hello: the master refuses any other than its own
 };
 
 int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);

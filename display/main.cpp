@@ -42,6 +42,7 @@ int main(int argc, char** argv) {
     opt.width = parsed.width;
     opt.height = parsed.height;
     opt.steps = parsed.series.steps;
+    opt.scene = sceneIdentity(parsed);
     opt.endpoints = endpoints;
     opt.web_token = display::webToken();
     return display::runStage(opt, ctx, stop);

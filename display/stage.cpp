@@ -23,7 +23,7 @@ namespace {
 class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
-      : opt_(opt), link_(ctx, opt.endpoints, proto::Role::Display),
+      : opt_(opt), link_(ctx, opt.endpoints, proto::Role::Display, opt.scene),
         waiting_budget_(kWaitingFrames * 4 * size_t(opt.width + kStripHeaderPixels) * size_t(opt.height)),
         inbox_(ctx, {proto::Role::Compositor, proto::Role::Renderer}, maxPixelMessageBytes(opt.width, opt.height), waiting_budget_),
         frames_(waiting_budget_) {

@@ -25,6 +25,7 @@ struct StageOptions {
   bool premultiplied = false;  // also write frame_NNNNNN.pam (exact premultiplied rgba8)
   std::string web{};      // HOST:PORT of the web view, beside the window or PNG files ("": none)
   std::string web_token{};  // what its viewers must present
+  std::string scene{};      // its sceneIdentity, said in Hello: the master refuses any other than its own
 };
 
 int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop = nullptr);

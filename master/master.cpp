@@ -120,11 +120,10 @@ class Master {
   void probe() { sendBytes(pub_, proto::encode(proto::Probe{}, kMasterRank)); }
 
   void onHello(const std::string& identity, const proto::Hello& h) {
-    if (h.run != opt_.run) {  // a stage of another farm: no rank, no work, and it is told why
-      const std::string why = fmt::format("this farm is run '{}', the {} (pid {}) is of run '{}'", opt_.run,
-                                          roleName(h.role), h.pid, h.run);
+    // A stage of another farm, or of another scene: no rank, no work, and it is told why.
+    if (const std::string why = helloRefusal(h, opt_.run, scene_); !why.empty()) {
       refuse(why);
-      return sendTo(identity, proto::encode(proto::Shutdown{why + "; check TESSERA_ENDPOINTS", opt_.run}, kMasterRank));
+      return sendTo(identity, proto::encode(proto::Shutdown{why, opt_.run}, kMasterRank));
     }
     if (!prepared_) {  // still reading the volume: answered once it is read (run)
       if (!held_.hold(identity, h)) drops_.drop(~0u, "while reading the volume: Hellos from too many connections");
@@ -374,6 +373,7 @@ class Master {
   static constexpr int kInteractiveInFlight = 1;
 
   const MasterOptions& opt_;
+  const std::string scene_ = sceneIdentity(opt_.scene);  // what every stage must have read
   zmq::socket_t pub_, ctl_;
   Membership members_;
   CreditWindow window_;

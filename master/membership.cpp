@@ -166,6 +166,34 @@ std::string describeWaiting(const Membership& members, uint64_t frame, const Cre
   return fmt::format("{}", fmt::join(parts, " and "));
 }
 
+namespace {
+// Line `n` (1-based) of `text`, at most 100 characters of it; "(none)" past its end.
+std::string lineOf(const std::string& text, size_t n) {
+  size_t at = 0;
+  for (size_t i = 1; i < n; ++i) {
+    if ((at = text.find('\n', at)) == std::string::npos) return "(none)";
+    ++at;
+  }
+  if (at >= text.size()) return "(none)";
+  std::string line = text.substr(at, text.find('\n', at) - at);
+  return line.size() > 100 ? fmt::format("'{}...'", line.substr(0, 97)) : fmt::format("'{}'", line);
+}
+}  // namespace
+
+std::string helloRefusal(const proto::Hello& h, const std::string& run, const std::string& scene) {
+  if (h.run != run)
+    return fmt::format("this farm is run '{}', the {} (pid {}) is of run '{}'; check TESSERA_ENDPOINTS", run,
+                       roleName(h.role), h.pid, h.run);
+  if (h.scene == scene) return "";
+  size_t line = 1;  // the first line that differs
+  for (size_t i = 0; i < std::min(h.scene.size(), scene.size()) && h.scene[i] == scene[i]; ++i)
+    if (scene[i] == '\n') ++line;
+  return fmt::format("the {} (pid {}) read another scene than the master: line {} of the scene as read is {} "
+                     "there and {} here (camera, quality, orbit and folders aside; tessera-info prints it); "
+                     "give every stage the same scene file (TESSERA_SCENE)",
+                     roleName(h.role), h.pid, line, lineOf(h.scene, line), lineOf(scene, line));
+}
+
 Workers aliveWorkers(const Membership& members) {
   Workers w;
   for (const Member* m : members.alive(proto::Role::Renderer)) {

@@ -85,6 +85,9 @@ class Membership {
 // The alive renderers and compositors, as the plans take them.
 struct Workers;
 Workers aliveWorkers(const Membership& members);
+// Why a stage's Hello may not join this farm: another run (TESSERA_RUN), or another scene (its
+// sceneIdentity against the master's, naming the first line that differs); "" when it may.
+std::string helloRefusal(const proto::Hello& h, const std::string& run, const std::string& scene);
 
 // Who frame `frame` waits for (`w`), e.g. "stats from renderer 1 (pid 1234) and strips from
 // compositor 0 (pid 99)"; `culprit` gets the first of them (nullptr if none is a member), or,

@@ -25,7 +25,7 @@ namespace {
 class Stage {
  public:
   Stage(const StageOptions& opt, zmq::context_t& ctx)
-      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Renderer), scene_(opt.scene) {
+      : opt_(opt), ctx_(ctx), link_(ctx, opt.endpoints, proto::Role::Renderer, sceneIdentity(opt.scene)), scene_(opt.scene) {
     link_.expectFrameSize(scene_.width, scene_.height);
     if (opt.scene.mesh) {
       tiles_ = std::make_unique<TileRenderer>(opt.scene);

@@ -35,8 +35,9 @@ std::string StageLink::heartbeatIdentity(const std::string& control_identity) {
   return hb;
 }
 
-StageLink::StageLink(zmq::context_t& ctx, const Endpoints& ep, proto::Role role, std::string advertise)
-    : ctx_(ctx), ep_(ep), role_(role), advertise_(std::move(advertise)),
+StageLink::StageLink(zmq::context_t& ctx, const Endpoints& ep, proto::Role role, std::string scene,
+                     std::string advertise)
+    : ctx_(ctx), ep_(ep), role_(role), scene_(std::move(scene)), advertise_(std::move(advertise)),
       identity_(randomIdentity()), run_(farmRun()), sub_(makeSocket(ctx, zmq::socket_type::sub)), ctl_(makeSocket(ctx, zmq::socket_type::dealer)) {
   sub_.set(zmq::sockopt::subscribe, "");
   sub_.set(zmq::sockopt::rcvhwm, 0);  // FrameParams must never be dropped by the queue
@@ -117,7 +118,7 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
     if ((stop && *stop) || expired()) return false;
     if (down && since(down_at) > kWelcomeGraceS) return shutDown(*down);
     if (!down && since(hello_at) > hello_every) {
-      sendBytes(ctl_, proto::encode(proto::Hello{role_, (uint32_t)getpid(), advertise_, run_}, 0));
+      sendBytes(ctl_, proto::encode(proto::Hello{role_, (uint32_t)getpid(), advertise_, run_, scene_}, 0));
       hello_at = Clock::now();
     }
     notice("the master at " + ep_.masterControl() + " to answer its Hello");

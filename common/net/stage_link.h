@@ -25,7 +25,8 @@ namespace tessera {
 
 class StageLink {
  public:
-  StageLink(zmq::context_t& ctx, const Endpoints& ep, proto::Role role, std::string advertise = "");
+  // `scene`: the stage's sceneIdentity, said in its Hello (the master refuses any other).
+  StageLink(zmq::context_t& ctx, const Endpoints& ep, proto::Role role, std::string scene, std::string advertise = "");
   ~StageLink();
   StageLink(const StageLink&) = delete;
   StageLink& operator=(const StageLink&) = delete;
@@ -91,6 +92,7 @@ class StageLink {
   zmq::context_t& ctx_;
   Endpoints ep_;
   proto::Role role_;
+  std::string scene_;
   std::string advertise_;
   std::string identity_;
   const std::string run_;  // TESSERA_RUN

@@ -43,11 +43,12 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 14;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
+inline constexpr uint16_t kVersion = 15;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
   // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms); 5: time steps; 6: Stats
   // carry their FrameParams' epoch; 7: Piece pixels Up-filtered; 8: binary-swap plans in FrameParams; 9: swap
   // bands go to the display as Strips; 10: Strips strip-filtered, Heartbeats name the awaited swap partner;
-  // 11: Stats' wait_ms; 12: Welcome's volume_range; 13: Shutdown's run; 14: Input's home
+  // 11: Stats' wait_ms; 12: Welcome's volume_range; 13: Shutdown's run; 14: Input's home;
+  // 15: Hello's scene
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -79,10 +80,12 @@ struct Header {
 };
 
 // ---- messages ---------------------------------------------------------------------
-// Hello:      role u8 1 (1..Role::Last) | pid u32 4 | endpoint str 4+n | run str 4+n
+// Hello:      role u8 1 (1..Role::Last) | pid u32 4 | endpoint str 4+n | run str 4+n | scene str 4+n
 //             endpoint: a compositor's advertised host ("" = the base host); a renderer's
 //             binary-swap socket as peers reach it ("" = none: direct send only)
 //             run: the farm's identity (TESSERA_RUN); the master refuses any other
+//             scene: the stage's sceneIdentity (YAML text); the master refuses any other than
+//             its own, naming the first line that differs
 // Welcome:    role u8 1 (1..Role::Last) | rank u32 4 | volume_range f64 2x8
 //             volume_range: the range the master maps to 0..1 for a volume file (the scene's
 //             `range`, else the whole file's min..max, step 0's for a series; a constant file's
@@ -92,7 +95,7 @@ struct Header {
 //             waiting_for: whose part of frame waiting_frame it awaits (a renderer: its swap partner's;
 //             a compositor: a renderer's piece; the display: a sender's strips), or kNobody
 struct Hello {                                                             // stage -> master
-  Role role = Role::Renderer; uint32_t pid = 0; std::string endpoint; std::string run;
+  Role role = Role::Renderer; uint32_t pid = 0; std::string endpoint; std::string run; std::string scene{};
   bool operator==(const Hello&) const = default;
 };
 struct Welcome {                                                           // master -> stage

@@ -21,6 +21,7 @@ std::vector<std::byte> encode(const Hello& m, uint32_t sender) {
     w.u32(m.pid);
     w.str(m.endpoint);
     w.str(m.run);
+    w.str(m.scene);
   });
 }
 Result<Hello> decodeHello(std::span<const std::byte> msg) {
@@ -29,6 +30,7 @@ Result<Hello> decodeHello(std::span<const std::byte> msg) {
     m.pid = r.u32("pid");
     m.endpoint = r.str("endpoint");
     m.run = r.str("run");
+    m.scene = r.str("scene");
   });
 }
 

@@ -44,7 +44,7 @@ void expectRoundTrip(const T& v, const Bytes& m, Dec dec, Type type) {
 }
 
 TEST(Protocol, EveryStructuredMessageRoundTrips) {
-  Hello hello{Role::Compositor, 4242, "tcp://127.0.0.1:7000", "3f9a0c1d2e4b"};
+  Hello hello{Role::Compositor, 4242, "tcp://127.0.0.1:7000", "3f9a0c1d2e4b", "image: [64, 48]\nblend: maximum\n"};
   expectRoundTrip(hello, encode(hello, 11), decodeHello, Type::Hello);
   expectRoundTrip(Welcome{Role::Display, 3}, encode(Welcome{Role::Display, 3}, 11), decodeWelcome, Type::Welcome);
   const Welcome ranged{Role::Renderer, 2, {-1024.5, 3071}};
@@ -110,7 +110,7 @@ void expectTruncationsFail(const Bytes& msg, Dec dec) {
 }
 
 TEST(Protocol, TruncatedAtEveryLengthFails) {
-  expectTruncationsFail(encode(Hello{Role::Renderer, 1, "ipc://x", "run-a"}, 1), decodeHello);
+  expectTruncationsFail(encode(Hello{Role::Renderer, 1, "ipc://x", "run-a", "image: [8, 8]\n"}, 1), decodeHello);
   expectTruncationsFail(encode(sampleParams(), 1), decodeFrameParams);
   expectTruncationsFail(encode(sampleSortFirstParams(), 1), decodeFrameParams);
   expectTruncationsFail(encode(samplePiece(PixelFormat::RGBA8), 1, Codec::Lzo), decodePiece);

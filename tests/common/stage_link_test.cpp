@@ -66,7 +66,7 @@ void busyThenWelcome(FakeMaster& m, std::chrono::milliseconds busy, int* hellos)
 TEST(StageJoin, AStageWaitsForAMasterThatProbesLongerThanItsJoinWait) {
   FakeMaster m("join_busy");
   zmq::context_t ctx;
-  StageLink link(ctx, m.ep, proto::Role::Renderer);
+  StageLink link(ctx, m.ep, proto::Role::Renderer, "");
   int hellos = 0;
   auto master = std::async(std::launch::async, [&] { busyThenWelcome(m, 2500ms, &hellos); });
   const auto t0 = Clock::now();
@@ -89,7 +89,7 @@ TEST(StageJoin, AStageWaitsForAMasterThatProbesLongerThanItsJoinWait) {
 TEST(StageJoin, AStageGivesUpOnAMasterThatFallsSilent) {
   FakeMaster m("join_silent");
   zmq::context_t ctx;
-  StageLink link(ctx, m.ep, proto::Role::Renderer);
+  StageLink link(ctx, m.ep, proto::Role::Renderer, "");
   // Probes for 1.5 s, then nothing: the stage's 1 s wait runs from the last probe.
   auto master = std::async(std::launch::async, [&] {
     int hellos = 0;
@@ -107,7 +107,7 @@ TEST(StageJoin, AStageGivesUpOnAMasterThatFallsSilent) {
 TEST(StageJoin, AStageEndsItsWaitWhenTheMasterShutsDownBeforeItsWelcome) {
   FakeMaster m("join_shutdown");
   zmq::context_t ctx;
-  StageLink link(ctx, m.ep, proto::Role::Compositor);
+  StageLink link(ctx, m.ep, proto::Role::Compositor, "");
   // A master stopped while it read its volume: probes, then says Shutdown.
   auto master = std::async(std::launch::async, [&] {
     int hellos = 0;
@@ -126,7 +126,7 @@ TEST(StageJoin, AStageEndsItsWaitWhenTheMasterShutsDownBeforeItsWelcome) {
 TEST(StageJoin, AStageWelcomedAsTheMasterShutsDownJoinsAndReadsTheShutdown) {
   FakeMaster m("join_welcome_shutdown");
   zmq::context_t ctx;
-  StageLink link(ctx, m.ep, proto::Role::Renderer);
+  StageLink link(ctx, m.ep, proto::Role::Renderer, "");
   auto master = std::async(std::launch::async, [&] {
     int hellos = 0;
     std::string who;
@@ -150,7 +150,7 @@ TEST(StageJoin, AStageWelcomedAsTheMasterShutsDownJoinsAndReadsTheShutdown) {
 TEST(StageJoin, AnotherRunsShutdownEndsNothing) {
   FakeMaster m("join_other_run");
   zmq::context_t ctx;
-  StageLink link(ctx, m.ep, proto::Role::Renderer);
+  StageLink link(ctx, m.ep, proto::Role::Renderer, "");
   const auto old = proto::encode(proto::Shutdown{"orbit done", farmRun() + "-yesterday"}, kMaster);
   int hellos = 0;
   auto master = std::async(std::launch::async, [&] {

@@ -66,7 +66,7 @@ void writeSeed(const std::string& dir, int& n, const std::vector<std::byte>& msg
 // One valid message of every type, so mutations start from deep inside the decoders.
 void writeSeeds(const std::string& dir) {
   int n = 0;
-  writeSeed(dir, n, encode(Hello{Role::Compositor, 42, "ipc:///tmp/x", "run"}, 1));
+  writeSeed(dir, n, encode(Hello{Role::Compositor, 42, "ipc:///tmp/x", "run", "image: [64, 64]\n"}, 1));
   writeSeed(dir, n, encode(Welcome{Role::Renderer, 2}, 1));
   writeSeed(dir, n, encode(Heartbeat{Role::Display, 0}, 1));
   writeSeed(dir, n, encode(Probe{}, 1));

@@ -189,8 +189,9 @@ TEST(FarmFaults, RendererSurvivesAFrameThatThrows) {
   mo.renderers = 1;
   renderer::StageOptions ro{scene, ep, 1};
   FarmDir dir("survives");
-  compositor::StageOptions co{ep, "", 512, 512, std::nullopt};
+  compositor::StageOptions co{ep, "", 512, 512, std::nullopt, sceneIdentity(scene)};
   display::StageOptions dopt{ep, (dir.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
+  dopt.scene = sceneIdentity(scene);
   auto master_done = std::async(std::launch::async, [&] { return master::run(mo, ctx, &stop); });
   auto renderer_done = std::async(std::launch::async, [&] { return renderer::runStage(ro, ctx, &stop); });
   auto compositor_done = std::async(std::launch::async, [&] { return compositor::runStage(co, ctx, &stop); });

@@ -41,8 +41,9 @@ TEST(InProcessFarm, LostRendererIsDetectedAndItsWorkReassigned) {
   mo.heartbeat_timeout_s = 0.5;
   mo.metrics_path = (dir.path() / "metrics.jsonl").string();
   renderer::StageOptions ro{scene, ep, 1};
-  compositor::StageOptions co{ep, "", 512, 512, std::nullopt};
+  compositor::StageOptions co{ep, "", 512, 512, std::nullopt, sceneIdentity(scene)};
   display::StageOptions dopt{ep, (dir.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
+  dopt.scene = sceneIdentity(scene);
 
   std::vector<std::future<int>> stages;
   stages.push_back(std::async(std::launch::async, [&] { return master::run(mo, ctx, &stop_all); }));
@@ -95,8 +96,9 @@ TEST(InProcessFarm, InteractiveFramesFollowInputAndIdleFramesAreNotRendered) {
   mo.endpoints = ep;
   mo.frames = 0;  // interactive
   renderer::StageOptions ro{scene, ep, 1};
-  compositor::StageOptions co{ep, "", 512, 512, std::nullopt};
+  compositor::StageOptions co{ep, "", 512, 512, std::nullopt, sceneIdentity(scene)};
   display::StageOptions dopt{ep, (dir.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
+  dopt.scene = sceneIdentity(scene);
   std::vector<std::future<int>> stages;
   stages.push_back(std::async(std::launch::async, [&] { return master::run(mo, ctx, &stop); }));
   stages.push_back(std::async(std::launch::async, [&] { return renderer::runStage(ro, ctx, &stop); }));
@@ -114,7 +116,7 @@ TEST(InProcessFarm, InteractiveFramesFollowInputAndIdleFramesAreNotRendered) {
   in.orbit_dx = 40;
   in.zoom = 0.8;
   // The master takes Input only from a joined display: the user joins as a second one.
-  StageLink user(ctx, ep, proto::Role::Display);
+  StageLink user(ctx, ep, proto::Role::Display, sceneIdentity(scene));
   ASSERT_TRUE(user.join(&stop, 30));
   user.report(proto::encode(in, 0));
   EXPECT_TRUE(waitFor(1, 30s)) << "no frame after the input";

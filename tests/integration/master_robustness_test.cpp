@@ -43,8 +43,8 @@ bool waitUntil(F done, std::chrono::milliseconds limit, std::function<void()> me
 // routing-id form), heartbeats only when told, and delivers nothing.
 class FakeStage {
  public:
-  FakeStage(zmq::context_t& ctx, const Endpoints& ep, Role role, std::string run = "")
-      : role_(role), run_(std::move(run)), sub_(makeSocket(ctx, zmq::socket_type::sub)), ctl_(makeSocket(ctx, zmq::socket_type::dealer)),
+  FakeStage(zmq::context_t& ctx, const Endpoints& ep, Role role, std::string scene, std::string run = "")
+      : role_(role), run_(std::move(run)), scene_(std::move(scene)), sub_(makeSocket(ctx, zmq::socket_type::sub)), ctl_(makeSocket(ctx, zmq::socket_type::dealer)),
         hb_(makeSocket(ctx, zmq::socket_type::dealer)) {
     std::string id(16, 'f');
     id[15] = static_cast<char>('a' + (int)role + std::random_device()() % 16);
@@ -59,7 +59,7 @@ class FakeStage {
   bool join(std::chrono::milliseconds limit) {
     zmq::message_t m;
     if (!waitUntil([&] { return sub_.recv(m, zmq::recv_flags::dontwait).has_value(); }, limit)) return false;
-    sendBytes(ctl_, proto::encode(proto::Hello{role_, 4242, "", run_}, 0));
+    sendBytes(ctl_, proto::encode(proto::Hello{role_, 4242, "", run_, scene_}, 0));
     return waitUntil([&] {
       if (!ctl_.recv(m, zmq::recv_flags::dontwait)) return false;
       if (auto refused = proto::decodeShutdown(view(m))) refusal_ = refused->reason;
@@ -81,7 +81,7 @@ class FakeStage {
 
  private:
   Role role_;
-  std::string run_, refusal_;
+  std::string run_, scene_, refusal_;
   zmq::socket_t sub_, ctl_, hb_;
   uint32_t rank_ = 0;
 };
@@ -96,6 +96,7 @@ class Farm {
     mo_.scene = scene_;
     mo_.endpoints = ep_;
     mo_.metrics_path = (dir_.path() / "metrics.jsonl").string();
+    co_.scene = do_.scene = sceneIdentity(scene_);
   }
   ~Farm() { stop(); }
   master::MasterOptions& options() { return mo_; }
@@ -190,7 +191,7 @@ TEST(MasterRobustness, MultipartAndRandomBytesDoNotHangTheMaster) {
       if (i % 2) junk.send(zmq::buffer(b.data(), b.size()), zmq::send_flags::none);
     }
   }
-  FakeStage stage(farm.ctx(), farm.endpoints(), Role::Compositor);
+  FakeStage stage(farm.ctx(), farm.endpoints(), Role::Compositor, sceneIdentity(farm.scene()));
   EXPECT_TRUE(stage.join(10s)) << "the master did not answer a real Hello after junk";
   EXPECT_NE(farm.stop(), -1) << "the master had to be freed from a blocking call";  // 1: stopped while gathering
 }
@@ -231,7 +232,7 @@ TEST(MasterRobustness, AStageOfAnotherRunIsRefusedToldWhyAndCounted) {
   Farm farm("other-run", smallScene(frames));
   farm.options().run = "farm-b";
   farm.startMaster();
-  FakeStage stranger(farm.ctx(), farm.endpoints(), Role::Renderer, "farm-a");
+  FakeStage stranger(farm.ctx(), farm.endpoints(), Role::Renderer, sceneIdentity(farm.scene()), "farm-a");
   EXPECT_FALSE(stranger.join(10s)) << "a renderer of run farm-a joined farm-b";
   EXPECT_NE(stranger.refusal().find("this farm is run 'farm-b'"), std::string::npos) << stranger.refusal();
   EXPECT_NE(stranger.refusal().find("of run 'farm-a'"), std::string::npos) << stranger.refusal();
@@ -248,13 +249,47 @@ TEST(MasterRobustness, AStageOfAnotherRunIsRefusedToldWhyAndCounted) {
   for (const auto& p : lines) EXPECT_EQ(p["render_reports"].get<int>(), 1) << "the stranger got work";
 }
 
+// Each host reads its own copy of the scene file: a stage whose copy differs (here its image
+// size, which bounds what it accepts, and its colour map) would blend or bound pieces
+// otherwise than the master plans, so it is refused, told the first line that differs, and
+// exits with an error; the farm's own stages render on.
+TEST(MasterRobustness, AStageOfAnotherSceneIsRefusedToldWhichLineDiffersAndCounted) {
+  const int frames = 20;
+  Farm farm("other-scene", smallScene(frames));
+  farm.startMaster();
+  Scene other = farm.scene();
+  other.width += 16;
+  FakeStage stranger(farm.ctx(), farm.endpoints(), Role::Compositor, sceneIdentity(other));
+  EXPECT_FALSE(stranger.join(10s)) << "a compositor of another scene joined";
+  const std::string& why = stranger.refusal();
+  EXPECT_NE(why.find("read another scene than the master"), std::string::npos) << why;
+  EXPECT_NE(why.find(fmt::format("'image: [{}, {}]' there", other.width, other.height)), std::string::npos) << why;
+  EXPECT_NE(why.find(fmt::format("'image: [{}, {}]' here", farm.scene().width, farm.scene().height)), std::string::npos)
+      << why;
+  // A real stage of another scene (its colour map) is refused the same way and exits with an error.
+  Scene other_map = farm.scene();
+  other_map.tf = transferFunctionPreset("grayscale");
+  ASSERT_NE(sceneIdentity(other_map), sceneIdentity(farm.scene())) << "the test changes nothing";
+  renderer::StageOptions ro{other_map, farm.endpoints(), 1};
+  auto refused = std::async(std::launch::async, [&] { return renderer::runStage(ro, farm.ctx()); });
+  ASSERT_EQ(refused.wait_for(30s), std::future_status::ready) << "a renderer of another scene is still waiting";
+  EXPECT_EQ(refused.get(), 1);
+  farm.startStages(1);
+  EXPECT_EQ(farm.join(60s), 0);
+  expectOrbitFrames(farm, frames);
+  auto lines = farm.metrics();
+  ASSERT_EQ(lines.size(), (size_t)frames);
+  EXPECT_GE(lines.back()["refused_peers"].get<uint64_t>(), 2u);
+  for (const auto& p : lines) EXPECT_EQ(p["render_reports"].get<int>(), 1) << "the refused renderer got work";
+}
+
 TEST(MasterRobustness, InputIsRefusedInAFixedLengthRun) {
   const int frames = 200;
   Farm farm("fixed-input", smallScene(frames));
   farm.startMaster();
   farm.startStages(1);
   ASSERT_TRUE(waitUntil([&] { return fs::exists(farm.dir().frame(0)); }, 30s));
-  FakeStage user(farm.ctx(), farm.endpoints(), Role::Display);  // a second, joined display
+  FakeStage user(farm.ctx(), farm.endpoints(), Role::Display, sceneIdentity(farm.scene()));  // a second, joined display
   ASSERT_TRUE(user.join(10s));
   proto::Input in;
   in.orbit_dx = 40;
@@ -275,7 +310,7 @@ TEST(MasterRobustness, RendererThatHeartbeatsButNeverDeliversIsReplaced) {
   farm.options().deadline = {2.0, 1.0, 8.0};
   farm.startMaster();
   farm.startStages(1);
-  FakeStage idle(farm.ctx(), farm.endpoints(), Role::Renderer);
+  FakeStage idle(farm.ctx(), farm.endpoints(), Role::Renderer, sceneIdentity(farm.scene()));
   ASSERT_TRUE(idle.join(30s));
   int rc = farm.join(60s, [&] {
     idle.heartbeat();
@@ -299,7 +334,7 @@ TEST(MasterRobustness, LostStageIsReadmittedWhenHeardFromAgain) {
   farm.options().heartbeat_timeout_s = 0.5;
   farm.startMaster();
   farm.startStages(0);
-  FakeStage r(farm.ctx(), farm.endpoints(), Role::Renderer);
+  FakeStage r(farm.ctx(), farm.endpoints(), Role::Renderer, sceneIdentity(farm.scene()));
   ASSERT_TRUE(r.join(30s));
   uint32_t first_epoch = ~0u;
   auto hasWork = [&](uint32_t newer_than) {

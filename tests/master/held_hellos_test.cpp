@@ -17,7 +17,7 @@ using namespace std::chrono_literals;
 TEST(HeldHellos, TheNewestHelloOfEachLiveConnectionFirstComeFirst) {
   HeldHellos held;
   auto hello = [&](char name, uint32_t pid) {
-    return held.hold(std::string(16, name) + "c", proto::Hello{proto::Role::Renderer, pid, "", "run"});
+    return held.hold(std::string(16, name) + "c", proto::Hello{proto::Role::Renderer, pid, "", "run", ""});
   };
   EXPECT_TRUE(hello('e', 1));
   std::this_thread::sleep_for(150ms);
@@ -40,9 +40,9 @@ TEST(HeldHellos, ConnectionsPastTheBoundAreNotHeld) {
   HeldHellos held;
   int accepted = 0;
   for (int i = 0; i < 5000; ++i)
-    accepted += held.hold("stage-" + std::to_string(i), proto::Hello{proto::Role::Renderer, (uint32_t)i, "", ""});
+    accepted += held.hold("stage-" + std::to_string(i), proto::Hello{proto::Role::Renderer, (uint32_t)i, "", "", ""});
   EXPECT_EQ(accepted, 4096);
-  EXPECT_TRUE(held.hold("stage-7", proto::Hello{proto::Role::Renderer, 70, "", ""})) << "a held one says Hello again";
+  EXPECT_TRUE(held.hold("stage-7", proto::Hello{proto::Role::Renderer, 70, "", "", ""})) << "a held one says Hello again";
   EXPECT_EQ(held.live().size(), 4096u);
 }
 

@@ -1,6 +1,10 @@
 #include "master/membership.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 
 #include "common/net/stage_link.h"
 
@@ -170,6 +174,46 @@ TEST(Membership, ADeadlineACompositorWaitsOutBlamesTheRendererWhosePieceItLacks)
   const std::string who = describeWaiting(m, 7, w, kStart, &culprit);
   EXPECT_EQ(culprit, &r1) << who;
   EXPECT_NE(who.find("compositor 0 awaits renderer 1's piece"), std::string::npos) << who;
+}
+
+// Every host reads its own copy of the scene: what the master sends with each frame (camera,
+// quality, orbit) and where a host keeps the files do not count; what a stage renders with does.
+TEST(HelloRefusal, AnotherSceneIsNamedByItsFirstDifferingLine) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / ("tessera-hello-" + std::to_string(getpid()));
+  for (const char* f : {"a/head.raw", "a/other.raw", "b/head.raw"}) {
+    fs::create_directories((root / f).parent_path());
+    std::ofstream(root / f, std::ios::binary) << std::string(512, '\x07');
+  }
+  const std::string a = (root / "a").string(), b = (root / "b").string();
+  const std::string text = "volume: {file: head.raw, dims: [8, 8, 8], type: uint8}\ntransfer_function: viridis\n";
+  const Scene master = parseScene(text, a);
+  const std::string ours = sceneIdentity(master);
+  proto::Hello h{Role::Renderer, 77, "", "run", ours};
+  EXPECT_EQ(helloRefusal(h, "run", ours), "");
+  Scene elsewhere = parseScene(text + "camera: {eye: [0, 0, 5], target: [0, 0, 0], up: [0, 1, 0], fov: 20}\nquality: fast\norbit: {frames: 3}\n",
+                               b);
+  h.scene = sceneIdentity(elsewhere);
+  EXPECT_EQ(helloRefusal(h, "run", ours), "") << h.scene;
+  auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string t = text;
+    return t.replace(t.find(from), from.size(), to);
+  };
+  for (const std::string& other : {replaced("viridis", "grayscale"), replaced("head.raw", "other.raw"),
+                                   text + "image: [256, 128]\n", text + "blend: maximum\n", text + "shading: true\n"}) {
+    h.scene = sceneIdentity(parseScene(other, a));
+    const std::string why = helloRefusal(h, "run", ours);
+    EXPECT_NE(why.find("the renderer (pid 77) read another scene than the master: line "), std::string::npos)
+        << other << ": " << why;
+  }
+  h.scene = sceneIdentity(parseScene(text + "image: [256, 128]\n", a));
+  EXPECT_NE(helloRefusal(h, "run", ours).find("'image: [256, 128]' there and 'image: [512, 512]' here"),
+            std::string::npos)
+      << helloRefusal(h, "run", ours);
+  h.run = "other";
+  EXPECT_NE(helloRefusal(h, "run", ours).find("this farm is run 'run', the renderer (pid 77) is of run 'other'"),
+            std::string::npos);
+  fs::remove_all(root);
 }
 
 }  // namespace
