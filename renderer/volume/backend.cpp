@@ -58,16 +58,18 @@ BackendKind parseBackend(const std::string& name) {
 
 const char* backendName(BackendKind kind) { return kind == BackendKind::Cpu ? "cpu" : "osmesa"; }
 
+std::string backendProblem(BackendKind kind, const Shading& shading, Blend blend) {
+  if (kind != BackendKind::Osmesa) return "";
+  if (shading.on) return "the osmesa volume backend does not shade; use backend cpu or leave out `shading`";
+  if (blend != Blend::Composite) return "the osmesa volume backend composites only; use backend cpu for `blend: maximum`";
+  return "";
+}
+
 std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_ptr<const Volume> volume,
                                                  TransferFunction tf, const Shading& shading,
                                                  const Vec3& light, Blend blend) {
-  if (kind == BackendKind::Osmesa) {
-    if (shading.on)
-      throw std::invalid_argument("the osmesa volume backend does not shade; use backend cpu or leave out `shading`");
-    if (blend != Blend::Composite)
-      throw std::invalid_argument("the osmesa volume backend composites only; use backend cpu for `blend: maximum`");
-    return std::make_unique<GlVolumeRenderer>(std::move(volume), std::move(tf));
-  }
+  if (std::string why = backendProblem(kind, shading, blend); !why.empty()) throw std::invalid_argument(why);
+  if (kind == BackendKind::Osmesa) return std::make_unique<GlVolumeRenderer>(std::move(volume), std::move(tf));
   cpuIsa();  // a bad TESSERA_SIMD fails here, on the caller's thread, not in a ray-casting thread
   return std::make_unique<Raycaster>(std::move(volume), std::move(tf), shading, light, blend);
 }

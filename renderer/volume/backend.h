@@ -64,7 +64,10 @@ enum class BackendKind { Cpu, Osmesa };
 BackendKind parseBackend(const std::string& name);
 const char* backendName(BackendKind kind);
 // Shading (with `light`, zero: a headlight) and `blend: maximum` (value pixels, see
-// common/max_intensity.h) are the cpu backend's; osmesa refuses them by name.
+// common/max_intensity.h) are the cpu backend's; osmesa refuses them by name: this says why
+// ("" when the backend renders them), so that a renderer refuses at start, not per frame.
+std::string backendProblem(BackendKind kind, const Shading& shading, Blend blend);
+// Throws std::invalid_argument with backendProblem's reason.
 std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_ptr<const Volume> volume,
                                                  TransferFunction tf, const Shading& shading = {},
                                                  const Vec3& light = {0, 0, 0}, Blend blend = Blend::Composite);

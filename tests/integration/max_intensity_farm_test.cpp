@@ -60,5 +60,18 @@ TEST(MaxIntensityFarm, TheOsmesaBackendRefusesItByName) {
   EXPECT_NE(r.output.find("use backend cpu for `blend: maximum`"), std::string::npos) << r.output;
 }
 
+// A farm's renderer refuses at start, before it joins: no master is needed to hear why, and
+// none would wait for a renderer that fails every frame.
+TEST(MaxIntensityFarm, AnOsmesaRendererRefusesItAtStart) {
+  FarmDir dir("mip-osmesa-stage");
+  const fs::path scene = writeMipScene(dir, 1);
+  const auto r = runCommand(bin("tessera-renderer") + " " + scene.string() + " --backend osmesa --endpoints ipc://" +
+                                (dir.path() / "sockets").string(),
+                            60);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("use backend cpu for `blend: maximum`"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("waiting"), std::string::npos) << "it waited for a master first:\n" << r.output;
+}
+
 }  // namespace
 }  // namespace tessera::test
