@@ -33,8 +33,7 @@ class Master {
   Master(const MasterOptions& opt, zmq::context_t& ctx)
       : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router, kMaxControlMessage)),
         window_(opt.in_flight, opt.deadline), total_frames_(opt.frames < 0 ? opt.scene.orbit.frames : opt.frames),
-        refinement_(opt.scene.camera, opt.scene.quality, opt.scene.width, opt.scene.height, opt.scene.time,
-                    opt.scene.series.steps),
+        refinement_(opt.scene),
         metrics_(opt.metrics_path, total_frames_) {
     // No receive bound on the control socket: with makeSocket's 64, libzmq lost messages of a
     // peer that sent faster than the master read (a third of 300 junk messages, never counted;

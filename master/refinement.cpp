@@ -50,6 +50,11 @@ Refinement::Refinement(const Camera& camera, const Quality& quality, int width, 
     : camera_(camera), home_(camera), quality_(quality), max_w_(width), max_h_(height), width_(width), height_(height),
       play_(time), steps_(steps), step_(time.stepAt(0, steps)) {}
 
+Refinement::Refinement(const Scene& scene)
+    : Refinement(scene.camera, scene.quality, scene.width, scene.height, scene.time, scene.series.steps) {
+  if (scene.camera_fitted) fit_home_ = [scene](double aspect) { return fittedCamera(scene, aspect); };
+}
+
 void Refinement::issued(const FrameSpec& s) {
   last_ = s;
   first_change_ = 0;
@@ -91,11 +96,14 @@ std::pair<int, int> Refinement::fitWindow(int ww, int wh, int max_w, int max_h) 
 }
 
 void Refinement::input(const proto::Input& in, Clock::time_point now) {
-  Camera moved = applyInput(in.home ? home_ : camera_, in);  // throws before anything changes
+  const auto [w, h] = in.width > 0 && in.height > 0 ? fitWindow(in.width, in.height, max_w_, max_h_)
+                                                     : std::pair{width_, height_};
+  const Camera home = in.home && fit_home_ ? fit_home_((double)w / h) : home_;
+  Camera moved = applyInput(in.home ? home : camera_, in);  // throws before anything changes
   if (in.interacting && !interacting(now)) std::fill(std::begin(seen_ms_), std::end(seen_ms_), 0.0);
   camera_ = moved;
   if (in.quality) quality_ = namedQuality(*in.quality);
-  if (in.width > 0 && in.height > 0) std::tie(width_, height_) = fitWindow(in.width, in.height, max_w_, max_h_);
+  width_ = w, height_ = h;
   timeKey(in.time);
   held_ = in.interacting;
   last_input_ = now;

@@ -7,6 +7,7 @@
 // Plain values, no sockets; time is passed in.
 #pragma once
 #include <chrono>
+#include <functional>
 #include <optional>
 
 #include "common/camera.h"
@@ -56,6 +57,10 @@ class Refinement {
   // `steps`: a time series' playback as the scene starts it.
   Refinement(const Camera& camera, const Quality& quality, int width, int height, const Playback& time = {},
              int steps = 1);
+  // The scene's: its camera, quality, image, playback and steps. A scene without `camera`
+  // goes home (the window's r) to its box fitted to the window's shape at that moment, as
+  // it was fitted to the scene's image at the start.
+  explicit Refinement(const Scene& scene);
 
   // Applies a display's Input. Throws std::invalid_argument (nothing changed) for values
   // applyInput refuses. A drag that starts forgets what the rungs cost in the last one.
@@ -79,6 +84,7 @@ class Refinement {
 
  private:
   Camera camera_, home_;  // now, and the scene's (an input's `home`)
+  std::function<Camera(double aspect)> fit_home_;  // set: home fits the scene's box to this aspect
   Quality quality_;
   int max_w_, max_h_, width_, height_;
   bool held_ = false;

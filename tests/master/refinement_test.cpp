@@ -213,6 +213,40 @@ TEST(Refinement, HomeGoesBackToTheScenesCamera) {
   EXPECT_EQ(camera(), applyInput(scene, drag(8, 25)));
 }
 
+// A scene without `camera` is fitted to its image at the start; its r fits the box to the
+// window's shape at that moment, so a window made tall shows the whole box again.
+TEST(Refinement, HomeFitsASceneWithoutCameraToTheWindowsShape) {
+  Scene scene = parseScene("volume: {generator: {name: hollow-shell, size: 16}}\nimage: [640, 480]\n", ".");
+  ASSERT_TRUE(scene.camera_fitted);
+  Refinement r(scene);
+  auto t = Clock::now();
+  auto camera = [&] {
+    const auto s = r.next(t);
+    EXPECT_TRUE(s.has_value());
+    if (!s) return Camera{};
+    r.issued(*s);
+    return s->camera;
+  };
+  EXPECT_EQ(camera(), fittedCamera(scene, 640.0 / 480));
+  proto::Input tall = drag(1, 30);
+  tall.width = 240, tall.height = 480;
+  r.input(tall, t);
+  (void)camera();
+  proto::Input home;
+  home.seq = 2, home.home = true;
+  r.input(home, t);
+  const Camera fitted = fittedCamera(scene, 240.0 / 480);
+  EXPECT_EQ(camera(), fitted);
+  EXPECT_FALSE(fitted == fittedCamera(scene, 640.0 / 480)) << "the test cannot tell the two shapes apart";
+  // A scene's own camera stays as it is.
+  scene.camera_fitted = false;
+  Refinement fixed(scene);
+  fixed.input(tall, t);
+  fixed.input(home, t);
+  ASSERT_TRUE(fixed.next(t));
+  EXPECT_EQ(fixed.next(t)->camera, scene.camera);
+}
+
 proto::Input key(uint64_t seq, proto::TimeKey k) {
   proto::Input in;
   in.seq = seq;
