@@ -1,5 +1,6 @@
 // The scene as YAML with every default filled in (what `tessera-info` prints, as `docker
 // compose config` prints the effective file): parsing it again gives the same Scene.
+#include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
 #include <charconv>
@@ -148,6 +149,8 @@ std::string sceneYaml(const Scene& s) {
   return std::string(e.c_str()) + "\n";
 }
 
+constexpr size_t kListedSteps = 64;
+
 std::string sceneIdentity(const Scene& scene) {
   Scene s = scene;
   // The master sends these with every frame; a stage's own are never used.
@@ -157,6 +160,15 @@ std::string sceneIdentity(const Scene& scene) {
   auto name = [](std::string& f) { f = (std::filesystem::path("/") / std::filesystem::path(f).filename()).string(); };
   if (auto* raw = std::get_if<RawVolumeSpec>(&s.volume)) name(raw->file);
   for (std::string& f : s.series.files) name(f);
+  // A Hello stays far below the master's 1 MiB control message however many steps a series
+  // has: a long list is its first and last names and a hash of all of them (FNV-1a).
+  if (const size_t n = s.series.files.size(); n > kListedSteps) {
+    uint64_t h = 14695981039346656037ull;
+    for (const std::string& f : s.series.files)
+      for (const char c : f + '\n') h = (h ^ (unsigned char)c) * 1099511628211ull;
+    s.series.files = {s.series.files.front(), fmt::format("/... {} more, the names' hash {:016x} ...", n - 2, h),
+                      s.series.files.back()};
+  }
   if (s.mesh && !s.mesh->file.empty()) name(s.mesh->file);
   return sceneYaml(s);
 }

@@ -216,5 +216,27 @@ TEST(HelloRefusal, AnotherSceneIsNamedByItsFirstDifferingLine) {
   fs::remove_all(root);
 }
 
+// A long time series is said by its first and last names and a hash of all: a Hello stays
+// small (the master takes control messages up to 1 MiB), and any other name still differs.
+TEST(HelloRefusal, ALongSeriesIsSaidShortAndStillTold) {
+  Scene s = defaultScene();
+  RawVolumeSpec raw;
+  raw.file = "/a/step_00000.raw", raw.dims = {8, 8, 8};
+  s.volume = raw;
+  auto steps = [&](const std::string& folder, int renamed) {
+    s.series.files.clear();
+    for (int k = 0; k < 20000; ++k)
+      s.series.files.push_back(fmt::format("{}/step_{:05}{}.raw", folder, k, k == renamed ? "b" : ""));
+    s.series.steps = (int)s.series.files.size();
+    return sceneIdentity(s);
+  };
+  const std::string ours = steps("/data/run-1", -1);
+  EXPECT_LT(ours.size(), 4096u);
+  EXPECT_NE(ours.find("step_00000.raw"), std::string::npos) << ours;
+  EXPECT_NE(ours.find("step_19999.raw"), std::string::npos) << ours;
+  EXPECT_EQ(steps("/scratch/copy", -1), ours);
+  EXPECT_NE(steps("/data/run-1", 12345), ours);
+}
+
 }  // namespace
 }  // namespace tessera::master
