@@ -149,28 +149,51 @@ std::string sceneYaml(const Scene& s) {
   return std::string(e.c_str()) + "\n";
 }
 
-constexpr size_t kListedSteps = 64;
+namespace {
+
+uint64_t fnv1a(std::string_view text, uint64_t h = 14695981039346656037ull) {
+  for (const char c : text) h = (h ^ (unsigned char)c) * 1099511628211ull;
+  return h;
+}
+
+// A Hello's scene is a protocol string (at most 64 KiB): a long series is listed by its ends,
+// and any longer text (a colour map of thousands of points) is cut, with a hash of the whole.
+constexpr size_t kListedSteps = 64, kMaxIdentity = 32 * 1024;
+
+// "/name": a file by its name alone (a folder, such as a DICOM series', by its own name).
+void byName(std::string& f) {
+  std::filesystem::path p = std::filesystem::path(f).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();
+  f = (std::filesystem::path("/") / p.filename()).string();
+}
+
+}  // namespace
 
 std::string sceneIdentity(const Scene& scene) {
   Scene s = scene;
   // The master sends these with every frame; a stage's own are never used.
   s.camera = Camera{}, s.camera_fitted = false, s.quality = Quality{}, s.orbit = Orbit{}, s.time = Playback{};
-  // Each host keeps its files where it likes: a file is known by its name (as "/name", which
-  // sceneYaml leaves as it is).
-  auto name = [](std::string& f) { f = (std::filesystem::path("/") / std::filesystem::path(f).filename()).string(); };
-  if (auto* raw = std::get_if<RawVolumeSpec>(&s.volume)) name(raw->file);
-  for (std::string& f : s.series.files) name(f);
-  // A Hello stays far below the master's 1 MiB control message however many steps a series
-  // has: a long list is its first and last names and a hash of all of them (FNV-1a).
+  // Each host keeps its files where it likes: a file is known by its name.
+  auto* raw = std::get_if<RawVolumeSpec>(&s.volume);
+  if (raw) byName(raw->file);
+  for (std::string& f : s.series.files) byName(f);
+  if (s.mesh && !s.mesh->file.empty()) byName(s.mesh->file);
   if (const size_t n = s.series.files.size(); n > kListedSteps) {
-    uint64_t h = 14695981039346656037ull;
-    for (const std::string& f : s.series.files)
-      for (const char c : f + '\n') h = (h ^ (unsigned char)c) * 1099511628211ull;
+    uint64_t h = fnv1a("");
+    for (const std::string& f : s.series.files) h = fnv1a(f + '\n', h);
     s.series.files = {s.series.files.front(), fmt::format("/... {} more, the names' hash {:016x} ...", n - 2, h),
                       s.series.files.back()};
   }
-  if (s.mesh && !s.mesh->file.empty()) name(s.mesh->file);
-  return sceneYaml(s);
+  std::string text = sceneYaml(s);
+  // A file of another size or type under the same name: what its header says, which sceneYaml
+  // leaves to the header.
+  if (s.has_volume && raw && raw->format != VolumeFormat::Raw)
+    text += fmt::format("header: {{dims: [{}, {}, {}], type: {}, spacing: [{}, {}, {}]}}\n", raw->dims[0],
+                        raw->dims[1], raw->dims[2], voxelTypeName(raw->type), num(raw->spacing[0]),
+                        num(raw->spacing[1]), num(raw->spacing[2]));
+  if (text.size() > kMaxIdentity)
+    text = text.substr(0, kMaxIdentity) + fmt::format("\n... the whole text's hash {:016x}\n", fnv1a(text));
+  return text;
 }
 
 }  // namespace tessera

@@ -9,7 +9,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Tessera compositor: composites one screen region of every frame"};
   StageArgs args;
   compositor::StageOptions opt;
-  addStageArgs(app, args, "scene file (default: the built-in scene; the master's): its image size and blend are used");
+  addStageArgs(app, args, "scene file (default: the built-in scene), the master's: its image size and blend are used, and the master refuses a compositor of another scene");
   app.add_option("--advertise-host", opt.advertise_host,
                  "tcp: host renderers use to reach this compositor ('hostname' = this machine's name, 'ip' = its address on the route to the master)")
       ->envname("TESSERA_ADVERTISE_HOST");

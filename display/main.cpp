@@ -15,7 +15,7 @@ int main(int argc, char** argv) {
   StageArgs args;
   std::vector<double> bg;
   display::StageOptions opt;
-  addStageArgs(app, args, "scene file (default: the built-in scene); only its image size is used");
+  addStageArgs(app, args, "scene file (default: the built-in scene), the master's: its image size is used, and the master refuses a display of another scene");
   app.add_option("--out", opt.out_dir, "folder for PNG frames (no window)")->envname("TESSERA_OUT");
   using Window = display::StageOptions::Window;
   const std::map<std::string, Window> windows{{"auto", Window::Auto}, {"on", Window::On}, {"off", Window::Off}};

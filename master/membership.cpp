@@ -167,16 +167,14 @@ std::string describeWaiting(const Membership& members, uint64_t frame, const Cre
 }
 
 namespace {
-// Line `n` (1-based) of `text`, at most 100 characters of it; "(none)" past its end.
-std::string lineOf(const std::string& text, size_t n) {
-  size_t at = 0;
-  for (size_t i = 1; i < n; ++i) {
-    if ((at = text.find('\n', at)) == std::string::npos) return "(none)";
-    ++at;
-  }
+// The line of `text` that starts at `at`, quoted; a long one as 80 characters around column
+// `col` (where two texts first differ); "(none)" past the text's end.
+std::string lineAt(const std::string& text, size_t at, size_t col) {
   if (at >= text.size()) return "(none)";
-  std::string line = text.substr(at, text.find('\n', at) - at);
-  return line.size() > 100 ? fmt::format("'{}...'", line.substr(0, 97)) : fmt::format("'{}'", line);
+  const std::string line = text.substr(at, text.find('\n', at) - at);
+  if (line.size() <= 100) return fmt::format("'{}'", line);
+  const size_t from = col > 40 ? col - 40 : 0;
+  return fmt::format("'{}{}{}'", from > 0 ? "..." : "", line.substr(from, 80), from + 80 < line.size() ? "..." : "");
 }
 }  // namespace
 
@@ -185,13 +183,13 @@ std::string helloRefusal(const proto::Hello& h, const std::string& run, const st
     return fmt::format("this farm is run '{}', the {} (pid {}) is of run '{}'; check TESSERA_ENDPOINTS", run,
                        roleName(h.role), h.pid, h.run);
   if (h.scene == scene) return "";
-  size_t line = 1;  // the first line that differs
-  for (size_t i = 0; i < std::min(h.scene.size(), scene.size()) && h.scene[i] == scene[i]; ++i)
-    if (scene[i] == '\n') ++line;
-  return fmt::format("the {} (pid {}) read another scene than the master: line {} of the scene as read is {} "
-                     "there and {} here (camera, quality, orbit and folders aside; tessera-info prints it); "
-                     "give every stage the same scene file (TESSERA_SCENE)",
-                     roleName(h.role), h.pid, line, lineOf(h.scene, line), lineOf(scene, line));
+  size_t line = 1, at = 0, i = 0;  // the first line that differs, where it starts, the first differing byte
+  for (; i < std::min(h.scene.size(), scene.size()) && h.scene[i] == scene[i]; ++i)
+    if (scene[i] == '\n') ++line, at = i + 1;
+  return fmt::format("the {} (pid {}) read another scene than the master: line {} of the scene as they compare it "
+                     "(every default filled in; camera, quality, orbit and time playback aside) is {} there and {} "
+                     "here; give every stage the same scene file (TESSERA_SCENE)",
+                     roleName(h.role), h.pid, line, lineAt(h.scene, at, i - at), lineAt(scene, at, i - at));
 }
 
 Workers aliveWorkers(const Membership& members) {

@@ -52,7 +52,10 @@ Refinement::Refinement(const Camera& camera, const Quality& quality, int width, 
 
 Refinement::Refinement(const Scene& scene)
     : Refinement(scene.camera, scene.quality, scene.width, scene.height, scene.time, scene.series.steps) {
-  if (scene.camera_fitted) fit_home_ = [scene](double aspect) { return fittedCamera(scene, aspect); };
+  if (scene.camera_fitted)
+    fit_home_ = [half = sceneHalfExtent(scene), view = sceneView(scene)](double aspect) {
+      return fittedCamera(half, aspect, view.front, view.up);
+    };
 }
 
 void Refinement::issued(const FrameSpec& s) {

@@ -31,9 +31,6 @@ int main(int argc, char** argv) {
   return stageMain(app, argc, argv, args, [&](const Endpoints& endpoints, zmq::context_t& ctx, auto stop) {
     opt.backend = renderer::parseBackend(backend);
     opt.scene = args.scene();
-    if (std::string why = renderer::backendProblem(opt.backend, opt.scene.shading, opt.scene.blend);
-        !why.empty())
-      throw std::invalid_argument(why);  // before it joins: a farm waits for a renderer that can render
     opt.endpoints = endpoints;
     opt.advertise_host = resolveAdvertiseHost(opt.advertise_host, endpoints);
     return renderer::runStage(opt, ctx, stop);

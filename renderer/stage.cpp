@@ -379,6 +379,11 @@ class Stage {
 }  // namespace
 
 int runStage(const StageOptions& opt, zmq::context_t& ctx, const std::atomic<bool>* stop) {
+  // Before it joins: a farm would wait for a renderer that fails every frame.
+  if (std::string why = backendProblem(opt.backend, opt.scene.shading, opt.scene.blend); !why.empty()) {
+    spdlog::error("{}", why);
+    return 1;
+  }
   Stage s(opt, ctx);
   const int code = s.run(stop);
   s.logSteps();

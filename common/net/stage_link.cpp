@@ -211,7 +211,7 @@ StageLink::Published StageLink::receive(DropCounter& drops, int max_messages) {
     if (max_w_ > 0 && (p->width > max_w_ || p->height > max_h_) && !size_logged_) {
       size_logged_ = true;
       spdlog::error("frame {} is {}x{}, larger than the {}x{} this {} was started for: its pixel messages may be "
-                    "refused or dropped. Start every stage of the farm with the same scene (--scene / TESSERA_SCENE)",
+                    "refused or dropped. Start every stage of the farm with the same scene (TESSERA_SCENE)",
                     p->frame, p->width, p->height, max_w_, max_h_, proto::roleName(role_));
     }
     out.params.push_back(std::move(*p));

@@ -11,7 +11,7 @@
 
 namespace tessera::proto::detail {
 
-inline constexpr uint32_t kMaxString = 64 * 1024;  // endpoints, reasons, names
+inline constexpr uint32_t kMaxString = 64 * 1024;  // endpoints, reasons, names, a Hello's scene
 
 class ByteWriter {
  public:

@@ -236,6 +236,52 @@ TEST(HelloRefusal, ALongSeriesIsSaidShortAndStillTold) {
   EXPECT_NE(ours.find("step_19999.raw"), std::string::npos) << ours;
   EXPECT_EQ(steps("/scratch/copy", -1), ours);
   EXPECT_NE(steps("/data/run-1", 12345), ours);
+  // Any text too long for a Hello (a colour map of thousands of points) is cut, with a hash of the whole.
+  std::vector<TfPoint> points;
+  for (int k = 0; k <= 4000; ++k) points.push_back({k / 4000.0, 0.5, 0.5, 0.5, k / 8000.0});
+  s.tf = TransferFunction(points);
+  const std::string long_map = sceneIdentity(s);
+  EXPECT_LT(long_map.size(), 33u * 1024);
+  points.back().r = 0.25;
+  s.tf = TransferFunction(points);
+  EXPECT_NE(sceneIdentity(s), long_map);
+}
+
+// A volume file is known by its name and its header (another file of the same name is not
+// the same volume), a folder by its own name; a line longer than a message can quote is shown
+// where it differs.
+TEST(HelloRefusal, FilesByNameAndHeaderAndLongLinesWhereTheyDiffer) {
+  Scene s = defaultScene();
+  RawVolumeSpec raw;
+  raw.file = "/data/a/head.nii.gz", raw.format = VolumeFormat::Nifti, raw.dims = {64, 64, 32};
+  raw.type = VoxelType::Int16;
+  s.volume = raw;
+  const std::string ours = sceneIdentity(s);
+  raw.file = "/scratch/head.nii.gz";
+  s.volume = raw;
+  EXPECT_EQ(sceneIdentity(s), ours);
+  raw.dims[2] = 33;
+  s.volume = raw;
+  proto::Hello h{Role::Compositor, 5, "", "", sceneIdentity(s)};
+  EXPECT_NE(helloRefusal(h, "", ours).find("'header: {dims: [64, 64, 33], type: int16, spacing: [1, 1, 1]}' there"),
+            std::string::npos)
+      << helloRefusal(h, "", ours);
+  raw.format = VolumeFormat::Dicom, raw.file = "/data/ct/";
+  s.volume = raw;
+  const std::string folder = sceneIdentity(s);
+  raw.file = "/mnt/copy/ct";
+  s.volume = raw;
+  EXPECT_EQ(sceneIdentity(s), folder);
+  h.scene = ours + "extra: 1\n";  // one text longer than the other
+  EXPECT_NE(helloRefusal(h, "", ours).find("is 'extra: 1' there and (none) here"), std::string::npos)
+      << helloRefusal(h, "", ours);
+  const std::string a(150, 'a');
+  h.scene = "x: 1\n" + a + "Y\n";
+  const std::string why = helloRefusal(h, "", "x: 1\n" + a + "X\n");
+  EXPECT_NE(why.find("line 2 "), std::string::npos) << why;
+  EXPECT_NE(why.find("'..." + std::string(40, 'a') + "Y' there and '..." + std::string(40, 'a') + "X' here"),
+            std::string::npos)
+      << why;
 }
 
 }  // namespace
