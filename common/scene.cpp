@@ -158,6 +158,23 @@ Shading Parser::shading(const YAML::Node& n) const {
   return sh;
 }
 
+Crop Parser::crop(const YAML::Node& n) const {
+  if (!n.IsMap()) fail("crop", "expected a map such as {x: [0, 0.5]}, got " + describe(n));
+  checkKeys(n, "crop", {"x", "y", "z"});
+  Crop c;
+  for (int a = 0; a < 3; ++a) {
+    const std::string key(1, "xyz"[a]), path = "crop." + key;
+    if (!n[key]) continue;
+    const YAML::Node v = n[key];
+    if (!v.IsSequence() || v.size() != 2) fail(path, "expected [lo, hi], fractions of the box, got " + describe(v));
+    const double lo = number(v[0], path + "[0]"), hi = number(v[1], path + "[1]");
+    if (!(lo >= 0 && hi <= 1 && lo < hi))
+      fail(path, "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]: expected 0 <= lo < hi <= 1 (fractions of the box)");
+    c.axes[a] = {lo, hi};
+  }
+  return c;
+}
+
 // A CT preset is in Hounsfield units: it sets the range. A DICOM CT series given neither a
 // colour map nor a range gets ct-bone, and a note says so. Shading stays the scene's choice
 // (it more than doubles a renderer's memory, and the OSMesa backend has none).
@@ -182,6 +199,15 @@ void ctPreset(const Parser& p, const YAML::Node& root, Scene& s) {
 
 }  // namespace detail
 
+VoxelBox cropBox(const Crop& c, const std::array<int, 3>& dims) {
+  VoxelBox b;
+  for (int a = 0; a < 3; ++a) {
+    b.lo[a] = std::clamp((int)std::lround(c.axes[a][0] * dims[a]), 0, dims[a] - 1);
+    b.hi[a] = std::clamp((int)std::lround(c.axes[a][1] * dims[a]), b.lo[a] + 1, dims[a]);
+  }
+  return b;
+}
+
 const char* blendName(Blend b) { return b == Blend::Maximum ? "maximum" : "composite"; }
 
 Scene parseScene(const std::string& yaml_text, const std::string& base_dir, const std::string& name_for_errors) {
@@ -195,7 +221,7 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
   if (!root.IsMap()) p.fail("", "expected a map of scene keys at the top level");
   p.checkKeys(root, "",
               {"volume", "transfer_function", "camera", "image", "quality", "orbit", "mesh", "light", "antialiasing",
-               "shading", "time", "blend"});
+               "shading", "time", "blend", "crop"});
   Scene s;
   s.path = name_for_errors;
   s.quality = namedQuality(QualityName::Default);
@@ -221,6 +247,10 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
     else if (b != "composite") p.fail("blend", "'" + b + "': expected composite or maximum (maximum intensity projection)");
     if (s.blend == Blend::Maximum && s.shading.on)
       p.fail("blend", "maximum shows each ray's largest value, which is not lit: leave `shading` out");
+  }
+  if (root["crop"]) {
+    if (is_mesh || !s.has_volume) p.fail("crop", "cuts a volume; a mesh scene has none");
+    s.crop = p.crop(root["crop"]);
   }
   detail::ctPreset(p, root, s);
   if (root["image"]) {

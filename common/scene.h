@@ -72,6 +72,19 @@ struct Shading {
 enum class Blend { Composite, Maximum };
 const char* blendName(Blend b);
 
+// `crop: {x: [lo, hi], y: ..., z: ...}`: only this part of the volume is rendered, as
+// ParaView's Crop and 3D Slicer's ROI cut a volume open; each axis a fraction of the box
+// (0..1, lo < hi), an axis left out whole. Samples outside it count for nothing; inside, the
+// data around the cut (trilinear neighbours, gradients) is the volume's own.
+struct Crop {
+  std::array<std::array<double, 2>, 3> axes{{{0, 1}, {0, 1}, {0, 1}}};
+  bool whole() const { return axes == Crop{}.axes; }
+  bool operator==(const Crop&) const = default;
+};
+// The crop in voxels of a volume of `dims`: each face at the nearest voxel boundary, at least
+// one voxel wide.
+VoxelBox cropBox(const Crop& c, const std::array<int, 3>& dims);
+
 struct Scene {
   std::string path;  // file it was loaded from ("" for built-in)
   std::variant<RawVolumeSpec, GeneratorSpec> volume;
@@ -80,6 +93,7 @@ struct Scene {
   Vec3 light{0, 0, 0};              // world direction towards the light; zero: headlight
   Shading shading;                  // volumes only
   Blend blend = Blend::Composite;   // volumes only
+  Crop crop;                        // volumes only
   Antialiasing antialiasing;
   TransferFunction tf;
   Camera camera;

@@ -146,6 +146,7 @@ class Parser {
   MeshSpec mesh(const YAML::Node& n, bool has_volume) const;
   Antialiasing antialiasing(const YAML::Node& n) const;
   Shading shading(const YAML::Node& n) const;
+  Crop crop(const YAML::Node& n) const;
 
   std::string file_, base_;
 };

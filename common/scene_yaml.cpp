@@ -137,6 +137,15 @@ std::string sceneYaml(const Scene& s) {
       << YAML::Key << "specular" << YAML::Value << num(s.shading.specular) << YAML::Key << "shininess"
       << YAML::Value << num(s.shading.shininess) << YAML::EndMap;
   if (s.blend != Blend::Composite) e << YAML::Key << "blend" << YAML::Value << blendName(s.blend);
+  if (!s.crop.whole()) {
+    e << YAML::Key << "crop" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    for (int a = 0; a < 3; ++a)
+      if (s.crop.axes[a] != Crop{}.axes[a]) {
+        e << YAML::Key << std::string(1, "xyz"[a]) << YAML::Value;
+        list(e, s.crop.axes[a]);
+      }
+    e << YAML::EndMap;
+  }
   if (s.mesh) {
     e << YAML::Key << "antialiasing" << YAML::Value << YAML::BeginMap << YAML::Key << "method" << YAML::Value
       << aaMethodName(s.antialiasing.method);

@@ -107,7 +107,7 @@ StepCache::Entry StepCache::load(int step, const VoxelBox& box, double& ms, std:
   const auto* raw = std::get_if<RawVolumeSpec>(&scene_.volume);
   e.file_bytes = raw ? (uint64_t)v->voxelCount() * voxelTypeSize(raw->type) : 0;  // generated: none
   e.volume = v;
-  if (backend_ == BackendKind::Cpu) e.caster = makeVolumeBackend(backend_, v, scene_.tf, scene_.shading, scene_.light, scene_.blend);
+  if (backend_ == BackendKind::Cpu) e.caster = makeVolumeBackend(backend_, v, scene_.tf, scene_.shading, scene_.light, scene_.blend, scene_.crop);
   ms = msSince(t0);
   return e;
 }
@@ -163,7 +163,7 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
     stats_.load_ms += ms + std::max(waited_ms, 0.0);  // a prefetch waited for that failed: both
     it = keep(step, std::move(e));
   }
-  if (!it->second.caster) it->second.caster = makeVolumeBackend(backend_, it->second.volume, scene_.tf, scene_.shading, scene_.light, scene_.blend);
+  if (!it->second.caster) it->second.caster = makeVolumeBackend(backend_, it->second.volume, scene_.tf, scene_.shading, scene_.light, scene_.blend, scene_.crop);
   last_good_ = step;
   return {step, it->second.volume, it->second.caster};
 }

@@ -140,7 +140,7 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   auto vol = std::make_shared<const Volume>(loadVolume(fixed, VoxelBox{{0, 0, 0}, volumeDims(scene)}, step));
   for (const std::string& said : volumeWarnings(scene, *vol)) std::fprintf(stderr, "tessera-render: warning: %s\n", said.c_str());
   auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, scene.tf, scene.shading, scene.light,
-                                            scene.blend);
+                                            scene.blend, scene.crop);
   std::optional<MaxIntensity> mip;
   if (scene.blend == Blend::Maximum) mip.emplace(scene.tf);
   const MaxIntensity* mp = mip ? &*mip : nullptr;

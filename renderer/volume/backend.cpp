@@ -67,11 +67,13 @@ std::string backendProblem(BackendKind kind, const Shading& shading, Blend blend
 
 std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_ptr<const Volume> volume,
                                                  TransferFunction tf, const Shading& shading,
-                                                 const Vec3& light, Blend blend) {
+                                                 const Vec3& light, Blend blend, const Crop& crop) {
   if (std::string why = backendProblem(kind, shading, blend); !why.empty()) throw std::invalid_argument(why);
-  if (kind == BackendKind::Osmesa) return std::make_unique<GlVolumeRenderer>(std::move(volume), std::move(tf));
+  const Volume& v = *volume;
+  if (kind == BackendKind::Osmesa)
+    return croppedBackend(std::make_unique<GlVolumeRenderer>(std::move(volume), std::move(tf)), v, crop);
   cpuIsa();  // a bad TESSERA_SIMD fails here, on the caller's thread, not in a ray-casting thread
-  return std::make_unique<Raycaster>(std::move(volume), std::move(tf), shading, light, blend);
+  return croppedBackend(std::make_unique<Raycaster>(std::move(volume), std::move(tf), shading, light, blend), v, crop);
 }
 
 }  // namespace tessera::renderer

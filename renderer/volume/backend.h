@@ -67,9 +67,13 @@ const char* backendName(BackendKind kind);
 // common/max_intensity.h) are the cpu backend's; osmesa refuses them by name: this says why
 // ("" when the backend renders them), so that a renderer refuses at start, not per frame.
 std::string backendProblem(BackendKind kind, const Shading& shading, Blend blend);
-// Throws std::invalid_argument with backendProblem's reason.
+// Throws std::invalid_argument with backendProblem's reason. `crop`: see croppedBackend.
 std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_ptr<const Volume> volume,
                                                  TransferFunction tf, const Shading& shading = {},
-                                                 const Vec3& light = {0, 0, 0}, Blend blend = Blend::Composite);
+                                                 const Vec3& light = {0, 0, 0}, Blend blend = Blend::Composite,
+                                                 const Crop& crop = {});
+// `inner`, each brick it renders cut to the scene's crop (common/scene.h) of `v`'s whole
+// volume; a brick wholly outside renders transparent. `inner` itself for a whole crop.
+std::unique_ptr<VolumeBackend> croppedBackend(std::unique_ptr<VolumeBackend> inner, const Volume& v, const Crop& crop);
 
 }  // namespace tessera::renderer

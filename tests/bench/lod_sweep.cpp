@@ -132,6 +132,7 @@ int run(int argc, char** argv) {
   Scene s = scene_path.empty() ? defaultScene() : loadScene(scene_path);
   if (s.mesh) throw std::invalid_argument("tessera-lod-sweep: a volume scene is needed, not a geometry scene");
   if (s.blend != Blend::Composite) throw std::invalid_argument("tessera-lod-sweep: composite scenes only, not blend: maximum");
+  if (!s.crop.whole()) throw std::invalid_argument("tessera-lod-sweep: whole volumes only, leave out `crop`");
   fixVolumeRange(s);
   fs::create_directories(out);
   auto vol = std::make_shared<const Volume>(loadVolume(s));

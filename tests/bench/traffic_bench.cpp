@@ -198,7 +198,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   auto vol = std::make_shared<const Volume>(loadVolume(scene, VoxelBox{{0, 0, 0}, volumeDims(scene)}, 0));
-  auto backend = renderer::makeVolumeBackend(renderer::BackendKind::Cpu, vol, scene.tf, scene.shading, scene.light);
+  auto backend = renderer::makeVolumeBackend(renderer::BackendKind::Cpu, vol, scene.tf, scene.shading, scene.light,
+                                             Blend::Composite, scene.crop);
   const BrickTree tree = splitBricks(*vol, renderers, &scene.tf);
   renderer::RenderOptions opt;
   opt.quality = scene.quality;

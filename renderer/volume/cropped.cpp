@@ -1,0 +1,45 @@
+// The scene's `crop` for any backend: each brick is rendered cut to the crop box. Bricks that
+// tile the volume, cut so, tile the crop box exactly, so a farm's bricks and one process's
+// whole volume render the same samples (on the same grid along each ray), and trilinear
+// neighbours and gradients at the cut are the volume's own voxels (the ghost layer).
+#include <algorithm>
+
+#include "renderer/volume/backend.h"
+
+namespace tessera::renderer {
+namespace {
+
+class Cropped : public VolumeBackend {
+ public:
+  Cropped(std::unique_ptr<VolumeBackend> inner, const Volume& v, const Crop& crop) : inner_(std::move(inner)) {
+    const VoxelBox whole = cropBox(crop, v.wholeDims());
+    for (int a = 0; a < 3; ++a)  // in the held window's indices, as the bricks are given
+      box_.lo[a] = whole.lo[a] - v.origin[a], box_.hi[a] = whole.hi[a] - v.origin[a];
+  }
+
+  ImageF render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
+                RenderStats* stats, Rect* active, ImageF recycled) const override {
+    Brick cut;
+    for (int a = 0; a < 3; ++a) {
+      cut.lo[a] = std::max(brick.lo[a], box_.lo[a]), cut.hi[a] = std::min(brick.hi[a], box_.hi[a]);
+      if (cut.lo[a] >= cut.hi[a]) {  // wholly cut away: transparent, as a brick that is empty
+        if (active) *active = Rect{};
+        return takeRecycled(width, height, std::move(recycled));
+      }
+    }
+    return inner_->render(cam, width, height, cut, opt, stats, active, std::move(recycled));
+  }
+
+ private:
+  std::unique_ptr<VolumeBackend> inner_;
+  Brick box_;
+};
+
+}  // namespace
+
+std::unique_ptr<VolumeBackend> croppedBackend(std::unique_ptr<VolumeBackend> inner, const Volume& v, const Crop& crop) {
+  if (crop.whole()) return inner;
+  return std::make_unique<Cropped>(std::move(inner), v, crop);
+}
+
+}  // namespace tessera::renderer
