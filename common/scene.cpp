@@ -1,6 +1,8 @@
 // Scene file parser (scenes/README.md): strict YAML with errors naming file and key path.
 #include "common/scene.h"
 
+#include <fmt/format.h>
+
 #include <tuple>
 
 #include "common/scene_parser.h"
@@ -169,7 +171,7 @@ Crop Parser::crop(const YAML::Node& n) const {
     if (!v.IsSequence() || v.size() != 2) fail(path, "expected [lo, hi], fractions of the box, got " + describe(v));
     const double lo = number(v[0], path + "[0]"), hi = number(v[1], path + "[1]");
     if (!(lo >= 0 && hi <= 1 && lo < hi))
-      fail(path, "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]: expected 0 <= lo < hi <= 1 (fractions of the box)");
+      fail(path, fmt::format("[{}, {}]: expected 0 <= lo < hi <= 1 (fractions of the box)", lo, hi));
     c.axes[a] = {lo, hi};
   }
   return c;
@@ -249,7 +251,7 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
       p.fail("blend", "maximum shows each ray's largest value, which is not lit: leave `shading` out");
   }
   if (root["crop"]) {
-    if (is_mesh || !s.has_volume) p.fail("crop", "cuts a volume; a mesh scene has none");
+    if (is_mesh) p.fail("crop", "cuts the rendered volume; a mesh scene renders none");
     s.crop = p.crop(root["crop"]);
   }
   detail::ctPreset(p, root, s);

@@ -84,14 +84,25 @@ VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cance
   return s;
 }
 
-std::vector<uint8_t> visibleBlocks(const VolumeSummary& s, const TransferFunction& tf) {
+std::vector<uint8_t> visibleBlocks(const VolumeSummary& s, const TransferFunction& tf, const Crop& crop) {
   std::vector<uint8_t> mask(s.lo.size());
   for (size_t i = 0; i < mask.size(); ++i) mask[i] = tf.maxAlpha(s.lo[i], s.hi[i]) > 0;
+  if (crop.whole()) return mask;
+  const VoxelBox box = cropBox(crop, s.shape.dims);
+  const auto& [bx, by, bz] = s.blocks;
+  for (int z = 0; z < bz; ++z)
+    for (int y = 0; y < by; ++y)
+      for (int x = 0; x < bx; ++x) {
+        const int b[3] = {x, y, z};
+        bool inside = true;  // the block [b * edge, (b + 1) * edge) meets the crop box
+        for (int a = 0; a < 3; ++a) inside = inside && (b[a] + 1) * s.edge > box.lo[a] && b[a] * s.edge < box.hi[a];
+        if (!inside) mask[x + (size_t)bx * (y + (size_t)by * z)] = 0;
+      }
   return mask;
 }
 
-BrickTree splitBricks(const VolumeSummary& s, int n, const TransferFunction& tf) {
-  const std::vector<uint8_t> mask = visibleBlocks(s, tf);
+BrickTree splitBricks(const VolumeSummary& s, int n, const TransferFunction& tf, const Crop& crop) {
+  const std::vector<uint8_t> mask = visibleBlocks(s, tf, crop);
   return scaleBricks(splitMask(s.blocks, &mask, n), s.edge, s.shape.dims);
 }
 

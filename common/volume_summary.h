@@ -27,10 +27,11 @@ struct VolumeSummary {
 // (bricks are cut on block faces). Throws as loadVolume does.
 // `cancel`, when raised, ends the reading at the next slab with std::runtime_error.
 VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cancel = nullptr);
-// 1 for every block that may be visible under tf (some value of its range has opacity).
-std::vector<uint8_t> visibleBlocks(const VolumeSummary& s, const TransferFunction& tf);
+// 1 for every block that may be visible under tf (some value of its range has opacity) and
+// reaches into the crop box.
+std::vector<uint8_t> visibleBlocks(const VolumeSummary& s, const TransferFunction& tf, const Crop& crop = {});
 // n bricks cut on block faces, balanced by the blocks that may be visible.
-BrickTree splitBricks(const VolumeSummary& s, int n, const TransferFunction& tf);
+BrickTree splitBricks(const VolumeSummary& s, int n, const TransferFunction& tf, const Crop& crop = {});
 
 // Fixes a raw volume's normalisation to the whole file's: with no `range`, the data's
 // min..max, found by streaming the file once; later windows then load without a scan.

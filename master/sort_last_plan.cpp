@@ -9,8 +9,9 @@
 
 namespace tessera::master {
 
-SortLastPlan::SortLastPlan(VolumeSummary volume, const TransferFunction& tf, bool balance, bool binary_swap)
-    : volume_(std::move(volume)), tf_(tf), balance_(balance), binary_swap_(binary_swap) {}
+SortLastPlan::SortLastPlan(VolumeSummary volume, const TransferFunction& tf, bool balance, bool binary_swap,
+                           const Crop& crop)
+    : volume_(std::move(volume)), tf_(tf), balance_(balance), binary_swap_(binary_swap), crop_(crop) {}
 
 // Bricks are sticky: a renderer keeps its bricks (and the voxels it loaded for them) for
 // the whole run. A renderer that joins gets a new split for everyone (balance needs it);
@@ -21,7 +22,7 @@ void SortLastPlan::reassign(const Workers& w) {
   bool joined = tree_.bricks.empty();
   for (uint32_t r : w.renderers) joined = joined || std::find(owner_.begin(), owner_.end(), r) == owner_.end();
   auto split = [&] {
-    tree_ = splitBricks(volume_, std::max<int>(1, (int)w.renderers.size()), tf_);
+    tree_ = splitBricks(volume_, std::max<int>(1, (int)w.renderers.size()), tf_, crop_);
     owner_.clear();
     for (size_t i = 0; i < tree_.bricks.size() && i < w.renderers.size(); ++i) owner_.push_back(w.renderers[i]);
   };

@@ -20,7 +20,9 @@ class SortLastPlan : public Plan {
  public:
   // Compositor bands are cut for each frame's own size (interactive frames are smaller).
   // binary_swap: frames carry a swap plan whenever the renderers allow one (SortLastWork::swap).
-  SortLastPlan(VolumeSummary volume, const TransferFunction& tf, bool balance, bool binary_swap = false);
+  // `crop`: the scene's; bricks are balanced by the visible blocks inside it.
+  SortLastPlan(VolumeSummary volume, const TransferFunction& tf, bool balance, bool binary_swap = false,
+               const Crop& crop = {});
   void reassign(const Workers& w) override;
   void fill(proto::FrameParams& p, const Workers& w) override;
   void stats(const proto::StageStats& s, const Workers& w) override;
@@ -34,6 +36,7 @@ class SortLastPlan : public Plan {
   const TransferFunction& tf_;
   bool balance_;
   bool binary_swap_;
+  Crop crop_;
   BrickTree tree_;
   std::vector<uint32_t> owner_;  // renderer rank of each brick
   // Renderers' active rects of the latest reported frame, as fractions of its image (x0, y0,

@@ -69,11 +69,10 @@ std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_p
                                                  TransferFunction tf, const Shading& shading,
                                                  const Vec3& light, Blend blend, const Crop& crop) {
   if (std::string why = backendProblem(kind, shading, blend); !why.empty()) throw std::invalid_argument(why);
-  const Volume& v = *volume;
   if (kind == BackendKind::Osmesa)
-    return croppedBackend(std::make_unique<GlVolumeRenderer>(std::move(volume), std::move(tf)), v, crop);
+    return croppedBackend(std::make_unique<GlVolumeRenderer>(volume, std::move(tf)), volume, crop);
   cpuIsa();  // a bad TESSERA_SIMD fails here, on the caller's thread, not in a ray-casting thread
-  return croppedBackend(std::make_unique<Raycaster>(std::move(volume), std::move(tf), shading, light, blend), v, crop);
+  return croppedBackend(std::make_unique<Raycaster>(volume, std::move(tf), shading, light, blend), volume, crop);
 }
 
 }  // namespace tessera::renderer

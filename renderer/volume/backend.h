@@ -74,6 +74,7 @@ std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_p
                                                  const Crop& crop = {});
 // `inner`, each brick it renders cut to the scene's crop (common/scene.h) of `v`'s whole
 // volume; a brick wholly outside renders transparent. `inner` itself for a whole crop.
-std::unique_ptr<VolumeBackend> croppedBackend(std::unique_ptr<VolumeBackend> inner, const Volume& v, const Crop& crop);
+std::unique_ptr<VolumeBackend> croppedBackend(std::unique_ptr<VolumeBackend> inner, std::shared_ptr<const Volume> v,
+                                              const Crop& crop);
 
 }  // namespace tessera::renderer

@@ -11,19 +11,22 @@ namespace {
 
 class Cropped : public VolumeBackend {
  public:
-  Cropped(std::unique_ptr<VolumeBackend> inner, const Volume& v, const Crop& crop) : inner_(std::move(inner)) {
-    const VoxelBox whole = cropBox(crop, v.wholeDims());
+  Cropped(std::unique_ptr<VolumeBackend> inner, std::shared_ptr<const Volume> v, const Crop& crop)
+      : inner_(std::move(inner)), volume_(std::move(v)) {
+    const VoxelBox whole = cropBox(crop, volume_->wholeDims());
     for (int a = 0; a < 3; ++a)  // in the held window's indices, as the bricks are given
-      box_.lo[a] = whole.lo[a] - v.origin[a], box_.hi[a] = whole.hi[a] - v.origin[a];
+      box_.lo[a] = whole.lo[a] - volume_->origin[a], box_.hi[a] = whole.hi[a] - volume_->origin[a];
   }
 
   ImageF render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
                 RenderStats* stats, Rect* active, ImageF recycled) const override {
+    checkRenderArguments("crop", *volume_, width, height, brick, opt.quality);  // refused as uncropped
     Brick cut;
     for (int a = 0; a < 3; ++a) {
       cut.lo[a] = std::max(brick.lo[a], box_.lo[a]), cut.hi[a] = std::min(brick.hi[a], box_.hi[a]);
       if (cut.lo[a] >= cut.hi[a]) {  // wholly cut away: transparent, as a brick that is empty
         if (active) *active = Rect{};
+        if (stats) *stats = RenderStats{};
         return takeRecycled(width, height, std::move(recycled));
       }
     }
@@ -32,14 +35,16 @@ class Cropped : public VolumeBackend {
 
  private:
   std::unique_ptr<VolumeBackend> inner_;
+  std::shared_ptr<const Volume> volume_;
   Brick box_;
 };
 
 }  // namespace
 
-std::unique_ptr<VolumeBackend> croppedBackend(std::unique_ptr<VolumeBackend> inner, const Volume& v, const Crop& crop) {
+std::unique_ptr<VolumeBackend> croppedBackend(std::unique_ptr<VolumeBackend> inner, std::shared_ptr<const Volume> v,
+                                              const Crop& crop) {
   if (crop.whole()) return inner;
-  return std::make_unique<Cropped>(std::move(inner), v, crop);
+  return std::make_unique<Cropped>(std::move(inner), std::move(v), crop);
 }
 
 }  // namespace tessera::renderer

@@ -151,6 +151,29 @@ TEST(VolumeSummary, BricksAreCutOnBlockFacesAndCoverTheVolumeOnce) {
   }
 }
 
+// A cropped scene's bricks are balanced by the visible blocks inside the crop: blocks
+// wholly outside count for nothing, and with the left half cropped, each of 4 bricks takes
+// a share of that half rather than 2 of the 4 rendering nothing.
+TEST(VolumeSummary, BricksAreBalancedByTheBlocksInsideTheCrop) {
+  Scene scene = defaultScene();
+  scene.volume = GeneratorSpec{"hollow-shell", 64, 1, {1, 1, 1}};
+  const VolumeSummary s = summarizeVolume(scene);
+  Crop crop;
+  crop.axes[0] = {0, 0.5};
+  const std::vector<uint8_t> all = visibleBlocks(s, scene.tf), inside = visibleBlocks(s, scene.tf, crop);
+  int kept = 0;
+  for (int z = 0; z < s.blocks[2]; ++z)
+    for (int y = 0; y < s.blocks[1]; ++y)
+      for (int x = 0; x < s.blocks[0]; ++x) {
+        const size_t i = x + (size_t)s.blocks[0] * (y + (size_t)s.blocks[1] * z);
+        EXPECT_EQ(inside[i], x * s.edge < 32 ? all[i] : 0) << x << " " << y << " " << z;
+        kept += inside[i];
+      }
+  EXPECT_GT(kept, 0);
+  const BrickTree tree = splitBricks(s, 4, scene.tf, crop);
+  for (const BrickBox& b : tree.bricks) EXPECT_LT(b.lo[0], 32) << "a brick wholly outside the crop";
+}
+
 // A few slices of a big image: blocks of 8 on the long axes (one block across the thin one),
 // not of one voxel, and bricks still split it (across the long axes).
 TEST(VolumeSummary, AThinVolumeKeepsBlocksOfEight) {

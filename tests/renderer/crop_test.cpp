@@ -36,11 +36,11 @@ TEST(Crop, TheKeyItsVoxelsAndItsErrors) {
       << "at least one voxel";
   const std::string volume = "volume: {generator: {name: hollow-shell, size: 16}}\n";
   for (const auto& [text, says] : std::vector<std::pair<std::string, std::string>>{
-           {volume + "crop: {x: [0.5, 0.5]}", "crop.x: [0.500000, 0.500000]: expected 0 <= lo < hi <= 1"},
-           {volume + "crop: {y: [-0.1, 0.5]}", "crop.y: [-0.100000, 0.500000]"},
+           {volume + "crop: {x: [0.5, 0.5]}", "crop.x: [0.5, 0.5]: expected 0 <= lo < hi <= 1"},
+           {volume + "crop: {y: [-0.1, 0.5]}", "crop.y: [-0.1, 0.5]"},
            {volume + "crop: {w: [0, 1]}", "crop.w"},
            {volume + "crop: [0, 1]", "crop: expected a map"},
-           {"mesh: {isosurface: {of: volume, level: 0.5}}\n" + volume + "crop: {x: [0, 1]}", "crop: cuts a volume"}}) {
+           {"mesh: {isosurface: {of: volume, level: 0.5}}\n" + volume + "crop: {x: [0, 1]}", "crop: cuts the rendered volume"}}) {
     try {
       parseScene(text, ".", "s.yaml");
       ADD_FAILURE() << "accepted: " << text;
