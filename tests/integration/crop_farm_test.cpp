@@ -19,15 +19,7 @@ void runAndCompare(const char* name, int renderers, int compositors, const char*
                           "camera: {eye: [0.9, 0.4, 1.1], target: [0, 0, 0], up: [0, 1, 0], fov: 40}\n"
                           "shading: true\nimage: [64, 48]\norbit: {frames: "
                        << frames << ", degrees: 120}\n";
-  const auto run = dir.runFarm(scene, renderers, compositors, frames, 120,
-                               std::string("--env TESSERA_COMPOSITING=") + compositing);
-  ASSERT_EQ(run.exit_code, 0) << run.output;
-  for (int k = 0; k < frames; ++k) {
-    ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " missing\n" << run.output;
-    const Image8 farm = dir.farmFrame(k);
-    EXPECT_TRUE(dir.matches(farm, dir.reference(scene, k), 1, "crop_" + std::to_string(k))) << "frame " << k;
-    EXPECT_GT(activeRegion(farm).area(), 600) << "frame " << k << " is (nearly) empty";
-  }
+  expectFarmMatchesRender(dir, scene, frames, renderers, compositors, compositing, 600, "crop");
 }
 
 TEST(CropFarm, DirectSendMatchesTesseraRender) { runAndCompare("crop-direct", 3, 1, "direct-send"); }

@@ -163,5 +163,20 @@ class FarmDir {
   fs::path dir_;
 };
 
+// `frames` frames of `scene` on `renderers` + `compositors` compositing by `compositing`: each
+// within 1/255 of tessera-render's (the contract) and showing more than `min_area` pixels (else
+// it would test nothing). A mismatch is written as `tag`_k images.
+inline void expectFarmMatchesRender(FarmDir& dir, const fs::path& scene, int frames, int renderers, int compositors,
+                                    const std::string& compositing, int min_area, const std::string& tag) {
+  const auto run = dir.runFarm(scene, renderers, compositors, frames, 120, "--env TESSERA_COMPOSITING=" + compositing);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  for (int k = 0; k < frames; ++k) {
+    ASSERT_TRUE(fs::exists(dir.frame(k))) << "frame " << k << " missing\n" << run.output;
+    const Image8 farm = dir.farmFrame(k);
+    EXPECT_TRUE(dir.matches(farm, dir.reference(scene, k), 1, tag + "_" + std::to_string(k))) << "frame " << k;
+    EXPECT_GT(activeRegion(farm).area(), min_area) << "frame " << k << " is (nearly) empty";
+  }
+}
+
 
 }  // namespace tessera::test

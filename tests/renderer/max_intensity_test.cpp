@@ -43,20 +43,35 @@ double maxValueDiff(const ImageF& a, const ImageF& b, int* shown_differently) {
   return d;
 }
 
+// The fast kernel (default quality) against the reference at the same step, whole volume:
+// both images, their largest value difference and the pixels shown by one only.
+struct AgainstReference {
+  ImageF fast, ref;
+  double diff = 0;
+  int shown_differently = 0;
+};
+AgainstReference againstReference(const Raycaster& rc, const Volume& v, const Camera& cam, int w, int h,
+                                  RenderStats* fast_stats = nullptr) {
+  RenderOptions same_step = options("reference");
+  same_step.quality.step = options("default").quality.step;
+  AgainstReference r;
+  r.fast = rc.render(cam, w, h, wholeVolume(v), options("default"), fast_stats);
+  r.ref = rc.render(cam, w, h, wholeVolume(v), same_step);
+  r.diff = maxValueDiff(r.fast, r.ref, &r.shown_differently);
+  return r;
+}
+
 TEST(MaxIntensity, FastValuesMatchTheReferenceWithinTheSixteenBitQuantization) {
   auto vol = test::generated("marschner-lobb", 40);
   const Raycaster rc(vol, kTf, {}, {0, 0, 0}, Blend::Maximum);
-  RenderOptions same_step = options("reference");
-  same_step.quality.step = options("default").quality.step;
   for (int frame : {0, 5}) {
-    const ImageF fast = rc.render(orbitCamera(frame), 48, 40, wholeVolume(*vol), options("default"));
-    const ImageF ref = rc.render(orbitCamera(frame), 48, 40, wholeVolume(*vol), same_step);
-    int shown_differently = 0;
-    ASSERT_GT(activeRegion(ref).area(), 600);
+    const AgainstReference r = againstReference(rc, *vol, orbitCamera(frame), 48, 40);
+    const ImageF& fast = r.fast;
+    ASSERT_GT(activeRegion(r.ref).area(), 600);
     // Voxels are kept as round(v * 65535): half a unit, and float interpolation's error.
-    EXPECT_LT(maxValueDiff(fast, ref, &shown_differently), 1.0 / 65535) << "frame " << frame;
+    EXPECT_LT(r.diff, 1.0 / 65535) << "frame " << frame;
     // Rays whose largest value lies within that error of the floor may show on one side only.
-    EXPECT_LE(shown_differently, 2) << "frame " << frame;
+    EXPECT_LE(r.shown_differently, 2) << "frame " << frame;
     for (size_t i = 0; i < fast.px.size(); i += 4) {
       if (fast.px[i + 3] == 0) continue;
       EXPECT_EQ(fast.px[i + 3], 1.0f);  // value pixels: (s, 0, 0, 1)
@@ -89,16 +104,11 @@ TEST(MaxIntensity, BrickJumpsMissNoValueOnRaysNearlyAlongAnAxis) {
   // The shell's front reaches the maximum its back cannot raise: most samples are jumped over.
   auto vol = test::generated("hollow-shell", 48);
   const Raycaster rc(vol, kTf, {}, {0, 0, 0}, Blend::Maximum);
-  RenderOptions same_step = options("reference");
-  same_step.quality.step = options("default").quality.step;
   for (const double tilt : {0.0, 1e-7, 1e-4, 3e-3}) {
-    const Camera cam = alongZ(tilt, 0.9);
     RenderStats st;
-    const ImageF fast = rc.render(cam, 40, 40, wholeVolume(*vol), options("default"), &st);
-    const ImageF ref = rc.render(cam, 40, 40, wholeVolume(*vol), same_step);
-    int shown_differently = 0;
-    EXPECT_LT(maxValueDiff(fast, ref, &shown_differently), 1.0 / 65535) << "tilt " << tilt;
-    EXPECT_LE(shown_differently, 2) << "tilt " << tilt;
+    const AgainstReference r = againstReference(rc, *vol, alongZ(tilt, 0.9), 40, 40, &st);
+    EXPECT_LT(r.diff, 1.0 / 65535) << "tilt " << tilt;
+    EXPECT_LE(r.shown_differently, 2) << "tilt " << tilt;
     EXPECT_GT(st.samples_skipped, st.samples / 4) << "tilt " << tilt << ": no jumps to test";
   }
 }
@@ -115,17 +125,12 @@ TEST(MaxIntensity, ABrickJumpStopsBeforeTheNextBricksFirstSample) {
     }
   auto vol = std::make_shared<const Volume>(v);
   const Raycaster rc(vol, kTf, {}, {0, 0, 0}, Blend::Maximum);
-  RenderOptions same_step = options("reference");
-  same_step.quality.step = options("default").quality.step;
   for (const double tilt : {0.0, 1e-6, 1e-3}) {
-    const Camera cam = alongZ(tilt, 0.025);  // the volume is 1/32 wide
     RenderStats st;
-    const ImageF fast = rc.render(cam, 16, 16, wholeVolume(*vol), options("default"), &st);
-    const ImageF ref = rc.render(cam, 16, 16, wholeVolume(*vol), same_step);
-    int shown_differently = 0;
-    EXPECT_LT(maxValueDiff(fast, ref, &shown_differently), 1.0 / 65535) << "tilt " << tilt;
-    EXPECT_EQ(shown_differently, 0) << "tilt " << tilt;
-    EXPECT_GT(fast.at(8, 8)[0], 0.75f) << "tilt " << tilt;  // the bright voxel's samples
+    const AgainstReference r = againstReference(rc, *vol, alongZ(tilt, 0.025), 16, 16, &st);  // 1/32 wide
+    EXPECT_LT(r.diff, 1.0 / 65535) << "tilt " << tilt;
+    EXPECT_EQ(r.shown_differently, 0) << "tilt " << tilt;
+    EXPECT_GT(r.fast.at(8, 8)[0], 0.75f) << "tilt " << tilt;  // the bright voxel's samples
     EXPECT_GT(st.samples_skipped, 0u) << "tilt " << tilt << ": no jump to test";
   }
 }
