@@ -35,6 +35,22 @@ class MaxIntensity {
   uint32_t floor_q_ = 0;
 };
 
+// A farm stage's map for frames that may each show the colour map through another window (the
+// user's window/level): made again when a frame's window differs from the last one's.
+class WindowedMaxIntensity {
+ public:
+  explicit WindowedMaxIntensity(TransferFunction tf) : tf_(std::move(tf)), map_(tf_) {}
+  const MaxIntensity& at(const ColorWindow& w) {
+    if (!(w == window_)) map_ = MaxIntensity(windowed(tf_, w)), window_ = w;
+    return map_;
+  }
+
+ private:
+  TransferFunction tf_;
+  ColorWindow window_;
+  MaxIntensity map_;
+};
+
 // Value pixels merged: dst = max(dst, src) per channel, within rect r (same sizes).
 void compositeMaximum(ImageF& dst, const ImageF& src, const Rect& r);
 

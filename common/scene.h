@@ -189,7 +189,7 @@ struct SceneView {
 };
 SceneView sceneView(const Scene& s);
 // The camera a scene without `camera` gets for an image of this aspect: fittedCamera of its
-// box from its sceneView.
+// box (of its crop's box, when it has one, looking at its centre) from its sceneView.
 Camera fittedCamera(const Scene& s, double aspect);
 
 }  // namespace tessera

@@ -56,7 +56,22 @@ SceneView sceneView(const Scene& s) {
 
 Camera fittedCamera(const Scene& s, double aspect) {
   const SceneView v = sceneView(s);
-  return fittedCamera(sceneHalfExtent(s), aspect, v.front, v.up);
+  const Vec3 half = sceneHalfExtent(s);
+  if (s.crop.whole() || !s.has_volume || s.mesh) return fittedCamera(half, aspect, v.front, v.up);
+  // A crop is what is seen: its box (voxel i covers [i, i + 1) / dims of the volume's box),
+  // framed as the volume's would be, from its centre.
+  const auto dims = volumeDims(s);
+  const VoxelBox b = cropBox(s.crop, dims);
+  Vec3 lo, hi;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = half[a] * (2.0 * b.lo[a] / dims[a] - 1);
+    hi[a] = half[a] * (2.0 * b.hi[a] / dims[a] - 1);
+  }
+  Camera c = fittedCamera((hi - lo) * 0.5, aspect, v.front, v.up);
+  const Vec3 centre = (lo + hi) * 0.5;
+  c.eye = c.eye + centre;
+  c.target = centre;
+  return c;
 }
 
 Scene defaultScene() {

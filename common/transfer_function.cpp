@@ -49,6 +49,30 @@ double TransferFunction::maxAlpha(double lo, double hi) const {
   return m;
 }
 
+TransferFunction windowed(const TransferFunction& tf, const ColorWindow& w) {
+  if (!std::isfinite(w.center) || !std::isfinite(w.width) || !(w.width > 0))
+    throw std::invalid_argument("colour window: center " + std::to_string(w.center) + " and width " +
+                                std::to_string(w.width) + " must be finite, the width positive");
+  if (w.isDefault() || tf.points().empty()) return tf;
+  auto at = [&](double s) {  // tf's point at window position s
+    const auto c = tf.eval((s - w.center) / w.width + 0.5);
+    auto unit = [](double v) { return std::clamp(v, 0.0, 1.0); };  // interpolation may round past an end
+    return TfPoint{s, unit(c[0]), unit(c[1]), unit(c[2]), unit(c[3])};
+  };
+  std::vector<TfPoint> points{at(0)};
+  for (TfPoint p : tf.points()) {
+    p.s = w.center + (p.s - 0.5) * w.width;
+    if (p.s > 0 && p.s < 1) points.push_back(p);
+  }
+  points.push_back(at(1));
+  return TransferFunction(std::move(points));
+}
+
+std::array<double, 2> windowRange(const std::array<double, 2>& range, const ColorWindow& w) {
+  const double span = range[1] - range[0];
+  return {range[0] + (w.center - w.width / 2) * span, range[0] + (w.center + w.width / 2) * span};
+}
+
 double correctOpacity(double alpha, double d) {
   if (alpha <= 0) return 0;
   if (alpha >= 1) return 1;

@@ -31,6 +31,23 @@ class TransferFunction {
   std::vector<TfPoint> points_;
 };
 
+// The colour map's window, as a CT viewer's window/level and ParaView's "rescale to custom
+// range" set it: the map's [0, 1] laid over [center - width/2, center + width/2] of the
+// normalised values (below and above it the map's end colours, as outside the range). The
+// default is the map as the scene gives it. A window is a change of the scene's `range`
+// (windowRange) done on the map instead of the voxels, so renderers keep their voxels.
+struct ColorWindow {
+  double center = 0.5, width = 1;
+  bool isDefault() const { return center == 0.5 && width == 1; }
+  bool operator==(const ColorWindow&) const = default;
+};
+// tf seen through w: windowed(tf, w).eval(s) == tf.eval((s - center) / width + 0.5) for s in
+// [0, 1], to rounding. Its points: tf's moved into the window, those outside [0, 1] replaced by
+// the map's values at 0 and 1. Throws std::invalid_argument unless width > 0 and both are finite.
+TransferFunction windowed(const TransferFunction& tf, const ColorWindow& w);
+// The data range a scene's `range` gives for window w of the mapped range lo..hi.
+std::array<double, 2> windowRange(const std::array<double, 2>& range, const ColorWindow& w);
+
 // Opacity correction for a step of length d: a = 1 - (1 - alpha)^(d / L0).
 double correctOpacity(double alpha, double d);
 

@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
     const Scene parsed = args.scene();
     opt.width = parsed.width;
     opt.height = parsed.height;
-    if (parsed.blend == Blend::Maximum) opt.maximum.emplace(parsed.tf);
+    if (parsed.blend == Blend::Maximum) opt.maximum = parsed.tf;
     opt.scene = sceneIdentity(parsed);
     opt.endpoints = endpoints;
     return compositor::runStage(opt, ctx, stop);

@@ -27,6 +27,7 @@ class Stage {
                Gather::waitingBudget(opt.width, opt.height)),
         gather_(0) {
     link_.expectFrameSize(opt.width, opt.height);
+    if (opt.maximum) mip_.emplace(*opt.maximum);
   }
 
   int run(const std::atomic<bool>* stop) {
@@ -123,7 +124,7 @@ class Stage {
       frame_ = Image8(r.params.width, r.params.height);
     const proto::SortLastWork* sort_last = r.params.sortLast();  // else sort-first: r.tiles are routed
     if (sort_last) st.active_pixels = compositeRegion(reg, sort_last->order, r.pieces, row_, frame_,
-                                                          opt_.maximum ? &*opt_.maximum : nullptr);
+                                                          mip_ ? &mip_->at(r.params.window) : nullptr);
     else route(r, st);
     st.work_ms = msSince(t0);
     for (const auto& p : r.pieces) st.active = unite(st.active, p.active);
@@ -190,6 +191,7 @@ class Stage {
   Gather gather_;
   std::vector<float> row_;
   Image8 frame_;
+  std::optional<WindowedMaxIntensity> mip_;  // blend: maximum
   std::map<uint64_t, double> decode_ms_;  // by frame
   DropCounter drops_;
   DropCounter unsent_;  // strips this compositor could not send (apart: drops_ counts by sender)

@@ -19,8 +19,8 @@ struct StageOptions {
   // The scene's image size (every process loads the same scene): bounds what peers may send.
   int width = 512, height = 512;
   // The scene's `blend: maximum`: pieces are value pixels, merged by their maxima and mapped
-  // through this colour map (common/max_intensity.h).
-  std::optional<MaxIntensity> maximum;
+  // through this colour map (common/max_intensity.h), seen through each frame's colour window.
+  std::optional<TransferFunction> maximum;
   std::string scene{};  // its sceneIdentity, said in Hello: the master refuses any other than its own
 };
 

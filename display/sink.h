@@ -3,6 +3,7 @@
 #pragma once
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -19,6 +20,11 @@ namespace tessera::display {
 // ("in", away from the user) does to the eye distance.
 constexpr double kDegreesPerPixel = 0.3;
 constexpr double kZoomPerNotch = 0.9;
+// A right-button drag sets the colour window, as CT viewers' window/level drag does: right
+// widens it (a 100-pixel drag 1.65 times), up raises its level (a 100-pixel drag by a quarter
+// of its width).
+constexpr double kWindowScalePerPixel = 1.005;
+constexpr double kWindowShiftPerPixel = 0.0025;
 
 struct InputEvent {
   double orbit_dx = 0, orbit_dy = 0;  // degrees (drag)
@@ -28,7 +34,8 @@ struct InputEvent {
   bool interacting = false;           // a drag, wheel or resize goes on (false: button released, a key)
   int width = 0, height = 0;          // the window's new size (0: unchanged)
   proto::TimeKey time = proto::TimeKey::None;  // Space, arrows, Home, End: a time series' playback
-  bool home = false;                  // r: the scene's camera again
+  bool home = false;                  // r: the scene's camera and colour window again
+  double window_shift = 0, window_scale = 1;  // right drag: the colour window (proto::Input)
   std::chrono::steady_clock::time_point at;  // when the (first merged) event reached the display
   // From a web page: the page's number for its load and the number it gave this (first merged)
   // input, so that the page can time input-to-present itself (page 0: not from a page).
@@ -51,6 +58,28 @@ struct Shown {
 // A drag and nothing else: consecutive ones collapse into one (the master needs the sum).
 inline bool isDrag(const InputEvent& ev) {
   return ev.interacting && ev.zoom == 1 && !ev.quality && !ev.quit && ev.width == 0 && ev.time == proto::TimeKey::None && !ev.home;
+}
+// Adds drag `ev` to `last` if both are drags; false (nothing changed) otherwise.
+inline bool addDrag(InputEvent& last, const InputEvent& ev) {
+  if (!isDrag(last) || !isDrag(ev)) return false;
+  last.orbit_dx += ev.orbit_dx;
+  last.orbit_dy += ev.orbit_dy;
+  last.window_shift += ev.window_shift;
+  last.window_scale *= ev.window_scale;
+  return true;
+}
+// `ev` (its time and page) as a drag of dx, dy pixels: the left button's orbits, the right
+// button's sets the colour window.
+inline InputEvent dragEvent(InputEvent ev, double dx, double dy, bool right) {
+  if (right) {
+    ev.window_scale = std::pow(kWindowScalePerPixel, dx);
+    ev.window_shift = -dy * kWindowShiftPerPixel;  // screen y grows downwards
+  } else {
+    ev.orbit_dx = dx * kDegreesPerPixel;
+    ev.orbit_dy = dy * kDegreesPerPixel;
+  }
+  ev.interacting = true;
+  return ev;
 }
 
 class Sink {

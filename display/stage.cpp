@@ -211,6 +211,8 @@ class Stage {
       in.height = e.height;
       in.time = e.time;
       in.home = e.home;
+      in.window_shift = e.window_shift;
+      in.window_scale = e.window_scale;
       inputs_[in.seq] = e;
       if (inputs_.size() > 4096) inputs_.erase(inputs_.begin());  // inputs no frame showed
       link_.report(proto::encode(in, 0));

@@ -68,7 +68,8 @@ std::string badInput(const nlohmann::json& msg, const std::string& type) {
   auto number = [&](const char* key, double limit) {
     return msg.contains(key) && msg[key].is_number() && std::abs(msg[key].get<double>()) <= limit;
   };
-  if (type == "drag" && !(number("dx", 1e4) && number("dy", 1e4))) return "a drag without numbers dx, dy within 10000";
+  if ((type == "drag" || type == "window") && !(number("dx", 1e4) && number("dy", 1e4)))
+    return "a " + type + " drag without numbers dx, dy within 10000";
   if (type == "wheel" && !number("notches", 100)) return "a wheel without a number of notches within 100";
   if (type == "key" && !(msg.contains("key") && msg["key"].is_string())) return "a key without a key";
   if (msg.contains("n") && !msg["n"].is_number_unsigned()) return "an input number n that is not a whole number";
@@ -358,7 +359,7 @@ void WebCallbacks::message(WebServer& s, WebServer::Viewer& v, std::chrono::stea
     }
     v.unacked.erase(v.unacked.begin(), it + 1);  // and any older ones it passed
     if (v.pending) lws_callback_on_writable(v.wsi);
-  } else if (type == "drag" || type == "release" || type == "wheel" || type == "key") {
+  } else if (type == "drag" || type == "window" || type == "release" || type == "wheel" || type == "key") {
     if (const std::string why = badInput(msg, type); !why.empty()) s.badMessage(why);
     else if (s.input_.size() < kMaxQueuedInput)
       s.input_.push_back({msg, arrived, v.page, msg.contains("n") ? msg["n"].get<uint64_t>() : 0u});

@@ -77,11 +77,7 @@ class WebSink final : public Sink {
       ev.page_input = in.n;
       if (!translate(in.msg, ev)) continue;
       // Consecutive drags collapse into one, as the window's do: the master needs the sum.
-      if (!out.empty() && isDrag(out.back()) && isDrag(ev)) {
-        out.back().orbit_dx += ev.orbit_dx;
-        out.back().orbit_dy += ev.orbit_dy;
-        continue;
-      }
+      if (!out.empty() && addDrag(out.back(), ev)) continue;
       out.push_back(ev);
     }
     return out;
@@ -118,10 +114,8 @@ class WebSink final : public Sink {
   // A viewer's message (checked by the server) as the window's input; false if it is none.
   static bool translate(const nlohmann::json& msg, InputEvent& ev) {
     const std::string t = msg["t"].get<std::string>();
-    if (t == "drag") {
-      ev.orbit_dx = msg["dx"].get<double>() * kDegreesPerPixel;
-      ev.orbit_dy = msg["dy"].get<double>() * kDegreesPerPixel;
-      ev.interacting = true;
+    if (t == "drag" || t == "window") {  // the left or right button's
+      ev = dragEvent(ev, msg["dx"].get<double>(), msg["dy"].get<double>(), t == "window");
     } else if (t == "wheel") {
       ev.zoom = std::pow(kZoomPerNotch, msg["notches"].get<double>());
       ev.interacting = true;

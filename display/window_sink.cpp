@@ -23,8 +23,9 @@ constexpr uint8_t kStripDim = 96;  // strip pixels keep 96/256 of their colour b
 constexpr std::array<uint8_t, 4> kTextColor = {230, 230, 230, 255};
 constexpr const char* kHelp[] = {
     "drag: orbit    wheel: zoom    resize: re-render at the window's size",
+    "right drag: colour window (right/left: wider/narrower, up/down: higher/lower level)",
     "while the mouse moves the farm shows reduced frames, then the full one",
-    "1 / 2 / 3: reference / default / fast quality    r: the scene's view again",
+    "1 / 2 / 3: reference / default / fast quality    r: the scene's view and colours again",
     "a time series: Space play/pause   <- -> step back/forward   Home/End first/last step",
     "h: this help    Esc, q or closing the window: stop the farm",
 };
@@ -228,20 +229,16 @@ class WindowSink final : public Sink {
         if (e.window.event == SDL_WINDOWEVENT_EXPOSED) draw();  // nothing else keeps the frame on screen
         return;
       case SDL_MOUSEBUTTONUP:
-        if (e.button.button != SDL_BUTTON_LEFT) return;
+        if (e.button.button != SDL_BUTTON_LEFT && e.button.button != SDL_BUTTON_RIGHT) return;
         break;  // released: the master renders the full frame now
-      case SDL_MOUSEMOTION:
-        if (!(e.motion.state & SDL_BUTTON_LMASK)) return;
+      case SDL_MOUSEMOTION: {
+        const bool left = e.motion.state & SDL_BUTTON_LMASK, right = e.motion.state & SDL_BUTTON_RMASK;
+        if (!left && !right) return;
+        ev = dragEvent(ev, e.motion.xrel, e.motion.yrel, !left);
         // Consecutive drag motions collapse into one event: the master only needs the sum.
-        if (!out.empty() && isDrag(out.back())) {
-          out.back().orbit_dx += e.motion.xrel * kDegreesPerPixel;
-          out.back().orbit_dy += e.motion.yrel * kDegreesPerPixel;
-          return;
-        }
-        ev.orbit_dx = e.motion.xrel * kDegreesPerPixel;
-        ev.orbit_dy = e.motion.yrel * kDegreesPerPixel;
-        ev.interacting = true;
+        if (!out.empty() && addDrag(out.back(), ev)) return;
         break;
+      }
       case SDL_MOUSEWHEEL: {
         int notches = e.wheel.y;
         if (e.wheel.direction == SDL_MOUSEWHEEL_FLIPPED) notches = -notches;

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <variant>
+
+#include <fmt/format.h>
 
 #include "common/scene.h"
 
@@ -33,6 +36,19 @@ Camera applyInput(const Camera& cam, const proto::Input& in) {
   zoomed.eye = c.target + away * (std::clamp(d * std::clamp(in.zoom, 0.2, 5.0), lo, hi) / d);
   if (cameraProblem(zoomed).what.empty()) c = zoomed;
   return c;
+}
+
+std::string windowNote(const Scene& scene, const ColorWindow& w) {
+  const auto* file = std::get_if<RawVolumeSpec>(&scene.volume);
+  const auto [lo, hi] = windowRange(file ? file->range : std::array<double, 2>{0, 1}, w);
+  std::string note = fmt::format("colour window: the colour map spans the values {:.6g} to {:.6g} (level {:.6g}, width {:.6g})",
+                                 lo, hi, (lo + hi) / 2, hi - lo);
+  if (w.isDefault()) return note + ", as the scene gives it";
+  if (!file) return note;
+  for (const char* preset : {"ct-bone", "ct-soft-tissue"})
+    if (scene.tf == transferFunctionPreset(preset))
+      return note + fmt::format(" (in Hounsfield units; {} keeps its own range, so a scene cannot keep this window)", preset);
+  return note + fmt::format("; to keep it, give the volume `range: [{:.6g}, {:.6g}]` in the scene", lo, hi);
 }
 
 }  // namespace tessera::master

@@ -1,6 +1,9 @@
 // Interactive camera control: how the display's drag/wheel input moves the camera.
 #pragma once
+#include <string>
+
 #include "common/camera.h"
+#include "common/scene.h"
 #include "common/wire/protocol.h"
 
 namespace tessera::master {
@@ -11,9 +14,13 @@ namespace tessera::master {
 // Throws std::invalid_argument for non-finite values or zoom <= 0.
 Camera applyInput(const Camera& cam, const proto::Input& in);
 
+// What the master says once the user has set a colour window (the drag released): the values
+// the colour map now spans and, for a volume file, the `range` that keeps that window.
+std::string windowNote(const Scene& scene, const ColorWindow& w);
+
 // What the master says as an interactive run starts: how to steer and stop it.
 inline constexpr const char* kSteeringNotice =
-    "interactive run: a frame is rendered when the display's window or web view sends input (drag: orbit, wheel: zoom, "
+    "interactive run: a frame is rendered when the display's window or web view sends input (drag: orbit, wheel: zoom, right-drag: colour window, "
     "Space: play a series, h: help); without either only the first frame is rendered (a series plays on). Ctrl-C or "
     "closing the window stops it";
 

@@ -33,8 +33,7 @@ class Master {
   Master(const MasterOptions& opt, zmq::context_t& ctx)
       : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router, kMaxControlMessage)),
         window_(opt.in_flight, opt.deadline), total_frames_(opt.frames < 0 ? opt.scene.orbit.frames : opt.frames),
-        refinement_(opt.scene),
-        metrics_(opt.metrics_path, total_frames_) {
+        refinement_(opt.scene), metrics_(opt.metrics_path, total_frames_) {
     // No receive bound on the control socket: with makeSocket's 64, libzmq lost messages of a
     // peer that sent faster than the master read (a third of 300 junk messages, never counted;
     // Stats could be lost too). It is drained every loop (<= 50 ms); FarmFuzz bounds its memory.
@@ -225,6 +224,7 @@ class Master {
         continue;
       }
       // Interactive: the newest view, or nothing when it would show nothing new.
+      if (auto cw = refinement_.settledWindow(Clock::now())) spdlog::info("{}", windowNote(prepared_->scene, *cw));
       auto spec = refinement_.next(Clock::now());
       if (!spec) return;
       if (spec->interactive) spec->after_cancel = cancelStale();

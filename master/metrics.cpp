@@ -188,6 +188,7 @@ void Metrics::write(uint64_t frame, Frame& f) {
     j["height"] = f.spec.height;
     j["camera"] = {{"eye", {c.eye.x, c.eye.y, c.eye.z}}, {"target", {c.target.x, c.target.y, c.target.z}},
                    {"up", {c.up.x, c.up.y, c.up.z}}, {"fov", c.fov}};
+    j["window"] = {f.spec.window.center, f.spec.window.width};
     if (f.d.input_ms > 0) j["input_ms"] = f.d.input_ms;
     j["cancelled_frames"] = cancelled_;
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <tuple>
 
 #include "master/interaction.h"
@@ -17,7 +18,8 @@ double msBetween(Refinement::Clock::time_point a, Refinement::Clock::time_point 
 // change of rung alone or an input that moved nothing issues no frame.
 bool sameView(const FrameSpec& a, const FrameSpec& b) {
   return a.camera == b.camera && a.interactive == b.interactive && a.quality == b.quality &&
-         a.full_width == b.full_width && a.full_height == b.full_height && a.step == b.step;
+         a.full_width == b.full_width && a.full_height == b.full_height && a.step == b.step &&
+         a.window == b.window;
 }
 
 }  // namespace
@@ -43,6 +45,7 @@ void setView(proto::FrameParams& p, const FrameSpec& spec) {
   p.interactive = spec.interactive;
   p.step = (uint32_t)spec.step;
   p.next_step = (uint32_t)spec.next_step;
+  p.window = spec.window;
 }
 
 Refinement::Refinement(const Camera& camera, const Quality& quality, int width, int height, const Playback& time,
@@ -52,10 +55,9 @@ Refinement::Refinement(const Camera& camera, const Quality& quality, int width, 
 
 Refinement::Refinement(const Scene& scene)
     : Refinement(scene.camera, scene.quality, scene.width, scene.height, scene.time, scene.series.steps) {
+  windowed_ = !scene.mesh;
   if (scene.camera_fitted)
-    fit_home_ = [half = sceneHalfExtent(scene), view = sceneView(scene)](double aspect) {
-      return fittedCamera(half, aspect, view.front, view.up);
-    };
+    fit_home_ = [scene](double aspect) { return fittedCamera(scene, aspect); };
 }
 
 void Refinement::issued(const FrameSpec& s) {
@@ -103,6 +105,9 @@ void Refinement::input(const proto::Input& in, Clock::time_point now) {
                                                      : std::pair{width_, height_};
   const Camera home = in.home && fit_home_ ? fit_home_((double)w / h) : home_;
   Camera moved = applyInput(in.home ? home : camera_, in);  // throws before anything changes
+  if (!std::isfinite(in.window_shift) || !std::isfinite(in.window_scale) || !(in.window_scale > 0))
+    throw std::invalid_argument("Input with a non-finite colour window shift or a non-positive scale");
+  if (windowed_) window_ = movedWindow(in.home ? ColorWindow{} : window_, in.window_shift, in.window_scale);
   if (in.interacting && !interacting(now)) std::fill(std::begin(seen_ms_), std::end(seen_ms_), 0.0);
   camera_ = moved;
   if (in.quality) quality_ = namedQuality(*in.quality);
@@ -113,6 +118,21 @@ void Refinement::input(const proto::Input& in, Clock::time_point now) {
   seq_ = std::max(seq_, in.seq);
   // The input-to-present time runs from the first input that changes what the next frame shows.
   if (first_change_ == 0 && next(now)) first_change_ = in.seq;
+}
+
+ColorWindow Refinement::movedWindow(const ColorWindow& w, double shift, double scale) {
+  ColorWindow out;
+  out.width = std::clamp(w.width * std::clamp(scale, 0.2, 5.0), kMinWindow, kMaxWindow);
+  // At least an eighth of the window stays over the values 0..1, so it cannot be lost.
+  const double reach = out.width * 3 / 8;
+  out.center = std::clamp(w.center + shift * w.width, -reach, 1 + reach);
+  if (shift == 0 && scale == 1) out = w;  // exactly: a release moves nothing
+  return out;
+}
+
+std::optional<ColorWindow> Refinement::settledWindow(Clock::time_point now) {
+  if (window_ == said_window_ || interacting(now)) return std::nullopt;
+  return said_window_ = window_;
 }
 
 bool Refinement::interacting(Clock::time_point now) const {
@@ -129,6 +149,7 @@ std::optional<FrameSpec> Refinement::next(Clock::time_point now) const {
   s.full_height = height_;
   s.step = step_;
   s.next_step = play_.play ? play_.stepAt(played_ + 1, steps_) : step_;
+  s.window = window_;
   if (s.interactive) {
     s.reduction = reduction();
     s.quality = interactiveQuality(quality_);

@@ -29,6 +29,7 @@ struct FrameSpec {
   bool after_cancel = false;  // issued behind a cancelled full frame: its time says nothing of its rung
   double reduction = 1;    // interactive frames: the image reduction factor
   int step = 0, next_step = 0;  // the volume's time step, and the one expected next (renderers prefetch it)
+  ColorWindow window;           // the colour map's window
   bool operator==(const FrameSpec&) const = default;
 };
 
@@ -59,8 +60,17 @@ class Refinement {
              int steps = 1);
   // The scene's: its camera, quality, image, playback and steps. A scene without `camera`
   // goes home (the window's r) to its box fitted to the window's shape at that moment, as
-  // it was fitted to the scene's image at the start.
+  // it was fitted to the scene's image at the start. A volume scene's colour window moves
+  // with the input's window_shift and window_scale; a mesh scene's has none.
   explicit Refinement(const Scene& scene);
+
+  // The colour window's bounds: a width from 1/1024 of the range (a 16-bit scan's 64 values)
+  // to 16 ranges, and a centre that keeps some of the window over the values.
+  static constexpr double kMinWindow = 1.0 / 1024, kMaxWindow = 16;
+  static ColorWindow movedWindow(const ColorWindow& w, double shift, double scale);
+  const ColorWindow& window() const { return window_; }
+  // The colour window once a drag that moved it has ended, once (the master says it).
+  std::optional<ColorWindow> settledWindow(Clock::time_point now);
 
   // Applies a display's Input. Throws std::invalid_argument (nothing changed) for values
   // applyInput refuses. A drag that starts forgets what the rungs cost in the last one.
@@ -86,6 +96,8 @@ class Refinement {
   Camera camera_, home_;  // now, and the scene's (an input's `home`)
   std::function<Camera(double aspect)> fit_home_;  // set: home fits the scene's box to this aspect
   Quality quality_;
+  ColorWindow window_, said_window_;
+  bool windowed_ = true;  // the colour window moves (not a mesh scene)
   int max_w_, max_h_, width_, height_;
   bool held_ = false;
   Clock::time_point last_input_{};

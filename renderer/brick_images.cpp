@@ -35,7 +35,7 @@ void BrickImages::hold(const proto::FrameParams& p, const proto::SortLastWork& w
                                                        held_.volume->origin[2] + held_.volume->dims[2]}};
     else held_ = {};  // before loading the next: peak memory is one window
   }
-  held_ = steps_.get(need, (int)p.step);
+  held_ = steps_.get(need, (int)p.step, p.window);
   const StepCacheStats cs = steps_.take();
   st.load_ms = cs.load_ms;
   if (scene_.series.steps > 1) {
@@ -54,7 +54,7 @@ void BrickImages::hold(const proto::FrameParams& p, const proto::SortLastWork& w
 
 const BrickImages::Image& BrickImages::render(const proto::FrameParams& p, const BrickBox& brick, proto::StageStats& st,
                                               const Image* in_rounds) {
-  Image::Key key{p.camera, p.quality, p.width, p.height, brick, held_.step};
+  Image::Key key{p.camera, p.quality, p.width, p.height, brick, held_.step, p.window};
   for (auto& c : images_)
     if (c.key == key) return ++st.images_reused, c;  // unchanged inputs: reuse, do not render again
   ++st.images_made;

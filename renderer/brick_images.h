@@ -28,6 +28,7 @@ class BrickImages {
       int width = 0, height = 0;
       BrickBox brick;
       int step = 0;
+      ColorWindow window;
       bool operator==(const Key&) const = default;
     };
     Key key;

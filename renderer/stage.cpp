@@ -36,7 +36,7 @@ class Stage {
       swap_ = std::make_unique<SwapExchange>(ctx, maxPixelMessageBytes(scene_.width, scene_.height),
                                              2 * 16 * size_t(scene_.width) * size_t(scene_.height));
       swap_->setMaximum(scene_.blend == Blend::Maximum);
-      if (scene_.blend == Blend::Maximum) mip_.emplace(scene_.tf);
+      if (scene_.blend == Blend::Maximum) mip_.emplace(scene_.tf);  // seen through each frame's window
       bindSwap();
     }
   }
@@ -339,7 +339,7 @@ class Stage {
     s.frame = p.frame;
     s.epoch = p.epoch;
     s.sender = link_.rank();
-    bandStrips(band, p.width, p.height, band8_, s, mip_ ? &*mip_ : nullptr);
+    bandStrips(band, p.width, p.height, band8_, s, mip_ ? &mip_->at(p.window) : nullptr);
     s.render_ms = st.work_ms;
     s.composite_ms = st.decode_ms;  // the swap's decoding and blending
     auto bytes = proto::encode(s, link_.rank(), p.codec);
@@ -360,7 +360,7 @@ class Stage {
   Image8 band8_;                   // a binary swap's band, quantized (the frame's size: strips name screen rows)
   Outbox outbox_{ctx_, link_.dataIdentity()};  // to compositors, swap partners and the display
   std::unique_ptr<SwapExchange> swap_;  // volume scenes
-  std::optional<MaxIntensity> mip_;     // blend: maximum: maps the bands this renderer finishes
+  std::optional<WindowedMaxIntensity> mip_;  // blend: maximum: maps the bands this renderer finishes
   size_t swap_size_logged_ = 0;  // renderers in the swap, when last said
   std::string swap_endpoint_;  // what Hello tells the master
   std::deque<proto::FrameParams> queued_;

@@ -89,7 +89,13 @@ void StepCache::recycle(Entry&& e) {
 
 std::vector<float> StepCache::takeSpare() { return std::exchange(spare_, {}); }
 
-StepCache::Entry StepCache::load(int step, const VoxelBox& box, double& ms, std::vector<float> storage) {
+std::shared_ptr<const VolumeBackend> StepCache::caster(std::shared_ptr<const Volume> v, const ColorWindow& window) const {
+  return makeVolumeBackend(backend_, std::move(v), windowed(scene_.tf, window), scene_.shading, scene_.light, scene_.blend,
+                           scene_.crop);
+}
+
+StepCache::Entry StepCache::load(int step, const VoxelBox& box, const ColorWindow& window, double& ms,
+                                 std::vector<float> storage) {
   const auto t0 = Clock::now();
   Entry e;
   std::shared_ptr<Volume> v;
@@ -107,13 +113,15 @@ StepCache::Entry StepCache::load(int step, const VoxelBox& box, double& ms, std:
   const auto* raw = std::get_if<RawVolumeSpec>(&scene_.volume);
   e.file_bytes = raw ? (uint64_t)v->voxelCount() * voxelTypeSize(raw->type) : 0;  // generated: none
   e.volume = v;
-  if (backend_ == BackendKind::Cpu) e.caster = makeVolumeBackend(backend_, v, scene_.tf, scene_.shading, scene_.light, scene_.blend, scene_.crop);
+  e.window = window;
+  if (backend_ == BackendKind::Cpu) e.caster = caster(v, window);
   ms = msSince(t0);
   return e;
 }
 
-HeldStep StepCache::get(const VoxelBox& box, int step) {
+HeldStep StepCache::get(const VoxelBox& box, int step, const ColorWindow& window) {
   std::unique_lock lock(mu_);
+  window_ = window;
   if (!(box == box_)) {
     held_.clear();  // the bricks moved: every held step is of the old window
     spare_ = {};
@@ -145,7 +153,7 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
     Entry e;
     double ms = 0;
     try {
-      e = load(step, box, ms, std::move(storage));
+      e = load(step, box, window, ms, std::move(storage));
     } catch (const std::exception& ex) {
       lock.lock();
       loading_ = -1;
@@ -163,7 +171,12 @@ HeldStep StepCache::get(const VoxelBox& box, int step) {
     stats_.load_ms += ms + std::max(waited_ms, 0.0);  // a prefetch waited for that failed: both
     it = keep(step, std::move(e));
   }
-  if (!it->second.caster) it->second.caster = makeVolumeBackend(backend_, it->second.volume, scene_.tf, scene_.shading, scene_.light, scene_.blend, scene_.crop);
+  Entry& held = it->second;
+  if (!held.caster || !(held.window == window)) {
+    held.caster.reset();
+    held.caster = caster(held.volume, window);
+    held.window = window;
+  }
   last_good_ = step;
   return {step, it->second.volume, it->second.caster};
 }
@@ -198,6 +211,7 @@ void StepCache::prefetchLoop() {
     prefetching_ = next;
     const uint64_t generation = prefetch_generation_ = generation_;
     const VoxelBox box = box_;  // get() may move the bricks while this loads
+    const ColorWindow window = window_;
     std::vector<float> storage = takeSpare();
     lock.unlock();
     if (before_prefetch) before_prefetch(next);
@@ -205,7 +219,7 @@ void StepCache::prefetchLoop() {
     double ms = 0;
     bool ok = true;
     try {
-      e = load(next, box, ms, std::move(storage));
+      e = load(next, box, window, ms, std::move(storage));
     } catch (const std::exception&) {
       ok = false;  // said (and counted) by get() when the step is shown
     }

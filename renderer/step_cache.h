@@ -47,7 +47,11 @@ class StepCache {
   // Step `step` of the window `box`: held, or loaded now (a miss). A step that cannot be
   // read is logged and counted, and the last good step is returned instead (nullptr volume
   // when there is none: the caller fails the frame). A new box drops every held step.
-  HeldStep get(const VoxelBox& box, int step);
+  // Its caster renders the scene's colour map through `window`: a held step's caster of
+  // another window is made again (its voxels and gradients are kept; the cpu backend's
+  // classification for the map, ~10 ms for 256^3 voxels, is not), and steps read ahead
+  // from then on are made for it.
+  HeldStep get(const VoxelBox& box, int step, const ColorWindow& window = {});
   // The steps the master will show next, soonest first: the prefetch thread loads those not
   // held, as the budget allows, and forgets earlier wishes (steps playback has passed).
   void prefetch(const std::vector<int>& steps);
@@ -62,11 +66,13 @@ class StepCache {
     std::shared_ptr<const VolumeBackend> caster;
     uint64_t bytes = 0;       // held in memory
     uint64_t file_bytes = 0;  // read from the file for it
+    ColorWindow window;       // the caster's
   };
   void prefetchLoop();
   // Loads step `step` of `box` (box_ as the caller read it under mu_) into `storage`, unlocked
   // while reading; throws what loadVolume throws.
-  Entry load(int step, const VoxelBox& box, double& ms, std::vector<float> storage);
+  Entry load(int step, const VoxelBox& box, const ColorWindow& window, double& ms, std::vector<float> storage);
+  std::shared_ptr<const VolumeBackend> caster(std::shared_ptr<const Volume> v, const ColorWindow& window) const;
   // A freed step's samples, for the next load: a step's window costs no page faults and no
   // zeroing (measured: ~5% of a playing renderer's time). Under mu_.
   void recycle(Entry&& e);
@@ -86,6 +92,7 @@ class StepCache {
   mutable std::mutex mu_;
   std::condition_variable changed_;
   VoxelBox box_{};
+  ColorWindow window_;       // of the last get(): what steps are read ahead for
   uint64_t generation_ = 0;  // bumped with box_: a load of an old box is dropped
   std::map<int, Entry> held_;
   int current_ = -1, direction_ = 1, last_good_ = -1;

@@ -274,6 +274,8 @@ std::vector<std::byte> encode(const Input& m, uint32_t sender) {
     w.i32(m.height);
     w.u8(static_cast<uint8_t>(m.time));
     w.boolean(m.home);
+    w.f64(m.window_shift);
+    w.f64(m.window_scale);
   });
 }
 Result<Input> decodeInput(std::span<const std::byte> msg) {
@@ -298,6 +300,9 @@ Result<Input> decodeInput(std::span<const std::byte> msg) {
     if (r.ok() && t > static_cast<uint8_t>(TimeKey::LastKey)) r.fail("time key " + std::to_string(t) + " not in 0..5");
     m.time = static_cast<TimeKey>(t);
     m.home = r.boolean("home");
+    m.window_shift = detail::readFinite(r, "window_shift");
+    m.window_scale = detail::readFinite(r, "window_scale");
+    if (r.ok() && m.window_scale <= 0) r.fail("window_scale " + std::to_string(m.window_scale) + " not positive");
   });
 }
 

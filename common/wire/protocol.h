@@ -39,16 +39,17 @@
 #include "common/image.h"
 #include "common/result.h"
 #include "common/quality.h"
+#include "common/transfer_function.h"
 
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 15;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
+inline constexpr uint16_t kVersion = 16;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
   // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms); 5: time steps; 6: Stats
   // carry their FrameParams' epoch; 7: Piece pixels Up-filtered; 8: binary-swap plans in FrameParams; 9: swap
   // bands go to the display as Strips; 10: Strips strip-filtered, Heartbeats name the awaited swap partner;
   // 11: Stats' wait_ms; 12: Welcome's volume_range; 13: Shutdown's run; 14: Input's home;
-  // 15: Hello's scene
+  // 15: Hello's scene; 16: the colour window (Input's window_shift/scale, FrameParams' window)
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -159,6 +160,7 @@ struct Shutdown {                                                          // ma
 //   input_first                u64      8     <= input_seq
 //   interactive                bool     1
 //   step, next_step            u32 x2   8     each < 1000000
+//   window.center, .width      f64 x2   16    finite, |center| <= 1e6, width in (0, 1e6]
 //   regions                    u32      4     count <= 65536, then per region (>= 24 bytes):
 //   regions.compositor         u32      4
 //   regions.region             rect     16    0 <= x, y, w, h; inside width x height
@@ -199,6 +201,7 @@ struct FrameParams {                                                       // ma
   bool interactive = false;                  // a reduced frame while the camera moves (level of detail)
   uint32_t step = 0;                         // the time step of the volume shown (0 for a static volume)
   uint32_t next_step = 0;                    // the step the master expects to show next: renderers prefetch it
+  ColorWindow window;                        // the colour map's window (the user's window/level)
   std::variant<SortLastWork, SortFirstWork> work;  // the mode: each stage dispatches on it once
   FrameMode mode() const { return work.index() == 0 ? FrameMode::SortLast : FrameMode::SortFirst; }
   const SortLastWork* sortLast() const { return std::get_if<SortLastWork>(&work); }    // null if sort-first
@@ -331,7 +334,9 @@ struct FrameDone {                             // display -> master
 //   interacting         bool    1
 //   width, height       i32 x2  8    both 0 (unchanged) or both 1..16384
 //   time                u8      1    TimeKey 0..Last
-//   home                bool    1    back to the scene's camera first (the window's r)
+//   home                bool    1    back to the scene's camera and colour window first (the window's r)
+//   window_shift        f64     8    finite: the colour window's centre moves by this many widths
+//   window_scale        f64     8    finite, > 0: its width is multiplied by this
 // A time series' playback keys (the window's Space, arrows, Home and End).
 enum class TimeKey : uint8_t { None = 0, PlayPause, Forward, Back, First, Last, LastKey = Last };
 struct Input {                                 // display -> master (interactive camera)
@@ -342,7 +347,8 @@ struct Input {                                 // display -> master (interactive
   bool interacting = false;                    // a drag (button held) or a wheel/resize burst goes on
   int width = 0, height = 0;                   // the window's new size (0: unchanged)
   TimeKey time = TimeKey::None;
-  bool home = false;                           // the scene's camera again, then the rest
+  bool home = false;                           // the scene's camera and colour window again, then the rest
+  double window_shift = 0, window_scale = 1;   // a right-button drag: the colour window's level and width
   bool operator==(const Input&) const = default;
 };
 

@@ -1,6 +1,7 @@
 // FrameParams on the wire: everything every stage needs to do its part of one frame.
 // The decoder checks the cross-field invariants (order is a permutation, regions inside
 // the image), so a stage can index with the decoded values without re-checking.
+#include <cmath>
 #include <algorithm>
 #include <string>
 #include <vector>
@@ -183,6 +184,8 @@ std::vector<std::byte> encode(const FrameParams& m, uint32_t sender) {
     w.boolean(m.interactive);
     w.u32(m.step);
     w.u32(m.next_step);
+    w.f64(m.window.center);
+    w.f64(m.window.width);
     w.u32(static_cast<uint32_t>(m.regions.size()));
     for (const CompositorRegion& c : m.regions) {
       w.u32(c.compositor);
@@ -257,6 +260,11 @@ Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
         m.next_step = r.u32("next_step");
         if (r.ok() && std::max(m.step, m.next_step) >= 1000000)
           r.fail("step " + std::to_string(m.step) + " or next_step " + std::to_string(m.next_step) + " >= 1000000");
+        m.window.center = detail::readFinite(r, "window.center");
+        m.window.width = detail::readFinite(r, "window.width");
+        if (r.ok() && !(std::abs(m.window.center) <= 1e6 && m.window.width > 0 && m.window.width <= 1e6))
+          r.fail("colour window centre " + std::to_string(m.window.center) + ", width " + std::to_string(m.window.width) +
+                 " not within |centre| <= 1e6, 0 < width <= 1e6");
         readRegions(r, m);
         m.display_endpoint = r.str("display_endpoint");
         const uint8_t mode = r.u8("mode");

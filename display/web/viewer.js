@@ -131,7 +131,8 @@
     };
   }
 
-  // Input: drags are summed and sent once per animation frame, like the window's.
+  // Input: drags are summed and sent once per animation frame, like the window's. The left
+  // button's orbits; the right button's sets the colour window ('window').
   let drag = null;
   let pending = { dx: 0, dy: 0 };
   function send(msg) {
@@ -142,13 +143,15 @@
     ws.send(JSON.stringify(msg));
   }
   function flushDrag() {
-    if (pending.dx || pending.dy) send({ t: 'drag', dx: pending.dx, dy: pending.dy });
-    pending = { dx: 0, dy: 0 };
+    if (pending.dx || pending.dy) send({ t: pending.right ? 'window' : 'drag', dx: pending.dx, dy: pending.dy });
+    pending = { dx: 0, dy: 0, right: pending.right };
     if (drag) requestAnimationFrame(flushDrag);
   }
+  canvas.addEventListener('contextmenu', (e) => e.preventDefault());  // the right button is ours
   canvas.addEventListener('pointerdown', (e) => {
-    if (e.button !== 0 || drag) return;
+    if ((e.button !== 0 && e.button !== 2) || drag) return;
     drag = { x: e.clientX, y: e.clientY };
+    pending.right = e.button === 2;
     canvas.setPointerCapture(e.pointerId);
     canvas.classList.add('dragging');
     requestAnimationFrame(flushDrag);
@@ -157,7 +160,8 @@
     if (!drag) return;
     pending.dx += e.clientX - drag.x;
     pending.dy += e.clientY - drag.y;
-    drag = { x: e.clientX, y: e.clientY };
+    drag.x = e.clientX;
+    drag.y = e.clientY;
   });
   const release = () => {
     if (!drag) return;

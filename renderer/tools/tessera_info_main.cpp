@@ -138,6 +138,11 @@ int run(int argc, char** argv) {
   std::printf("# values: %.9g .. %.9g; mapped to the transfer function: %.9g .. %.9g%s\n", shape.data_range[0],
               shape.data_range[1], shape.mapped_range[0], shape.mapped_range[1],
               raw && !raw->has_range ? " (no range given: the data's own)" : "");
+  if (!scene.crop.whole()) {
+    const VoxelBox c = cropBox(scene.crop, shape.dims);
+    std::printf("# crop: voxels [%d, %d) x [%d, %d) x [%d, %d) are rendered, %d x %d x %d of them\n", c.lo[0], c.hi[0],
+                c.lo[1], c.hi[1], c.lo[2], c.hi[2], c.hi[0] - c.lo[0], c.hi[1] - c.lo[1], c.hi[2] - c.lo[2]);
+  }
   if (scene.series.steps > 1)
     std::printf("# time steps: %d; the values, warnings and histogram here are step 0's, and so is the range every step "
                 "is mapped with unless the scene gives `range`\n",

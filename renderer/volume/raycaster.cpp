@@ -22,6 +22,7 @@
 #include "renderer/volume/kernels.h"
 #include "renderer/volume/minmax.h"
 #include "renderer/volume/occupancy.h"
+#include "renderer/volume/per_volume.h"
 #include "renderer/volume/ray_setup.h"
 #include "renderer/volume/tf_table.h"
 #include "renderer/volume/volume_accel.h"
@@ -37,7 +38,7 @@ struct Raycaster::Impl {
   Brick nonempty;  // voxel box holding every sample that can be non-empty (lo == hi: none)
   Shading shading;
   Vec3 light;
-  std::unique_ptr<const GradientVolume> gradients;  // with shading
+  std::shared_ptr<const GradientVolume> gradients;  // with shading (shared by casters of the volume)
   Blend blend = Blend::Composite;
   double max_floor = 0;                // blend: maximum: MaxIntensity::floor
   MaxSkip max_skip;                    // blend: maximum, pointing into brick_max
@@ -73,7 +74,7 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, 
   impl_->light = light;
   impl_->blend = blend;
   if (blend == Blend::Maximum && shading.on) throw std::invalid_argument("Raycaster: blend maximum is not lit (no shading)");
-  if (shading.on) impl_->gradients = std::make_unique<const GradientVolume>(v);
+  if (shading.on) impl_->gradients = perVolume<GradientVolume>(impl_->volume);
   const TransferFunction& f = impl_->tf;
   if (blend == Blend::Maximum) {
     // A block is empty when its values cannot reach the floor: nothing below it shows.

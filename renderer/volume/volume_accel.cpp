@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
-#include <map>
 #include <mutex>
 #include <thread>
 #include <utility>
@@ -13,6 +12,7 @@
 
 #include "common/lanes.h"
 #include "common/parallel.h"
+#include "renderer/volume/per_volume.h"
 
 namespace tessera::renderer {
 
@@ -135,19 +135,7 @@ VolumeAccel::VolumeAccel(Pass&& p)
     : hierarchy(p.nb, std::move(p.mn), std::move(p.mx)), bricked(std::move(p.bricked)), nb(p.nb), all_finite(p.all_finite) {}
 
 std::shared_ptr<const VolumeAccel> VolumeAccel::forVolume(const std::shared_ptr<const Volume>& v) {
-  static std::mutex mu;
-  static std::map<const Volume*, std::pair<std::weak_ptr<const Volume>, std::weak_ptr<const VolumeAccel>>> cache;
-  std::lock_guard lock(mu);
-  for (auto it = cache.begin(); it != cache.end();) {  // drop entries of freed volumes
-    if (it->second.first.expired() || it->second.second.expired()) it = cache.erase(it);
-    else ++it;
-  }
-  auto it = cache.find(v.get());
-  if (it != cache.end() && it->second.first.lock() == v)
-    if (auto a = it->second.second.lock()) return a;
-  auto a = std::make_shared<const VolumeAccel>(*v);
-  cache[v.get()] = {v, a};
-  return a;
+  return perVolume<VolumeAccel>(v);
 }
 
 }  // namespace tessera::renderer

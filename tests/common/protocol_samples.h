@@ -29,6 +29,7 @@ inline FrameParams sampleParams() {
   p.interactive = true;
   p.step = 12345;
   p.next_step = 12344;
+  p.window = {0.3125, 0.25};
   p.work = SortLastWork{{{0, {{0, 0, 0}, {128, 256, 256}}}, {1, {{128, 0, 0}, {256, 256, 256}}}, {1, {{0, 0, 0}, {1, 1, 1}}}},
                         {2, 0, 1}, {}};
   return p;

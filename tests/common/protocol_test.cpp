@@ -69,7 +69,7 @@ TEST(Protocol, EveryStructuredMessageRoundTrips) {
   expectRoundTrip(st, encode(st, 11), decodeStageStats, Type::Stats);
   FrameDone fd{1000, 16.5, 2.25, 33.5, 888888, 3, 1};
   expectRoundTrip(fd, encode(fd, 11), decodeFrameDone, Type::FrameDone);
-  Input in{12, -5.5, 10, 0.9, QualityName::Reference, true, 800, 600, TimeKey::Back, true};
+  Input in{12, -5.5, 10, 0.9, QualityName::Reference, true, 800, 600, TimeKey::Back, true, -0.125, 1.5};
   expectRoundTrip(in, encode(in, 11), decodeInput, Type::Input);
   EXPECT_EQ(decodeHeader(encode(sampleParams(), 11))->frame, 42u) << "FrameParams::frame travels in the header";
 }
@@ -116,7 +116,7 @@ TEST(Protocol, TruncatedAtEveryLengthFails) {
   expectTruncationsFail(encode(samplePiece(PixelFormat::RGBA8), 1, Codec::Lzo), decodePiece);
   expectTruncationsFail(encode(sampleStrips(), 1, Codec::Zstd), decodeStrips);
   expectTruncationsFail(encode(sampleFramebuffer(), 1, Codec::Lz4), decodeFramebuffer);
-  expectTruncationsFail(encode(Input{9, 1, 2, 3, QualityName::Fast, true, 640, 480, TimeKey::Last, true}, 1), decodeInput);
+  expectTruncationsFail(encode(Input{9, 1, 2, 3, QualityName::Fast, true, 640, 480, TimeKey::Last, true, 0.5, 2}, 1), decodeInput);
   expectTruncationsFail(encode(Probe{}, 1), decodeProbe);
 }
 
@@ -297,6 +297,20 @@ TEST(Protocol, InteractionFieldsOutOfRangeAreRefusedByName) {
     auto r = decodeInput(encode(in, 1));
     ASSERT_FALSE(r) << w << "x" << h;
     EXPECT_NE(r.error().find("window size"), std::string::npos) << r.error();
+  }
+  for (double scale : {0.0, -1.0, std::nan("")}) {  // the colour window's width factor
+    Input in;
+    in.window_scale = scale;
+    auto r = decodeInput(encode(in, 1));
+    ASSERT_FALSE(r) << scale;
+    EXPECT_NE(r.error().find("window_scale"), std::string::npos) << r.error();
+  }
+  for (ColorWindow w : {ColorWindow{0.5, 0}, ColorWindow{0.5, -1}, ColorWindow{2e6, 1}, ColorWindow{0.5, 2e6}}) {
+    p = sampleParams();
+    p.window = w;
+    f = decodeFrameParams(encode(p, 1));
+    ASSERT_FALSE(f) << w.center << " " << w.width;
+    EXPECT_NE(f.error().find("colour window"), std::string::npos) << f.error();
   }
   FrameDone d;
   d.input_ms = -1;

@@ -126,6 +126,18 @@ TEST(Scene, AVolumeAloneGetsTheDefaultColourMapAndAFittedCamera) {
   EXPECT_FALSE(parseScene(std::string(kGood), ".", "g.yaml").camera_fitted);
 }
 
+// A crop is what a scene without `camera` shows: the camera frames the crop's box from its
+// centre, as it frames the whole box.
+TEST(Scene, AFittedCameraFramesTheCrop) {
+  const Scene s = parseScene("volume: {generator: {name: hollow-shell, size: 16, seed: 1}}\n"
+                             "crop: {x: [0.5, 1], z: [0, 0.25]}\n", ".", "s.yaml");
+  // The box is [-0.5, 0.5]^3: the crop is x 0..0.5, y -0.5..0.5, z -0.5..-0.25.
+  EXPECT_EQ(s.camera.target, (Vec3{0.25, 0, -0.375}));
+  const double radius = length(Vec3{0.25, 0.5, 0.125});
+  EXPECT_NEAR(length(s.camera.eye - s.camera.target), 1.05 * radius / std::sin(15 * std::numbers::pi / 180), 1e-12);
+  EXPECT_GT(s.camera.eye.z, s.camera.target.z) << "seen from the front, as the whole box";
+}
+
 TEST(Scene, TransferFunctionPresetsByName) {
   for (const char* name : {"cool-to-warm", "viridis", "grayscale"}) {
     const Scene s = parseScene(std::string("volume: {generator: {name: hollow-shell, size: 16}}\ntransfer_function: ") +

@@ -69,3 +69,31 @@ TEST(TransferFunction, CorrectOpacity) {
   // Tiny opacity keeps its relative precision (a naive pow would lose it).
   EXPECT_NEAR(correctOpacity(1e-12, kL0 / 16) / (1e-12 / 16), 1.0, 1e-9);
 }
+
+TEST(TransferFunction, AWindowLaysTheMapOverPartOfTheValues) {
+  const auto tf = sample();
+  EXPECT_EQ(windowed(tf, {}), tf);  // the default window is the map itself
+  // Narrow, wide, shifted past either end, and a step (0.6) landing on the window's edge.
+  for (ColorWindow w : {ColorWindow{0.5, 0.25}, ColorWindow{0.1, 0.5}, ColorWindow{0.9, 3}, ColorWindow{-0.2, 1},
+                        ColorWindow{1.3, 2}, ColorWindow{0.4, 1}}) {
+    const auto in = windowed(tf, w);
+    EXPECT_EQ(in.points().front().s, 0.0);
+    EXPECT_EQ(in.points().back().s, 1.0);
+    for (int i = 0; i <= 1000; ++i) {
+      const double s = i / 1000.0;
+      const auto want = tf.eval((s - w.center) / w.width + 0.5), got = in.eval(s);
+      for (int c = 0; c < 4; ++c)
+        ASSERT_NEAR(got[c], want[c], 1e-12) << "window " << w.center << "/" << w.width << " at " << s << " channel " << c;
+    }
+  }
+  // The map's points keep their colours, moved into the window.
+  const auto half = windowed(tf, {0.25, 0.5});
+  EXPECT_NEAR(half.points()[1].s, 0.1, 1e-15);  // 0.2 -> 0.25 + (0.2 - 0.5) * 0.5
+  EXPECT_EQ(half.points()[2].a, 0.8);
+  EXPECT_THROW(windowed(tf, {0.5, 0}), std::invalid_argument);
+  EXPECT_THROW(windowed(tf, {std::nan(""), 1}), std::invalid_argument);
+  // The range a scene gives for it: a window of a CT range.
+  const auto r = windowRange({-1000, 3000}, {0.25, 0.1});
+  EXPECT_DOUBLE_EQ(r[0], -200);
+  EXPECT_DOUBLE_EQ(r[1], 200);
+}

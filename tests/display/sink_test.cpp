@@ -289,5 +289,32 @@ TEST_F(WindowSinkXvfb, PollTranslatesInput) {
   EXPECT_TRUE(sink->poll().empty());
 }
 
+// The right button's drag moves the colour window: right widens it, up raises the level;
+// its motions merge as the left button's do, and its release is the full frame's cue.
+TEST_F(WindowSinkXvfb, ARightDragSetsTheColourWindow) {
+  auto sink = makeWindowSink(64, 48, "tessera window test");
+  sink->poll();
+  SDL_Event e{};
+  e.type = SDL_MOUSEMOTION;
+  e.motion.state = SDL_BUTTON_RMASK;
+  e.motion.xrel = 30, e.motion.yrel = -8;
+  SDL_PushEvent(&e);
+  e.motion.xrel = 10, e.motion.yrel = -12;
+  SDL_PushEvent(&e);  // merges
+  e = {};
+  e.type = SDL_MOUSEBUTTONUP;
+  e.button.button = SDL_BUTTON_RIGHT;
+  SDL_PushEvent(&e);
+  const auto ev = sink->poll();
+  ASSERT_EQ(ev.size(), 2u);
+  EXPECT_TRUE(ev[0].interacting);
+  EXPECT_EQ(ev[0].orbit_dx, 0);
+  EXPECT_EQ(ev[0].orbit_dy, 0);
+  EXPECT_NEAR(ev[0].window_scale, std::pow(kWindowScalePerPixel, 40), 1e-12);
+  EXPECT_NEAR(ev[0].window_shift, 20 * kWindowShiftPerPixel, 1e-12);  // 20 pixels up
+  EXPECT_FALSE(ev[1].interacting);
+  EXPECT_EQ(ev[1].window_scale, 1);
+}
+
 }  // namespace
 }  // namespace tessera::display

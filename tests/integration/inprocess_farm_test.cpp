@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <future>
+#include <optional>
 #include <fstream>
 #include <thread>
 
@@ -18,6 +19,8 @@
 #include "tests/integration/farm_util.h"
 #include "master/interaction.h"
 #include "master/master.h"
+#include "master/refinement.h"
+#include "common/max_intensity.h"
 #include "renderer/volume/raycaster.h"
 #include "renderer/stage.h"
 
@@ -83,64 +86,137 @@ TEST(InProcessFarm, LostRendererIsDetectedAndItsWorkReassigned) {
   EXPECT_GE(max_epoch, 1u);
 }
 
+// An interactive farm in this process (master, renderers, one compositor, a display writing
+// PNG files) and a user who joins as a second display to send Input.
+class InteractiveFarm {
+ public:
+  InteractiveFarm(FarmDir& dir, const Scene& scene, int renderers, const std::string& name, bool binary_swap = false)
+      : dir_(dir), scene_(scene), ep_(makeEndpoints("inproc://" + name)) {
+    mo_.scene = scene;
+    mo_.binary_swap = binary_swap;
+    mo_.endpoints = ep_;
+    mo_.frames = 0;  // interactive
+    mo_.renderers = renderers;
+    for (int r = 0; r < renderers; ++r) ro_.push_back({scene, ep_, 1});  // one thread each
+    co_ = {ep_, "", 512, 512, std::nullopt, sceneIdentity(scene)};
+    if (scene.blend == Blend::Maximum) co_.maximum = scene.tf;
+    dopt_ = {ep_, (dir.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
+    dopt_.scene = sceneIdentity(scene);
+    stages_.push_back(std::async(std::launch::async, [&] { return master::run(mo_, ctx_, &stop_); }));
+    for (auto& ro : ro_) stages_.push_back(std::async(std::launch::async, [&] { return renderer::runStage(ro, ctx_, &stop_); }));
+    stages_.push_back(std::async(std::launch::async, [&] { return compositor::runStage(co_, ctx_, &stop_); }));
+    stages_.push_back(std::async(std::launch::async, [&] { return display::runStage(dopt_, ctx_, &stop_); }));
+  }
+  ~InteractiveFarm() { stop_ = true; }
+
+  bool waitFor(int k, std::chrono::milliseconds limit) {
+    auto end = std::chrono::steady_clock::now() + limit;
+    while (!fs::exists(dir_.frame(k)) && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(10ms);
+    return fs::exists(dir_.frame(k));
+  }
+  // The master takes Input only from a joined display: the user joins as a second one.
+  void send(const proto::Input& in) {
+    if (!user_) {
+      user_.emplace(ctx_, ep_, proto::Role::Display, sceneIdentity(scene_));
+      ASSERT_TRUE(user_->join(&stop_, 30));
+    }
+    user_->report(proto::encode(in, 0));
+  }
+  void stop() {
+    stop_ = true;
+    for (auto& f : stages_) {
+      ASSERT_EQ(f.wait_for(30s), std::future_status::ready);
+      EXPECT_EQ(f.get(), 0);
+    }
+  }
+
+ private:
+  FarmDir& dir_;
+  Scene scene_;
+  Endpoints ep_;
+  zmq::context_t ctx_;
+  std::atomic<bool> stop_{false};
+  master::MasterOptions mo_;
+  std::vector<renderer::StageOptions> ro_;
+  compositor::StageOptions co_;
+  display::StageOptions dopt_;
+  std::vector<std::future<int>> stages_;
+  std::optional<StageLink> user_;
+};
+
+// The one-process render of `scene` seen by `cam` through colour window `w`.
+Image8 windowedRender(const Scene& scene, const Camera& cam, const ColorWindow& w) {
+  auto volume = std::make_shared<Volume>(loadVolume(scene));
+  const TransferFunction tf = windowed(scene.tf, w);
+  renderer::Raycaster caster(volume, tf, {}, {0, 0, 0}, scene.blend);
+  renderer::RenderOptions opt;
+  opt.quality = scene.quality;
+  ImageF img = caster.render(cam, scene.width, scene.height, renderer::wholeVolume(*volume), opt);
+  if (scene.blend == Blend::Maximum) MaxIntensity(tf).map(img.px.data(), (size_t)img.width * img.height);
+  return toRGBA8(img);
+}
+
 // Interactive mode: no frame is rendered again while the inputs stay the same; an Input
-// from the display moves the camera and yields exactly one new, correct frame.
+// from the display moves the camera and yields exactly one new, correct frame; a right-drag's
+// colour window too; r brings back the scene's view and colours.
 TEST(InProcessFarm, InteractiveFramesFollowInputAndIdleFramesAreNotRendered) {
   FarmDir dir("interactive");
   Scene scene = smallScene(1);
-  Endpoints ep = makeEndpoints("inproc://farm-interactive");
-  zmq::context_t ctx;
-  std::atomic<bool> stop{false};
-  master::MasterOptions mo;
-  mo.scene = scene;
-  mo.endpoints = ep;
-  mo.frames = 0;  // interactive
-  renderer::StageOptions ro{scene, ep, 1};
-  compositor::StageOptions co{ep, "", 512, 512, std::nullopt, sceneIdentity(scene)};
-  display::StageOptions dopt{ep, (dir.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
-  dopt.scene = sceneIdentity(scene);
-  std::vector<std::future<int>> stages;
-  stages.push_back(std::async(std::launch::async, [&] { return master::run(mo, ctx, &stop); }));
-  stages.push_back(std::async(std::launch::async, [&] { return renderer::runStage(ro, ctx, &stop); }));
-  stages.push_back(std::async(std::launch::async, [&] { return compositor::runStage(co, ctx, &stop); }));
-  stages.push_back(std::async(std::launch::async, [&] { return display::runStage(dopt, ctx, &stop); }));
-  auto waitFor = [&](int k, std::chrono::milliseconds limit) {
-    auto end = std::chrono::steady_clock::now() + limit;
-    while (!fs::exists(dir.frame(k)) && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(10ms);
-    return fs::exists(dir.frame(k));
-  };
-  EXPECT_TRUE(waitFor(0, 30s)) << "first frame missing";
-  EXPECT_FALSE(waitFor(1, 500ms)) << "a frame was rendered although nothing changed";
-
+  InteractiveFarm farm(dir, scene, 1, "farm-interactive");
+  EXPECT_TRUE(farm.waitFor(0, 30s)) << "first frame missing";
+  EXPECT_FALSE(farm.waitFor(1, 500ms)) << "a frame was rendered although nothing changed";
   proto::Input in;
   in.orbit_dx = 40;
   in.zoom = 0.8;
-  // The master takes Input only from a joined display: the user joins as a second one.
-  StageLink user(ctx, ep, proto::Role::Display, sceneIdentity(scene));
-  ASSERT_TRUE(user.join(&stop, 30));
-  user.report(proto::encode(in, 0));
-  EXPECT_TRUE(waitFor(1, 30s)) << "no frame after the input";
-  EXPECT_FALSE(waitFor(2, 500ms)) << "more than one frame for one input";
+  farm.send(in);
+  EXPECT_TRUE(farm.waitFor(1, 30s)) << "no frame after the input";
+  EXPECT_FALSE(farm.waitFor(2, 500ms)) << "more than one frame for one input";
+  proto::Input window;  // a right drag's sum, released
+  window.window_shift = 0.4;
+  window.window_scale = 0.5;
+  farm.send(window);
+  EXPECT_TRUE(farm.waitFor(2, 30s)) << "no frame after the colour window moved";
   proto::Input home;  // the window's r: the scene's view again
   home.home = true;
-  user.report(proto::encode(home, 0));
-  EXPECT_TRUE(waitFor(2, 30s)) << "no frame after r";
-  stop = true;
-  for (auto& f : stages) {
-    ASSERT_EQ(f.wait_for(30s), std::future_status::ready);
-    EXPECT_EQ(f.get(), 0);
-  }
-  auto volume = std::make_shared<Volume>(loadVolume(scene));
-  renderer::Raycaster caster(volume, scene.tf);
-  renderer::RenderOptions opt;
-  opt.quality = scene.quality;
-  Camera moved = master::applyInput(scene.camera, in);
-  Image8 ref = toRGBA8(caster.render(moved, scene.width, scene.height, renderer::wholeVolume(*volume), opt));
+  farm.send(home);
+  EXPECT_TRUE(farm.waitFor(3, 30s)) << "no frame after r";
+  farm.stop();
+  const Camera moved = master::applyInput(scene.camera, in);
+  const ColorWindow w = master::Refinement::movedWindow({}, 0.4, 0.5);
   Image8 before = readPng(dir.frame(0).string()), after = readPng(dir.frame(1).string());
   // 1/255: the sort-last contract.
-  EXPECT_TRUE(dir.matches(after, ref, 1, "after_input"));
+  EXPECT_TRUE(dir.matches(after, windowedRender(scene, moved, {}), 1, "after_input"));
   EXPECT_GT(maxAbsDiff(after, before), 16) << "the camera did not move";
-  EXPECT_TRUE(dir.matches(readPng(dir.frame(2).string()), before, 1, "home")) << "r did not bring back the scene's view";
+  const Image8 recoloured = readPng(dir.frame(2).string());
+  EXPECT_TRUE(dir.matches(recoloured, windowedRender(scene, moved, w), 1, "window"));
+  EXPECT_GT(maxAbsDiff(recoloured, after), 16) << "the colour window did not change the image";
+  EXPECT_TRUE(dir.matches(readPng(dir.frame(3).string()), before, 1, "home")) << "r did not bring back the scene's view";
+}
+
+// Maximum intensity projection maps the merged values once, where the frame is finished (the
+// compositor with direct send, the renderers' bands with binary swap): through the frame's
+// colour window.
+TEST(InProcessFarm, AColourWindowRecoloursAMaximumIntensityFarm) {
+  for (bool binary_swap : {false, true}) {
+    SCOPED_TRACE(binary_swap ? "binary swap" : "direct send");
+    const std::string name = binary_swap ? "interactive-mip-swap" : "interactive-mip";
+    FarmDir dir(name);
+    Scene scene = smallScene(1);
+    scene.blend = Blend::Maximum;
+    InteractiveFarm farm(dir, scene, 2, "farm-" + name, binary_swap);
+    EXPECT_TRUE(farm.waitFor(0, 30s)) << "first frame missing";
+    proto::Input window;
+    window.window_shift = -0.3;
+    window.window_scale = 0.4;
+    farm.send(window);
+    EXPECT_TRUE(farm.waitFor(1, 30s)) << "no frame after the colour window moved";
+    farm.stop();
+    const ColorWindow w = master::Refinement::movedWindow({}, -0.3, 0.4);
+    const Image8 before = readPng(dir.frame(0).string()), after = readPng(dir.frame(1).string());
+    EXPECT_TRUE(dir.matches(before, windowedRender(scene, scene.camera, {}), 1, "mip"));
+    EXPECT_TRUE(dir.matches(after, windowedRender(scene, scene.camera, w), 1, "mip_window"));
+    EXPECT_GT(maxAbsDiff(after, before), 16) << "the colour window did not change the image";
+  }
 }
 
 }  // namespace

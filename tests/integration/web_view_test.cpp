@@ -147,6 +147,23 @@ TEST_F(WebView, TheLosslessFrameOnThePageIsThePngSinksFrameExactly) {
   EXPECT_TRUE(fs::exists(dir_.path() / "web-view.png"));
 }
 
+// The right button's drag sets the colour window, not the camera: the picture changes, and the
+// final frame is the PNG sink's, with the scene's camera and a window other than the scene's.
+TEST_F(WebView, ARightDragSetsTheColourWindow) {
+  const auto out = browse("wait-lossless:0 pixels:before right-drag:20 wait-lossless:+ sleep:600 pixels:after");
+  ASSERT_EQ(out.size(), 6u);
+  const Image8 before = pagePixels("before", out[1]), after = pagePixels("after", out[5]);
+  EXPECT_GT(maxAbsDiff(before, after), 16) << "the right drag did not change the picture";
+  const auto lines = metricsLines(dir_);
+  ASSERT_GE(lines.size(), 2u);
+  EXPECT_EQ(lines.back()["camera"], lines.front()["camera"]) << "the right drag moved the camera";
+  EXPECT_EQ(lines.front()["window"], nlohmann::json::array({0.5, 1.0}));
+  EXPECT_NE(lines.back()["window"], lines.front()["window"]);
+  const uint64_t id = out[5]["id"].get<uint64_t>();
+  EXPECT_EQ(id, lines.back()["frame"].get<uint64_t>());
+  EXPECT_TRUE(dir_.matches(after, pngFrame(id), 0, "final_page_vs_png_sink"));
+}
+
 TEST_F(WebView, ADragChangesThePictureAndEndsOnTheLosslessFrameOfTheFinalCamera) {
   const auto out = browse("wait-lossless:0 pixels:before drag:30 wait-lossless:+ sleep:600 pixels:after state");
   ASSERT_EQ(out.size(), 7u);

@@ -66,3 +66,24 @@ TEST(Interaction, BadValuesThrowInvalidArgument) {
 
 }  // namespace
 }  // namespace tessera::master
+
+namespace tessera::master {
+namespace {
+
+TEST(Interaction, TheColourWindowIsSaidInTheVolumesValuesWithTheRangeThatKeepsIt) {
+  Scene scene;
+  RawVolumeSpec file;
+  file.range = {-1000, 3000};
+  scene.volume = file;
+  const std::string note = windowNote(scene, {0.25, 0.1});
+  EXPECT_NE(note.find("values -200 to 200 (level 0, width 400)"), std::string::npos) << note;
+  EXPECT_NE(note.find("`range: [-200, 200]`"), std::string::npos) << note;
+  EXPECT_NE(windowNote(scene, {}).find("as the scene gives it"), std::string::npos);
+  scene.tf = transferFunctionPreset("ct-bone");  // its range is its own: no `range` to give
+  EXPECT_EQ(windowNote(scene, {0.25, 0.1}).find("range:"), std::string::npos);
+  scene.volume = GeneratorSpec{};  // no range to give: the values only
+  EXPECT_EQ(windowNote(scene, {0.25, 0.5}).find("range:"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace tessera::master

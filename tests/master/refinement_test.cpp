@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace tessera::master {
 namespace {
 
@@ -307,6 +309,82 @@ TEST(Refinement, TimeKeysDoNothingWithoutASeries) {
   r.issued(*r.next(Clock::now()));
   r.input(key(1, proto::TimeKey::Forward), Clock::now());
   EXPECT_FALSE(r.next(Clock::now()));
+}
+
+}  // namespace
+}  // namespace tessera::master
+
+namespace tessera::master {
+namespace {
+
+proto::Input windowDrag(uint64_t seq, double shift, double scale, bool interacting = true) {
+  proto::Input in;
+  in.seq = seq;
+  in.window_shift = shift;
+  in.window_scale = scale;
+  in.interacting = interacting;
+  return in;
+}
+
+// A right-button drag moves the colour window: the level by widths, the width by a factor;
+// the frames show it, the master says it once the drag ends, and r brings back the scene's.
+TEST(Refinement, ARightDragMovesTheColourWindowAndRBringsBackTheScenes) {
+  Refinement r = make();
+  auto t = Clock::now();
+  r.issued(*r.next(t));
+  EXPECT_FALSE(r.settledWindow(t)) << "the scene's window is not news";
+  r.input(windowDrag(1, 0.25, 0.5), t);
+  auto s = r.next(t);
+  ASSERT_TRUE(s);
+  EXPECT_TRUE(s->interactive);
+  EXPECT_EQ(s->window, (ColorWindow{0.75, 0.5}));  // the level moved by a quarter of the old width
+  r.issued(*s);
+  EXPECT_FALSE(r.settledWindow(t)) << "said while the drag goes on";
+  r.input(windowDrag(2, 0, 1, false), t);  // released
+  s = r.next(t);
+  ASSERT_TRUE(s);
+  EXPECT_FALSE(s->interactive);
+  EXPECT_EQ(s->window, (ColorWindow{0.75, 0.5}));
+  r.issued(*s);
+  EXPECT_EQ(r.settledWindow(t), (ColorWindow{0.75, 0.5}));
+  EXPECT_FALSE(r.settledWindow(t)) << "said once";
+  proto::Input home;
+  home.seq = 3, home.home = true;
+  r.input(home, t);
+  s = r.next(t);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->window, ColorWindow{});
+  EXPECT_EQ(s->camera, Camera{});
+}
+
+TEST(Refinement, TheColourWindowStaysWithinItsBounds) {
+  ColorWindow w;
+  for (int i = 0; i < 20; ++i) w = Refinement::movedWindow(w, 0, 1000);  // each step at most 5 times
+  EXPECT_EQ(w.width, Refinement::kMaxWindow);
+  for (int i = 0; i < 20; ++i) w = Refinement::movedWindow(w, 0, 1e-3);
+  EXPECT_EQ(w.width, Refinement::kMinWindow);
+  w = Refinement::movedWindow({0.5, 0.5}, 100, 1);  // far above the values: an eighth stays over them
+  EXPECT_DOUBLE_EQ(w.center, 1 + 0.5 * 3 / 8);
+  w = Refinement::movedWindow({0.5, 0.5}, -100, 1);
+  EXPECT_DOUBLE_EQ(w.center, -0.5 * 3 / 8);
+  EXPECT_EQ(Refinement::movedWindow({3, 1e-9}, 0, 1), (ColorWindow{3, 1e-9})) << "no change: exactly as before";
+  Refinement r = make();
+  auto t = Clock::now();
+  r.issued(*r.next(t));
+  EXPECT_THROW(r.input(windowDrag(1, std::nan(""), 1), t), std::invalid_argument);
+  EXPECT_THROW(r.input(windowDrag(2, 0, 0), t), std::invalid_argument);
+  EXPECT_FALSE(r.next(t)) << "refused input changed the view";
+}
+
+TEST(Refinement, AMeshSceneHasNoColourWindow) {
+  Scene scene;
+  scene.mesh = MeshSpec{};
+  Refinement r(scene);
+  auto t = Clock::now();
+  r.issued(*r.next(t));
+  r.input(windowDrag(1, 0.25, 2, false), t);
+  EXPECT_FALSE(r.next(t)) << "a mesh's colours do not change";
+  EXPECT_EQ(r.window(), ColorWindow{});
 }
 
 }  // namespace

@@ -89,3 +89,43 @@ TEST(BrickImages, ARecycledImageEqualsAFreshOne) {
 
 }  // namespace
 }  // namespace tessera::renderer
+
+namespace tessera::renderer {
+namespace {
+
+// A frame's colour window re-renders the brick from the voxels held, equal to a caster made
+// for the windowed map (cpu shaded: its gradients shared; osmesa: made again), and back.
+TEST(BrickImages, AFramesColourWindowRendersAsACasterOfTheWindowedMap) {
+  for (BackendKind kind : {BackendKind::Cpu, BackendKind::Osmesa}) {
+    SCOPED_TRACE(backendName(kind));
+    Shell shell(32);
+    shell.scene.shading.on = kind == BackendKind::Cpu;
+    proto::SortLastWork work;
+    const BrickBox brick{{0, 0, 0}, {32, 32, 32}};
+    work.bricks.push_back({0, brick});
+    BrickImages images(shell.scene, kind, 64, 1);
+    proto::StageStats st;
+    proto::FrameParams p = shell.p;
+    p.window = {0.6, 0.3};
+    images.hold(p, work, 0, st);
+    const ImageF windowed_image = images.render(p, brick, st, nullptr).image;
+    auto volume = std::make_shared<const Volume>(loadVolume(shell.scene));
+    RenderOptions ro;
+    ro.quality = p.quality;
+    ro.threads = 1;
+    auto fresh = [&](const ColorWindow& w) {
+      return makeVolumeBackend(kind, volume, windowed(shell.scene.tf, w), shell.scene.shading)
+          ->render(p.camera, p.width, p.height, brick, ro);
+    };
+    EXPECT_EQ(windowed_image.px, fresh(p.window).px);
+    p.window = {};
+    images.hold(p, work, 0, st);
+    const ImageF plain = images.render(p, brick, st, nullptr).image;
+    EXPECT_EQ(plain.px, fresh({}).px);
+    EXPECT_NE(plain.px, windowed_image.px) << "the window changed nothing";
+    EXPECT_EQ(st.images_made, 2u);
+  }
+}
+
+}  // namespace
+}  // namespace tessera::renderer

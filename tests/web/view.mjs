@@ -8,6 +8,7 @@
 //   pixels:NAME         the canvas's RGBA into OUTDIR/NAME.rgba, and its id/kind/size
 //   shot:NAME           a screenshot into OUTDIR/NAME.png
 //   drag:STEPS          a left-button drag from the canvas's centre, STEPS moves of 6 px, 16 ms apart
+//   right-drag:STEPS    the same with the right button (the colour window)
 //   reload              reloads the page; prints the ms until it shows a frame again
 //   bad-ws              from the page, a second WebSocket (with the token) sends malformed,
 //                       unknown, oversized and binary messages, then closes
@@ -53,19 +54,20 @@ try {
     } else if (name === 'shot') {
       await page.screenshot({ path: path.join(outdir, arg + '.png') });
       say({ action });
-    } else if (name === 'drag') {
+    } else if (name === 'drag' || name === 'right-drag') {
+      const button = name === 'drag' ? 'left' : 'right';
       dragFrom = (await state()).shown;
       const box = await (await page.$('canvas')).boundingBox();
       let x = box.x + box.width / 2, y = box.y + box.height / 2;
       await page.mouse.move(x, y);
-      await page.mouse.down();
+      await page.mouse.down({ button });
       for (let i = 0; i < Number(arg); ++i) {
         x += 6;
         y += 1;
         await page.mouse.move(x, y);
         await new Promise((r) => setTimeout(r, 16));
       }
-      await page.mouse.up();
+      await page.mouse.up({ button });
       say({ action, ms: Date.now() - t0, state: await state() });
     } else if (name === 'reload') {
       await page.reload({ waitUntil: 'load' });
