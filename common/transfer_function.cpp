@@ -62,7 +62,9 @@ TransferFunction windowed(const TransferFunction& tf, const ColorWindow& w) {
   std::vector<TfPoint> points{at(0)};
   for (TfPoint p : tf.points()) {
     p.s = w.center + (p.s - 0.5) * w.width;
-    if (p.s > 0 && p.s < 1) points.push_back(p);
+    // A point moved onto 1 stays: a step there holds its left value up to 1 (at 0, at(0) is
+    // the step's right value, which is what 0 shows).
+    if (p.s > 0 && p.s <= 1) points.push_back(p);
   }
   points.push_back(at(1));
   return TransferFunction(std::move(points));

@@ -1,6 +1,7 @@
 // Where the display stage puts finished frames: an SDL2 window or a folder of PNG files.
 // A Sink is used from one thread (the display loop). Frames are premultiplied rgba8.
 #pragma once
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -65,14 +66,14 @@ inline bool addDrag(InputEvent& last, const InputEvent& ev) {
   last.orbit_dx += ev.orbit_dx;
   last.orbit_dy += ev.orbit_dy;
   last.window_shift += ev.window_shift;
-  last.window_scale *= ev.window_scale;
+  last.window_scale = std::clamp(last.window_scale * ev.window_scale, 1e-3, 1e3);  // the master takes 0.2..5 a step
   return true;
 }
 // `ev` (its time and page) as a drag of dx, dy pixels: the left button's orbits, the right
 // button's sets the colour window.
 inline InputEvent dragEvent(InputEvent ev, double dx, double dy, bool right) {
   if (right) {
-    ev.window_scale = std::pow(kWindowScalePerPixel, dx);
+    ev.window_scale = std::pow(kWindowScalePerPixel, std::clamp(dx, -1000.0, 1000.0));  // a web page's dx may be 1e4
     ev.window_shift = -dy * kWindowShiftPerPixel;  // screen y grows downwards
   } else {
     ev.orbit_dx = dx * kDegreesPerPixel;

@@ -64,9 +64,10 @@ class Refinement {
   // with the input's window_shift and window_scale; a mesh scene's has none.
   explicit Refinement(const Scene& scene);
 
-  // The colour window's bounds: a width from 1/1024 of the range (a 16-bit scan's 64 values)
-  // to 16 ranges, and a centre that keeps some of the window over the values.
-  static constexpr double kMinWindow = 1.0 / 1024, kMaxWindow = 16;
+  // The colour window's bounds: a width from 1/256 of the range (16 entries of the casters'
+  // 4096-entry colour table, 256 levels of their 16-bit voxels) to 16 ranges, and a centre
+  // that keeps some of the window over the values.
+  static constexpr double kMinWindow = 1.0 / 256, kMaxWindow = 16;
   static ColorWindow movedWindow(const ColorWindow& w, double shift, double scale);
   const ColorWindow& window() const { return window_; }
   // The colour window once a drag that moved it has ended, once (the master says it).

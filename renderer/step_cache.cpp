@@ -163,7 +163,7 @@ HeldStep StepCache::get(const VoxelBox& box, int step, const ColorWindow& window
                     stats_.bad_steps);
       auto good = held_.find(last_good_);
       if (good == held_.end()) return {};
-      return {last_good_, good->second.volume, good->second.caster};
+      return shown(last_good_, good->second, window);
     }
     lock.lock();
     loading_ = -1;
@@ -171,14 +171,18 @@ HeldStep StepCache::get(const VoxelBox& box, int step, const ColorWindow& window
     stats_.load_ms += ms + std::max(waited_ms, 0.0);  // a prefetch waited for that failed: both
     it = keep(step, std::move(e));
   }
-  Entry& held = it->second;
-  if (!held.caster || !(held.window == window)) {
-    held.caster.reset();
-    held.caster = caster(held.volume, window);
-    held.window = window;
-  }
   last_good_ = step;
-  return {step, it->second.volume, it->second.caster};
+  return shown(step, it->second, window);
+}
+
+HeldStep StepCache::shown(int step, Entry& e, const ColorWindow& window) {
+  if (!e.caster || !(e.window == window)) {
+    // Made before the old one goes: while it lives, the volume's bricked copy and gradients
+    // stay in perVolume's cache for the new one.
+    e.caster = caster(e.volume, window);
+    e.window = window;
+  }
+  return {step, e.volume, e.caster};
 }
 
 void StepCache::prefetch(const std::vector<int>& steps) {

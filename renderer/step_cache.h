@@ -48,9 +48,10 @@ class StepCache {
   // read is logged and counted, and the last good step is returned instead (nullptr volume
   // when there is none: the caller fails the frame). A new box drops every held step.
   // Its caster renders the scene's colour map through `window`: a held step's caster of
-  // another window is made again (its voxels and gradients are kept; the cpu backend's
-  // classification for the map, ~10 ms for 256^3 voxels, is not), and steps read ahead
-  // from then on are made for it.
+  // another window is made again (the cpu backend keeps its bricked voxels and gradients and
+  // classifies them for the map again: 15-25 ms for half of a 256^3 volume; the osmesa
+  // backend makes its context and volume texture again), and steps read ahead from then on
+  // are made for it. The last good step shown instead of a bad one is shown through it too.
   HeldStep get(const VoxelBox& box, int step, const ColorWindow& window = {});
   // The steps the master will show next, soonest first: the prefetch thread loads those not
   // held, as the budget allows, and forgets earlier wishes (steps playback has passed).
@@ -73,6 +74,7 @@ class StepCache {
   // while reading; throws what loadVolume throws.
   Entry load(int step, const VoxelBox& box, const ColorWindow& window, double& ms, std::vector<float> storage);
   std::shared_ptr<const VolumeBackend> caster(std::shared_ptr<const Volume> v, const ColorWindow& window) const;
+  HeldStep shown(int step, Entry& e, const ColorWindow& window);  // e's caster made for `window` if not; under mu_
   // A freed step's samples, for the next load: a step's window costs no page faults and no
   // zeroing (measured: ~5% of a playing renderer's time). Under mu_.
   void recycle(Entry&& e);

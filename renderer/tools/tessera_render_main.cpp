@@ -79,7 +79,7 @@ ImageF renderScene(const renderer::VolumeBackend& rc, const Volume& vol, const B
 
 struct Args {
   std::string scene_path, out = "out.png", quality_name, size, raw, pam, backend = "cpu";
-  std::vector<double> background;
+  std::vector<double> background, window;
   int bricks = 1, frame = 0, threads = 0, repeat = 1, step = -1;
   bool print_stats = false, compare_ref = false, no_skip = false;
   // Mesh scenes (OSMesa): tiles, anti-aliasing overrides and the anti-aliasing sweep.
@@ -120,6 +120,12 @@ void addOptions(CLI::App& app, Args& a) {
       ->expected(3)
       ->check(CLI::Range(0.0, 1.0))
       ->option_text("R,G,B [none: straight alpha]");
+  app.add_option("--window", a.window,
+                 "the colour map through a window of the values, as an interactive farm's right-drag sets it "
+                 "(metrics.jsonl's `window`): centre and width in fractions of the volume's range")
+      ->delimiter(',')
+      ->expected(2)
+      ->option_text("C,W [0.5,1: the scene's map]");
   app.add_option("--tiles", a.tiles, "mesh scenes: render as CxR tiles and assemble (bit-identical to 1x1)");
   app.add_option("--aa", a.aa, "mesh scenes: none | msaa | ssaa | fft (default: the scene's)");
   app.add_option("--aa-samples", a.aa_samples, "mesh scenes: MSAA samples (1,2,4) or SSAA factor")->check(CLI::Range(1, 8));
@@ -221,6 +227,10 @@ int run(int argc, char** argv) {
   if (!a.size.empty()) parseSize(a.size, w, h);
   // A camera fitted to the scene's image is fitted again to the size asked for (a tall one).
   if (scene.camera_fitted) scene.camera = fittedCamera(scene, (double)w / h);
+  if (!a.window.empty()) {
+    if (scene.mesh) throw std::invalid_argument("--window: a mesh scene has no colour map");
+    scene.tf = windowed(scene.tf, {a.window[0], a.window[1]});
+  }
   if (!scene.mesh) return renderVolume(scene, a, w, h, bg);
   renderer::MeshToolOptions mo;
   mo.out = a.out;

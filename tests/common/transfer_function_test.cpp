@@ -73,9 +73,11 @@ TEST(TransferFunction, CorrectOpacity) {
 TEST(TransferFunction, AWindowLaysTheMapOverPartOfTheValues) {
   const auto tf = sample();
   EXPECT_EQ(windowed(tf, {}), tf);  // the default window is the map itself
-  // Narrow, wide, shifted past either end, and a step (0.6) landing on the window's edge.
+  // Narrow, wide, shifted past either end, and the step at 0.6 landing exactly on either edge.
+  const double step_at = 0.6 - 0.5;  // the step's offset from the map's middle, as windowed() computes it
+  ASSERT_EQ(1 - step_at + step_at, 1.0);
   for (ColorWindow w : {ColorWindow{0.5, 0.25}, ColorWindow{0.1, 0.5}, ColorWindow{0.9, 3}, ColorWindow{-0.2, 1},
-                        ColorWindow{1.3, 2}, ColorWindow{0.4, 1}}) {
+                        ColorWindow{1.3, 2}, ColorWindow{0.4, 1}, ColorWindow{1 - step_at, 1}, ColorWindow{-step_at, 1}}) {
     const auto in = windowed(tf, w);
     EXPECT_EQ(in.points().front().s, 0.0);
     EXPECT_EQ(in.points().back().s, 1.0);

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <thread>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "common/io/image_io.h"
@@ -94,6 +95,7 @@ class InteractiveFarm {
       : dir_(dir), scene_(scene), ep_(makeEndpoints("inproc://" + name)) {
     mo_.scene = scene;
     mo_.binary_swap = binary_swap;
+    mo_.metrics_path = (dir.path() / "metrics.jsonl").string();
     mo_.endpoints = ep_;
     mo_.frames = 0;  // interactive
     mo_.renderers = renderers;
@@ -143,6 +145,15 @@ class InteractiveFarm {
   std::vector<std::future<int>> stages_;
   std::optional<StageLink> user_;
 };
+
+// Each frame's line of the master's metrics.jsonl.
+std::vector<nlohmann::json> frameLines(const FarmDir& dir) {
+  std::vector<nlohmann::json> lines;
+  std::ifstream in(dir.path() / "metrics.jsonl");
+  for (std::string line; std::getline(in, line);)
+    if (auto j = nlohmann::json::parse(line, nullptr, false); j.is_object() && j.contains("frame")) lines.push_back(j);
+  return lines;
+}
 
 // The one-process render of `scene` seen by `cam` through colour window `w`.
 Image8 windowedRender(const Scene& scene, const Camera& cam, const ColorWindow& w) {
@@ -215,6 +226,14 @@ TEST(InProcessFarm, AColourWindowRecoloursAMaximumIntensityFarm) {
     const Image8 before = readPng(dir.frame(0).string()), after = readPng(dir.frame(1).string());
     EXPECT_TRUE(dir.matches(before, windowedRender(scene, scene.camera, {}), 1, "mip"));
     EXPECT_TRUE(dir.matches(after, windowedRender(scene, scene.camera, w), 1, "mip_window"));
+    // The frame's line in metrics.jsonl gives its window; tessera-render --window renders it so.
+    const auto lines = frameLines(dir);
+    ASSERT_EQ(lines.size(), 2u);
+    EXPECT_EQ(lines[1]["window"], nlohmann::json::array({w.center, w.width}));
+    const fs::path file = dir.path() / "mip.yaml";
+    std::ofstream(file) << sceneYaml(scene);
+    const std::string arg = fmt::format("--window {},{}", lines[1]["window"][0].get<double>(), lines[1]["window"][1].get<double>());
+    EXPECT_TRUE(dir.matches(after, dir.reference(file, 0, arg), 1, "mip_tessera_render_window"));
     EXPECT_GT(maxAbsDiff(after, before), 16) << "the colour window did not change the image";
   }
 }

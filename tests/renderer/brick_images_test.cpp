@@ -94,7 +94,7 @@ namespace tessera::renderer {
 namespace {
 
 // A frame's colour window re-renders the brick from the voxels held, equal to a caster made
-// for the windowed map (cpu shaded: its gradients shared; osmesa: made again), and back.
+// for the windowed map (cpu, shaded; osmesa), and back.
 TEST(BrickImages, AFramesColourWindowRendersAsACasterOfTheWindowedMap) {
   for (BackendKind kind : {BackendKind::Cpu, BackendKind::Osmesa}) {
     SCOPED_TRACE(backendName(kind));

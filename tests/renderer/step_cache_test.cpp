@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "common/clock.h"
+#include "tests/common/temp_dir.h"
 
 namespace tessera::renderer {
 namespace {
@@ -81,6 +82,37 @@ TEST(StepCache, AFrameThatWaitsForThePrefetchOfItsStepCountsAMissAndItsWait) {
   const HeldStep small = moved.get();
   ASSERT_EQ(small.step, 3);
   EXPECT_EQ(small.volume->dims, (std::array<int, 3>{8, 8, 8}));
+}
+
+}  // namespace
+}  // namespace tessera::renderer
+
+namespace tessera::renderer {
+namespace {
+
+// A step that cannot be read shows the last good one, through the frame's colour window too.
+TEST(StepCache, TheLastGoodStepShownForABadOneIsShownThroughTheFramesWindow) {
+  test::TempDir dir("step_cache_window");
+  std::vector<uint8_t> voxels(16 * 16 * 16);
+  for (size_t i = 0; i < voxels.size(); ++i) voxels[i] = (uint8_t)(i * 37 % 251);
+  dir.write("t0.raw", voxels.data(), voxels.size());
+  dir.write("t1.raw", voxels.data(), 100);  // short
+  const Scene scene = parseScene("volume: {series: [t0.raw, t1.raw], dims: [16, 16, 16], type: uint8, range: [0, 255]}\n",
+                                 dir.path.string(), "s.yaml");
+  StepCache cache(scene, BackendKind::Cpu, 1ull << 30);
+  const VoxelBox box{{0, 0, 0}, {16, 16, 16}};
+  ASSERT_TRUE(cache.get(box, 0).volume);
+  const ColorWindow w{0.3, 0.4};
+  const HeldStep shown = cache.get(box, 1, w);
+  ASSERT_EQ(shown.step, 0);
+  RenderOptions ro;
+  ro.threads = 1;
+  const Brick whole{{0, 0, 0}, {16, 16, 16}};
+  const ImageF got = shown.caster->render(scene.camera, 32, 32, whole, ro);
+  const ImageF want = makeVolumeBackend(BackendKind::Cpu, shown.volume, windowed(scene.tf, w))->render(scene.camera, 32, 32, whole, ro);
+  const ImageF plain = makeVolumeBackend(BackendKind::Cpu, shown.volume, scene.tf)->render(scene.camera, 32, 32, whole, ro);
+  EXPECT_EQ(got.px, want.px);
+  EXPECT_NE(got.px, plain.px) << "the window changed nothing";
 }
 
 }  // namespace
