@@ -177,6 +177,15 @@ Crop Parser::crop(const YAML::Node& n) const {
   return c;
 }
 
+ValueWindow Parser::window(const YAML::Node& n) const {
+  if (!n.IsMap() || !n["level"] || !n["width"])
+    fail("window", "expected {level: L, width: W} in the volume's values, got " + describe(n));
+  checkKeys(n, "window", {"level", "width"});
+  const ValueWindow w{number(n["level"], "window.level"), number(n["width"], "window.width")};
+  if (!(w.width > 0)) fail("window.width", fmt::format("{}: expected a positive width of values", w.width));
+  return w;
+}
+
 // A CT preset is in Hounsfield units: it sets the range. A DICOM CT series given neither a
 // colour map nor a range gets ct-bone, and a note says so. Shading stays the scene's choice
 // (it more than doubles a renderer's memory, and the OSMesa backend has none).
@@ -223,7 +232,7 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
   if (!root.IsMap()) p.fail("", "expected a map of scene keys at the top level");
   p.checkKeys(root, "",
               {"volume", "transfer_function", "camera", "image", "quality", "orbit", "mesh", "light", "antialiasing",
-               "shading", "time", "blend", "crop"});
+               "shading", "time", "blend", "crop", "window"});
   Scene s;
   s.path = name_for_errors;
   s.quality = namedQuality(QualityName::Default);
@@ -253,6 +262,10 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
   if (root["crop"]) {
     if (is_mesh) p.fail("crop", "cuts the rendered volume; a mesh scene renders none");
     s.crop = p.crop(root["crop"]);
+  }
+  if (root["window"]) {
+    if (is_mesh) p.fail("window", "lays a volume's colour map over its values; a mesh scene has none");
+    s.window = p.window(root["window"]);
   }
   detail::ctPreset(p, root, s);
   if (root["image"]) {

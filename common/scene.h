@@ -85,6 +85,14 @@ struct Crop {
 // one voxel wide.
 VoxelBox cropBox(const Crop& c, const std::array<int, 3>& dims);
 
+// `window: {level: L, width: W}`: the colour map laid over L - W/2 .. L + W/2 of the volume's
+// values, in its own units (Hounsfield for a CT), as a CT viewer's window/level: what the
+// window's right-drag sets, and the master says once a drag ends. Left out: over its range.
+struct ValueWindow {
+  double level = 0, width = 1;
+  bool operator==(const ValueWindow&) const = default;
+};
+
 struct Scene {
   std::string path;  // file it was loaded from ("" for built-in)
   std::variant<RawVolumeSpec, GeneratorSpec> volume;
@@ -94,6 +102,7 @@ struct Scene {
   Shading shading;                  // volumes only
   Blend blend = Blend::Composite;   // volumes only
   Crop crop;                        // volumes only
+  std::optional<ValueWindow> window;  // volumes only
   Antialiasing antialiasing;
   TransferFunction tf;
   Camera camera;
@@ -136,7 +145,7 @@ Scene loadScene(const std::string& path);
 std::string sceneYaml(const Scene& s);
 // What every stage of one farm must have read alike (stages read their own copy of the scene
 // file, on their own hosts): sceneYaml less what the master sends with each frame (camera,
-// quality, orbit, time playback), each file named by its name alone. The master refuses a
+// quality, orbit, time playback, colour window), each file named by its name alone. The master refuses a
 // stage whose identity differs from its own (Hello.scene).
 std::string sceneIdentity(const Scene& s);
 // The built-in default scene (a hollow shell) that runs with no file.
@@ -177,6 +186,14 @@ class VolumeReader {
 std::variant<RawVolumeSpec, GeneratorSpec> stepVolume(const Scene& scene, int step);
 // The volume's dims from the scene alone (no voxel read).
 std::array<int, 3> volumeDims(const Scene& scene);
+// The values a volume scene's colour map spans: the file's `range` (fixed by the time a farm
+// runs: the master's, see fixVolumeRange), or 0..1 (a generated volume, or a file whose range
+// is not known yet).
+std::array<double, 2> mappedRange(const Scene& s);
+// The scene's `window` in fractions of `range` (the default window without one).
+ColorWindow colorWindow(const Scene& s, const std::array<double, 2>& range);
+ColorWindow colorWindow(const Scene& s);  // of mappedRange(s)
+
 // Half extents of the scene's box from the volume's dims and spacing (no voxel read); a mesh
 // scene's unit box.
 Vec3 sceneHalfExtent(const Scene& s);

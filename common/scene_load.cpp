@@ -34,6 +34,19 @@ Scene loadScene(const std::string& path) {
   return s;
 }
 
+std::array<double, 2> mappedRange(const Scene& s) {
+  const auto* raw = s.has_volume && !s.mesh ? std::get_if<RawVolumeSpec>(&s.volume) : nullptr;
+  return raw && raw->has_range ? raw->range : std::array<double, 2>{0, 1};
+}
+
+ColorWindow colorWindow(const Scene& s, const std::array<double, 2>& range) {
+  const double span = range[1] - range[0];
+  if (!s.window || !(span > 0)) return {};
+  return {(s.window->level - range[0]) / span, s.window->width / span};
+}
+
+ColorWindow colorWindow(const Scene& s) { return colorWindow(s, mappedRange(s)); }
+
 Vec3 sceneHalfExtent(const Scene& s) {
   if (!s.has_volume || s.mesh) return {0.5, 0.5, 0.5};
   Volume shape;

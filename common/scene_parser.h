@@ -147,6 +147,7 @@ class Parser {
   Antialiasing antialiasing(const YAML::Node& n) const;
   Shading shading(const YAML::Node& n) const;
   Crop crop(const YAML::Node& n) const;
+  ValueWindow window(const YAML::Node& n) const;
 
   std::string file_, base_;
 };

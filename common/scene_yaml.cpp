@@ -146,6 +146,9 @@ std::string sceneYaml(const Scene& s) {
       }
     e << YAML::EndMap;
   }
+  if (s.window)
+    e << YAML::Key << "window" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "level" << YAML::Value
+      << num(s.window->level) << YAML::Key << "width" << YAML::Value << num(s.window->width) << YAML::EndMap;
   if (s.mesh) {
     e << YAML::Key << "antialiasing" << YAML::Value << YAML::BeginMap << YAML::Key << "method" << YAML::Value
       << aaMethodName(s.antialiasing.method);
@@ -182,6 +185,7 @@ std::string sceneIdentity(const Scene& scene) {
   Scene s = scene;
   // The master sends these with every frame; a stage's own are never used.
   s.camera = Camera{}, s.camera_fitted = false, s.quality = Quality{}, s.orbit = Orbit{}, s.time = Playback{};
+  s.window.reset();
   // Each host keeps its files where it likes: a file is known by its name.
   auto* raw = std::get_if<RawVolumeSpec>(&s.volume);
   if (raw) byName(raw->file);

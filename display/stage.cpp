@@ -131,6 +131,11 @@ class Stage {
                                                                       : std::string("sharp"),
                                      fps, msSince(p.first_seen), render_ms, composite_ms, last_display_ms_);
     if (opt_.steps > 1) status += fmt::format("  step {}/{}", params.step, opt_.steps - 1);
+    if (!params.window.isDefault()) {  // the values the colour map spans (a generated volume's run 0..1)
+      const auto r = link_.volumeRange();
+      const auto v = windowRange(r[0] < r[1] ? r : std::array<double, 2>{0, 1}, params.window);
+      status += fmt::format("  colours {:.4g}..{:.4g}", v[0], v[1]);
+    }
     const auto input = inputShown(params);
     if (input) status += fmt::format("  input {:.0f} ms", msSince(input->at));  // up to now, before presenting
     if (sink_->interactive()) status += "  h: help";

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-#include <variant>
 
 #include <fmt/format.h>
 
@@ -39,16 +38,10 @@ Camera applyInput(const Camera& cam, const proto::Input& in) {
 }
 
 std::string windowNote(const Scene& scene, const ColorWindow& w) {
-  const auto* file = std::get_if<RawVolumeSpec>(&scene.volume);
-  const auto [lo, hi] = windowRange(file ? file->range : std::array<double, 2>{0, 1}, w);
-  std::string note = fmt::format("colour window: the colour map spans the values {:.6g} to {:.6g} (level {:.6g}, width {:.6g})",
-                                 lo, hi, (lo + hi) / 2, hi - lo);
-  if (w.isDefault()) return note + ", as the scene gives it";
-  if (!file) return note;
-  for (const char* preset : {"ct-bone", "ct-soft-tissue"})
-    if (scene.tf == transferFunctionPreset(preset))
-      return note + fmt::format(" (in Hounsfield units; {} keeps its own range, so a scene cannot keep this window)", preset);
-  return note + fmt::format("; to keep it, give the volume `range: [{:.6g}, {:.6g}]` in the scene", lo, hi);
+  const auto [lo, hi] = windowRange(mappedRange(scene), w);
+  std::string note = fmt::format("colour window: the colour map spans the values {:.6g} to {:.6g}", lo, hi);
+  if (w == colorWindow(scene)) return note + ", as the scene gives it";
+  return note + fmt::format("; to keep it, give the scene `window: {{level: {:.6g}, width: {:.6g}}}`", (lo + hi) / 2, hi - lo);
 }
 
 }  // namespace tessera::master

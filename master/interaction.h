@@ -15,7 +15,7 @@ namespace tessera::master {
 Camera applyInput(const Camera& cam, const proto::Input& in);
 
 // What the master says once the user has set a colour window (the drag released): the values
-// the colour map now spans and, for a volume file, the `range` that keeps that window.
+// the colour map now spans and the scene's `window` that keeps it (`scene`'s range fixed).
 std::string windowNote(const Scene& scene, const ColorWindow& w);
 
 // What the master says as an interactive run starts: how to steer and stop it.

@@ -64,6 +64,7 @@ class Master {
       return 1;  // as when stopped while gathering the stages
     }
     plan_ = prepared_->plan.get();
+    refinement_.setSceneWindow(colorWindow(prepared_->scene));
     for (const auto& [identity, hello] : held_.live()) onHello(identity, hello);
     if (!gatherMembers(stop)) return 1;
     plan_->reassign(workers());
@@ -219,7 +220,7 @@ class Master {
     while (plan_->canRun(w)) {
       if (total_frames_ > 0) {
         if (!window_.hasRoom() || next_frame_ >= (uint64_t)total_frames_) return;
-        publish(next_frame_, orbitFrame(opt_.scene, next_frame_), w);
+        publish(next_frame_, orbitFrame(prepared_->scene, next_frame_), w);
         ++next_frame_;
         continue;
       }
@@ -263,7 +264,6 @@ class Master {
     metrics_.issued(frame, p.epoch, (int)w.renderers.size(), (int)p.regions.size(), spec);
     sendBytes(pub_, proto::encode(p, kMasterRank));
   }
-
   bool finished() const { return total_frames_ > 0 && next_frame_ >= (uint64_t)total_frames_ && window_.empty(); }
 
   // ---- control messages ---------------------------------------------------------------

@@ -32,6 +32,7 @@ FrameSpec orbitFrame(const Scene& scene, uint64_t frame) {
   s.height = s.full_height = scene.height;
   s.step = scene.time.stepAt(frame, scene.series.steps);
   s.next_step = scene.time.stepAt(frame + 1, scene.series.steps);
+  s.window = colorWindow(scene);
   return s;
 }
 
@@ -107,7 +108,7 @@ void Refinement::input(const proto::Input& in, Clock::time_point now) {
   Camera moved = applyInput(in.home ? home : camera_, in);  // throws before anything changes
   if (!std::isfinite(in.window_shift) || !std::isfinite(in.window_scale) || !(in.window_scale > 0))
     throw std::invalid_argument("Input with a non-finite colour window shift or a non-positive scale");
-  if (windowed_) window_ = movedWindow(in.home ? ColorWindow{} : window_, in.window_shift, in.window_scale);
+  if (windowed_) window_ = movedWindow(in.home ? home_window_ : window_, in.window_shift, in.window_scale);
   if (in.interacting && !interacting(now)) std::fill(std::begin(seen_ms_), std::end(seen_ms_), 0.0);
   camera_ = moved;
   if (in.quality) quality_ = namedQuality(*in.quality);
@@ -128,6 +129,11 @@ ColorWindow Refinement::movedWindow(const ColorWindow& w, double shift, double s
   out.center = std::clamp(w.center + shift * w.width, -reach, 1 + reach);
   if (shift == 0 && scale == 1) out = w;  // exactly: a release moves nothing
   return out;
+}
+
+void Refinement::setSceneWindow(const ColorWindow& w) {
+  if (!windowed_) return;
+  window_ = home_window_ = said_window_ = w;
 }
 
 std::optional<ColorWindow> Refinement::settledWindow(Clock::time_point now) {

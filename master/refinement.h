@@ -33,7 +33,8 @@ struct FrameSpec {
   bool operator==(const FrameSpec&) const = default;
 };
 
-// A fixed run's frame: the orbit's camera at the scene's quality and size.
+// A fixed run's frame: the orbit's camera at the scene's quality, size and colour window
+// (`scene`'s range fixed: the master's prepared scene).
 FrameSpec orbitFrame(const Scene& scene, uint64_t frame);
 // Sets what the spec decides in p: the view, the size, the inputs shown and the steps.
 void setView(proto::FrameParams& p, const FrameSpec& spec);
@@ -70,6 +71,9 @@ class Refinement {
   static constexpr double kMinWindow = 1.0 / 256, kMaxWindow = 16;
   static ColorWindow movedWindow(const ColorWindow& w, double shift, double scale);
   const ColorWindow& window() const { return window_; }
+  // The scene's `window` once its range is known (the master has read the volume): the first
+  // frames' and r's, and not news when a drag ends on it.
+  void setSceneWindow(const ColorWindow& w);
   // The colour window once a drag that moved it has ended, once (the master says it).
   std::optional<ColorWindow> settledWindow(Clock::time_point now);
 
@@ -97,7 +101,7 @@ class Refinement {
   Camera camera_, home_;  // now, and the scene's (an input's `home`)
   std::function<Camera(double aspect)> fit_home_;  // set: home fits the scene's box to this aspect
   Quality quality_;
-  ColorWindow window_, said_window_;
+  ColorWindow window_, home_window_, said_window_;
   bool windowed_ = true;  // the colour window moves (not a mesh scene)
   int max_w_, max_h_, width_, height_;
   bool held_ = false;

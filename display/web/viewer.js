@@ -97,7 +97,7 @@
         });
       }
       setKind(state.kind === 'moving' ? 'moving (JPEG)' : 'lossless', state.kind);
-      statusEl.textContent = header.status;
+      statusEl.textContent = state.status = header.status;
     }
     if (bitmap) bitmap.close();
   }

@@ -138,6 +138,9 @@ int run(int argc, char** argv) {
   std::printf("# values: %.9g .. %.9g; mapped to the transfer function: %.9g .. %.9g%s\n", shape.data_range[0],
               shape.data_range[1], shape.mapped_range[0], shape.mapped_range[1],
               raw && !raw->has_range ? " (no range given: the data's own)" : "");
+  if (scene.window)
+    std::printf("# window: the colour map spans the values %.9g .. %.9g\n", scene.window->level - scene.window->width / 2,
+                scene.window->level + scene.window->width / 2);
   if (!scene.crop.whole()) {
     const VoxelBox c = cropBox(scene.crop, shape.dims);
     std::printf("# crop: voxels [%d, %d) x [%d, %d) x [%d, %d) are rendered, %d x %d x %d of them\n", c.lo[0], c.hi[0],

@@ -121,8 +121,8 @@ void addOptions(CLI::App& app, Args& a) {
       ->check(CLI::Range(0.0, 1.0))
       ->option_text("R,G,B [none: straight alpha]");
   app.add_option("--window", a.window,
-                 "the colour map through a window of the values, as an interactive farm's right-drag sets it "
-                 "(metrics.jsonl's `window`): centre and width in fractions of the volume's range")
+                 "the colour map through this window instead of the scene's `window`, as an interactive farm's "
+                 "frame shows it (metrics.jsonl's `window`): centre and width in fractions of the volume's range")
       ->delimiter(',')
       ->expected(2)
       ->option_text("C,W [0.5,1: the scene's map]");
@@ -145,14 +145,17 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   const int step = a.step >= 0 ? a.step : scene.time.stepAt(a.frame, scene.series.steps);
   auto vol = std::make_shared<const Volume>(loadVolume(fixed, VoxelBox{{0, 0, 0}, volumeDims(scene)}, step));
   for (const std::string& said : volumeWarnings(scene, *vol)) std::fprintf(stderr, "tessera-render: warning: %s\n", said.c_str());
-  auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, scene.tf, scene.shading, scene.light,
+  // The scene's `window` over the values mapped (a file's `range`, or its data's), or the one asked for.
+  const ColorWindow window = a.window.empty() ? colorWindow(scene, vol->mapped_range) : ColorWindow{a.window[0], a.window[1]};
+  const TransferFunction tf = windowed(scene.tf, window);
+  auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, tf, scene.shading, scene.light,
                                             scene.blend, scene.crop);
   std::optional<MaxIntensity> mip;
-  if (scene.blend == Blend::Maximum) mip.emplace(scene.tf);
+  if (scene.blend == Blend::Maximum) mip.emplace(tf);
   const MaxIntensity* mp = mip ? &*mip : nullptr;
   // Split once, outside the timed renders, as the farm's master does once per run (no tree:
   // the whole volume, and no classification of every voxel for it).
-  const BrickTree tree = a.bricks > 1 ? splitBricks(*vol, a.bricks, &scene.tf) : BrickTree{};
+  const BrickTree tree = a.bricks > 1 ? splitBricks(*vol, a.bricks, &tf) : BrickTree{};
   ImageF img;
   Rect drawn;
   renderer::RenderStats stats;
@@ -227,11 +230,8 @@ int run(int argc, char** argv) {
   if (!a.size.empty()) parseSize(a.size, w, h);
   // A camera fitted to the scene's image is fitted again to the size asked for (a tall one).
   if (scene.camera_fitted) scene.camera = fittedCamera(scene, (double)w / h);
-  if (!a.window.empty()) {
-    if (scene.mesh) throw std::invalid_argument("--window: a mesh scene has no colour map");
-    scene.tf = windowed(scene.tf, {a.window[0], a.window[1]});
-  }
   if (!scene.mesh) return renderVolume(scene, a, w, h, bg);
+  if (!a.window.empty()) throw std::invalid_argument("--window: a mesh scene has no colour map");
   renderer::MeshToolOptions mo;
   mo.out = a.out;
   mo.width = w;

@@ -134,6 +134,7 @@ int run(int argc, char** argv) {
   if (s.blend != Blend::Composite) throw std::invalid_argument("tessera-lod-sweep: composite scenes only, not blend: maximum");
   if (!s.crop.whole()) throw std::invalid_argument("tessera-lod-sweep: whole volumes only, leave out `crop`");
   fixVolumeRange(s);
+  s.tf = windowed(s.tf, colorWindow(s));  // the scene's `window`, as the farm shows it
   fs::create_directories(out);
   auto vol = std::make_shared<const Volume>(loadVolume(s));
   const renderer::Raycaster rc(vol, s.tf, s.shading, s.light);

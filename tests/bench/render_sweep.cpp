@@ -57,10 +57,10 @@ Scene sceneFor(const std::string& generator, int size, const std::string& scenes
       }
       auto* g = std::get_if<GeneratorSpec>(&s.volume);
       // Geometry scenes (an isosurface of a generated volume) carry no transfer function.
-      // A maximum intensity projection (mip.yaml) or a cut volume (cut-head.yaml) is not the
-      // whole composite frame the sweep times.
+      // A maximum intensity projection (mip.yaml), a cut volume (cut-head.yaml) or a colour
+      // window is not the scene's whole composite frame the sweep times.
       if (g && g->name == generator && !s.mesh && !s.tf.points().empty() && s.blend == Blend::Composite &&
-          s.crop.whole()) {
+          s.crop.whole() && !s.window) {
         g->size = size;
         return s;
       }

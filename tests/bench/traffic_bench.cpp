@@ -192,12 +192,13 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "tessera-traffic-bench: --renderers must be a power of two (binary swap), got %d\n", renderers);
     return 2;
   }
-  const Scene scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
+  Scene scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
   if (scene.blend != Blend::Composite) {  // its pieces are blended "over" below
     std::fprintf(stderr, "tessera-traffic-bench: composite scenes only, not blend: maximum\n");
     return 2;
   }
   auto vol = std::make_shared<const Volume>(loadVolume(scene, VoxelBox{{0, 0, 0}, volumeDims(scene)}, 0));
+  scene.tf = windowed(scene.tf, colorWindow(scene, vol->mapped_range));  // the scene's `window`, as the farm shows it
   auto backend = renderer::makeVolumeBackend(renderer::BackendKind::Cpu, vol, scene.tf, scene.shading, scene.light,
                                              Blend::Composite, scene.crop);
   const BrickTree tree = splitBricks(*vol, renderers, &scene.tf);

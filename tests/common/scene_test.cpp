@@ -138,6 +138,26 @@ TEST(Scene, AFittedCameraFramesTheCrop) {
   EXPECT_GT(s.camera.eye.z, s.camera.target.z) << "seen from the front, as the whole box";
 }
 
+// `window` lays the colour map over a span of the values, in the volume's units.
+TEST(Scene, AWindowIsInTheVolumesValues) {
+  const std::string gen = "volume: {generator: {name: hollow-shell, size: 16, seed: 1}}\n";
+  const Scene s = parseScene(gen + "window: {level: 0.6, width: 0.4}\n", ".", "s.yaml");
+  ASSERT_TRUE(s.window);
+  EXPECT_EQ(*s.window, (ValueWindow{0.6, 0.4}));
+  EXPECT_EQ(colorWindow(s), (ColorWindow{0.6, 0.4}));  // a generated volume's values run 0..1
+  const ColorWindow hu = colorWindow(s, {-1000, 3000});
+  EXPECT_DOUBLE_EQ(hu.center, (0.6 + 1000) / 4000);
+  EXPECT_DOUBLE_EQ(hu.width, 0.4 / 4000);
+  EXPECT_EQ(colorWindow(parseScene(gen, ".", "s.yaml")), ColorWindow{});
+  EXPECT_EQ(parseScene(sceneYaml(s), ".", "t.yaml").window, s.window) << sceneYaml(s);
+  // The master sends it with each frame: stages need not agree on it.
+  EXPECT_EQ(sceneIdentity(s), sceneIdentity(parseScene(gen, ".", "s.yaml")));
+  EXPECT_ERROR(gen + "window: {level: 0.5, width: 0}\n", "window.width: 0: expected a positive width");
+  EXPECT_ERROR(gen + "window: {level: 0.5}\n", "window: expected {level: L, width: W}");
+  EXPECT_ERROR(gen + "window: {level: 0.5, width: 1, gamma: 2}\n", "window.gamma: unknown key");
+  EXPECT_ERROR(gen + "window: [0.5, 1]\n", "window: expected {level: L, width: W}");
+}
+
 TEST(Scene, TransferFunctionPresetsByName) {
   for (const char* name : {"cool-to-warm", "viridis", "grayscale"}) {
     const Scene s = parseScene(std::string("volume: {generator: {name: hollow-shell, size: 16}}\ntransfer_function: ") +

@@ -315,11 +315,14 @@ TEST(FirstContact, TesseraInfoOnAGeneratorAConstantFileAndADeclaredRange) {
   EXPECT_EQ(histogramCounts(g.output), expected) << g.output;
   EXPECT_NE(g.output.find("mapped to the transfer function: 0 .. 1\n"), std::string::npos) << g.output;
   EXPECT_EQ(g.output.find("# crop:"), std::string::npos) << "no crop: nothing said of one";
-  const auto cut = writeSceneFile(dir, "cut.yaml", "volume: {generator: {name: head, size: 16}}\ncrop: {x: [0, 0.5], z: [0.25, 1]}\n");
+  const auto cut = writeSceneFile(dir, "cut.yaml", "volume: {generator: {name: head, size: 16}}\ncrop: {x: [0, 0.5], z: [0.25, 1]}\n"
+                                                  "window: {level: 0.5, width: 0.25}\n");
   const auto cropped = runCommand(bin("tessera-info") + " " + cut.string() + " --bins 4", 60);
   ASSERT_EQ(cropped.exit_code, 0) << cropped.output;
   EXPECT_NE(cropped.output.find("# crop: voxels [0, 8) x [0, 16) x [4, 16) are rendered, 8 x 16 x 12 of them\n"),
             std::string::npos) << cropped.output;
+  EXPECT_NE(cropped.output.find("# window: the colour map spans the values 0.375 .. 0.625\n"), std::string::npos)
+      << cropped.output;
 
   std::ofstream(dir.path() / "c.raw", std::ios::binary) << std::string(64, (char)7);
   const auto c = runCommand(bin("tessera-info") + " " +

@@ -150,8 +150,11 @@ TEST_F(WebView, TheLosslessFrameOnThePageIsThePngSinksFrameExactly) {
 // The right button's drag sets the colour window, not the camera: the picture changes, and the
 // final frame is the PNG sink's, with the scene's camera and a window other than the scene's.
 TEST_F(WebView, ARightDragSetsTheColourWindow) {
-  const auto out = browse("wait-lossless:0 pixels:before right-drag:20 wait-lossless:+ sleep:600 pixels:after");
-  ASSERT_EQ(out.size(), 6u);
+  const auto out = browse("wait-lossless:0 pixels:before right-drag:20 wait-lossless:+ sleep:600 pixels:after state");
+  ASSERT_EQ(out.size(), 7u);
+  // The status line says which values the colour map now spans (a generated volume's: 0..1 is its range).
+  const std::string status = out[6]["state"]["status"].get<std::string>();
+  EXPECT_NE(status.find("  colours "), std::string::npos) << status;
   const Image8 before = pagePixels("before", out[1]), after = pagePixels("after", out[5]);
   EXPECT_GT(maxAbsDiff(before, after), 16) << "the right drag did not change the picture";
   const auto lines = metricsLines(dir_);

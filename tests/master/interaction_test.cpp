@@ -70,19 +70,22 @@ TEST(Interaction, BadValuesThrowInvalidArgument) {
 namespace tessera::master {
 namespace {
 
-TEST(Interaction, TheColourWindowIsSaidInTheVolumesValuesWithTheRangeThatKeepsIt) {
+TEST(Interaction, TheColourWindowIsSaidInTheVolumesValuesWithTheSceneKeyThatKeepsIt) {
   Scene scene;
   RawVolumeSpec file;
+  file.has_range = true;
   file.range = {-1000, 3000};
   scene.volume = file;
   const std::string note = windowNote(scene, {0.25, 0.1});
-  EXPECT_NE(note.find("values -200 to 200 (level 0, width 400)"), std::string::npos) << note;
-  EXPECT_NE(note.find("`range: [-200, 200]`"), std::string::npos) << note;
+  EXPECT_NE(note.find("values -200 to 200;"), std::string::npos) << note;
+  EXPECT_NE(note.find("give the scene `window: {level: 0, width: 400}`"), std::string::npos) << note;
   EXPECT_NE(windowNote(scene, {}).find("as the scene gives it"), std::string::npos);
-  scene.tf = transferFunctionPreset("ct-bone");  // its range is its own: no `range` to give
-  EXPECT_EQ(windowNote(scene, {0.25, 0.1}).find("range:"), std::string::npos);
-  scene.volume = GeneratorSpec{};  // no range to give: the values only
-  EXPECT_EQ(windowNote(scene, {0.25, 0.5}).find("range:"), std::string::npos);
+  scene.window = ValueWindow{0, 400};  // the scene's own window is not news
+  EXPECT_NE(windowNote(scene, {0.25, 0.1}).find("as the scene gives it"), std::string::npos);
+  scene.volume = GeneratorSpec{};  // values 0..1
+  scene.window.reset();
+  EXPECT_NE(windowNote(scene, {0.25, 0.5}).find("values 0 to 0.5; to keep it, give the scene `window: {level: 0.25, width: 0.5}`"),
+            std::string::npos) << windowNote(scene, {0.25, 0.5});
 }
 
 }  // namespace

@@ -357,6 +357,30 @@ TEST(Refinement, ARightDragMovesTheColourWindowAndRBringsBackTheScenes) {
   EXPECT_EQ(s->camera, Camera{});
 }
 
+// A scene's `window` is the first frames' and r's, and no news when a drag ends on it.
+TEST(Refinement, TheScenesWindowIsWhereTheColourWindowStartsAndGoesBack) {
+  Refinement r = make();
+  const ColorWindow scene{0.75, 0.25};  // binary fractions: the moves below are exact
+  r.setSceneWindow(scene);
+  auto t = Clock::now();
+  auto s = r.next(t);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->window, scene);
+  r.issued(*s);
+  EXPECT_FALSE(r.settledWindow(t));
+  r.input(windowDrag(1, 0.5, 2, false), t);
+  s = r.next(t);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->window, (ColorWindow{0.875, 0.5}));
+  r.issued(*s);
+  proto::Input home;
+  home.seq = 2, home.home = true;
+  r.input(home, t);
+  s = r.next(t);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->window, scene);
+}
+
 TEST(Refinement, TheColourWindowStaysWithinItsBounds) {
   ColorWindow w;
   for (int i = 0; i < 20; ++i) w = Refinement::movedWindow(w, 0, 1000);  // each step at most 5 times

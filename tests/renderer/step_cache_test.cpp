@@ -92,7 +92,7 @@ namespace {
 
 // A step that cannot be read shows the last good one, through the frame's colour window too.
 TEST(StepCache, TheLastGoodStepShownForABadOneIsShownThroughTheFramesWindow) {
-  test::TempDir dir("step_cache_window");
+  tessera::test::TempDir dir("step_cache_window");
   std::vector<uint8_t> voxels(16 * 16 * 16);
   for (size_t i = 0; i < voxels.size(); ++i) voxels[i] = (uint8_t)(i * 37 % 251);
   dir.write("t0.raw", voxels.data(), voxels.size());
