@@ -33,7 +33,7 @@ class SortLastPlan : public Plan {
   std::optional<uint32_t> nearestAliveOwner(int brick, const std::function<bool(uint32_t)>& alive) const;
 
   VolumeSummary volume_;  // the master never holds the voxels
-  const TransferFunction& tf_;
+  TransferFunction tf_;  // the scene's, through its `window`: what shows decides the split
   bool balance_;
   bool binary_swap_;
   Crop crop_;

@@ -1,8 +1,15 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <vector>
+
 #include "common/scene.h"
+#include "master/plan.h"
 #include "master/sort_first_plan.h"
 #include "master/sort_last_plan.h"
+#include "tests/common/temp_dir.h"
 
 namespace tessera::master {
 namespace {
@@ -153,6 +160,35 @@ TEST(SortLastPlan, BandsFollowTheLatestFramesActivePixels) {
   EXPECT_EQ(half.regions[0].region.h + half.regions[1].region.h, 24);
   EXPECT_EQ(half.regions[1].region.y + half.regions[1].region.h, 24);
   EXPECT_EQ(half.regions[0].region.w, 32);
+}
+
+// The bricks hold equal shares of what the map shows through the scene's `window`: a ramp
+// along x whose top quarter alone shows (as a CT windowed on bone) is split inside that quarter.
+TEST(SortLastPlan, BricksAreBalancedByWhatTheScenesWindowShows) {
+  test::TempDir dir("plan_window");
+  std::vector<uint8_t> ramp(128 * 8 * 8);
+  for (size_t i = 0; i < ramp.size(); ++i) ramp[i] = (uint8_t)(2 * (i % 128));
+  dir.write("ramp.raw", ramp.data(), ramp.size());
+  const std::string volume = "volume: {file: ramp.raw, dims: [128, 8, 8], type: uint8, range: [0, 255]}\n"
+                             "transfer_function: [[0, 0, 0, 0, 0], [1, 1, 1, 1, 1]]\n";
+  auto brickXs = [&](const std::string& yaml) {
+    const Scene scene = parseScene(yaml, dir.path.string(), "s.yaml");
+    auto plan = makePlan(scene, true, 1, false, summarizeVolume(scene));
+    const Workers w = twoByTwo();
+    plan->reassign(w);
+    proto::FrameParams p = sized(64, 48);
+    p.camera = scene.camera;
+    plan->fill(p, w);
+    std::vector<std::array<int, 2>> xs;
+    for (const auto& b : p.sortLast()->bricks) xs.push_back({b.brick.lo[0], b.brick.hi[0]});
+    std::sort(xs.begin(), xs.end());
+    return xs;
+  };
+  using Xs = std::vector<std::array<int, 2>>;
+  EXPECT_EQ(brickXs(volume), (Xs{{0, 64}, {64, 128}}));  // every value but 0 shows
+  // Level 232, width 64: values above 200 show, x from 100 on (the summary's blocks of so
+  // small a volume are 2 voxels wide), split in their middle.
+  EXPECT_EQ(brickXs(volume + "window: {level: 232, width: 64}\n"), (Xs{{0, 114}, {114, 128}}));
 }
 
 TEST(SortFirstPlan, TilesDealtToRenderersAndRoutedByCompositorRendererModM) {
