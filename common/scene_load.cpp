@@ -1,4 +1,5 @@
 // Scenes from files, the built-in default scene, and a scene's volume read or generated.
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -42,7 +43,8 @@ std::array<double, 2> mappedRange(const Scene& s) {
 ColorWindow colorWindow(const Scene& s, const std::array<double, 2>& range) {
   const double span = range[1] - range[0];
   if (!s.window || !(span > 0)) return {};
-  return {(s.window->level - range[0]) / span, s.window->width / span};
+  // Held within what a frame may carry: a window that far beside the values shows the same end colour.
+  return {std::clamp((s.window->level - range[0]) / span, -1e6, 1e6), std::clamp(s.window->width / span, 1e-300, 1e6)};
 }
 
 ColorWindow colorWindow(const Scene& s) { return colorWindow(s, mappedRange(s)); }

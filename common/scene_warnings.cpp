@@ -94,6 +94,17 @@ std::vector<std::string> volumeWarnings(const Scene& scene, const Volume& shape)
     const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume);
     out.push_back(where + (raw && raw->has_range ? "volume.range: " : "volume: ") + why);
   }
+  if (scene.window) {  // a window beside every value shows each voxel in one end colour
+    const double lo = scene.window->level - scene.window->width / 2, hi = scene.window->level + scene.window->width / 2;
+    const auto [dlo, dhi] = shape.data_range;
+    if (dlo <= dhi && (hi < dlo || lo > dhi)) {
+      char b[300];
+      std::snprintf(b, sizeof b, "window: level %.9g, width %.9g spans %.9g .. %.9g, none of the volume's values %.9g .. %.9g: "
+                    "every voxel takes the colour map's %s end", scene.window->level, scene.window->width, lo, hi, dlo, dhi,
+                    hi < dlo ? "top" : "bottom");
+      out.push_back(where + b);
+    }
+  }
   // A thin stack is faint when opacity adds up along few samples; a projection's is scaled to 1.
   if (scene.blend == Blend::Composite)
     if (std::string why = thinProblem(scene, shape); !why.empty()) out.push_back(where + why);

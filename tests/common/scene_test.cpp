@@ -149,6 +149,11 @@ TEST(Scene, AWindowIsInTheVolumesValues) {
   EXPECT_DOUBLE_EQ(hu.center, (0.6 + 1000) / 4000);
   EXPECT_DOUBLE_EQ(hu.width, 0.4 / 4000);
   EXPECT_EQ(colorWindow(parseScene(gen, ".", "s.yaml")), ColorWindow{});
+  // Far beside the values, a window is held within what a frame may carry (the same end colour).
+  const Scene far = parseScene(gen + "window: {level: 1e12, width: 1e9}\n", ".", "s.yaml");
+  EXPECT_EQ(colorWindow(far), (ColorWindow{1e6, 1e6}));
+  const Scene thin = parseScene(gen + "window: {level: 0, width: 1e-10}\n", ".", "s.yaml");
+  EXPECT_EQ(colorWindow(thin, {0, 1e300}).width, 1e-300) << "a width of 0 would be refused by every stage";
   EXPECT_EQ(parseScene(sceneYaml(s), ".", "t.yaml").window, s.window) << sceneYaml(s);
   // The master sends it with each frame: stages need not agree on it.
   EXPECT_EQ(sceneIdentity(s), sceneIdentity(parseScene(gen, ".", "s.yaml")));

@@ -45,6 +45,21 @@ TEST(VolumeWarnings, ARangeThatMissesTheDataNamesTheSceneAndTheKey) {
   EXPECT_EQ(c[0].rfind("data/slice.yaml: volume: every voxel has the value 7", 0), 0u) << c[0];
 }
 
+// A `window` beside all of the data's values (a CT window on an MRI's 0..1000, say) is said;
+// one that meets them is not.
+TEST(VolumeWarnings, AWindowBesideEveryValueIsSaid) {
+  Scene s = sceneOf(true, {0, 1000});
+  s.window = ValueWindow{2000, 400};
+  const auto w = volumeWarnings(s, shape({32, 32, 32}));
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_EQ(w[0], "data/slice.yaml: window: level 2000, width 400 spans 1800 .. 2200, none of the volume's values 0 .. 1000: "
+                  "every voxel takes the colour map's bottom end");
+  s.window = ValueWindow{-300, 400};
+  ASSERT_EQ(volumeWarnings(s, shape({32, 32, 32})).size(), 1u);
+  s.window = ValueWindow{1100, 400};  // 900 .. 1300 meets the values
+  EXPECT_TRUE(volumeWarnings(s, shape({32, 32, 32})).empty());
+}
+
 // One slice of 256 x 256 is 1/256 of the box thick: at the presets' opacity (0.02 per 1/256)
 // a ray straight across gathers 2%, which the user must hear about; an opaque transfer
 // function shows it, and a volume of 64 slices is no thin volume.
