@@ -95,13 +95,24 @@ std::vector<std::string> volumeWarnings(const Scene& scene, const Volume& shape)
     out.push_back(where + (raw && raw->has_range ? "volume.range: " : "volume: ") + why);
   }
   if (scene.window) {  // a window beside every value shows each voxel in one end colour
-    const double lo = scene.window->level - scene.window->width / 2, hi = scene.window->level + scene.window->width / 2;
-    const auto [dlo, dhi] = shape.data_range;
-    if (dlo <= dhi && (hi < dlo || lo > dhi)) {
-      char b[300];
-      std::snprintf(b, sizeof b, "window: level %.9g, width %.9g spans %.9g .. %.9g, none of the volume's values %.9g .. %.9g: "
-                    "every voxel takes the colour map's %s end", scene.window->level, scene.window->width, lo, hi, dlo, dhi,
-                    hi < dlo ? "top" : "bottom");
+    const ValueWindow& w = *scene.window;
+    const double lo = w.level - w.width / 2, hi = w.level + w.width / 2;
+    // Voxels are clamped to the mapped range before any window: those are the values it sees.
+    const double vlo = std::max(shape.data_range[0], shape.mapped_range[0]);
+    const double vhi = std::min(shape.data_range[1], shape.mapped_range[1]);
+    const bool clipped = vlo != shape.data_range[0] || vhi != shape.data_range[1];
+    char b[500];
+    if (vlo <= vhi && (hi < vlo || lo > vhi)) {
+      std::snprintf(b, sizeof b, "window: level %.9g, width %.9g spans %.9g .. %.9g, none of the volume's values %.9g .. %.9g%s: "
+                    "every voxel takes the colour map's %s end%s", w.level, w.width, lo, hi, vlo, vhi,
+                    clipped ? " (as volume.range clamps them)" : "", hi < vlo ? "top" : "bottom",
+                    clipped ? "; widen volume.range or leave it out" : "");
+      out.push_back(where + b);
+    } else if (vlo < vhi && w.width < (shape.mapped_range[1] - shape.mapped_range[0]) / 256) {
+      // The casters' tables and the voxels' 16 bits resolve the mapped range, not the window.
+      std::snprintf(b, sizeof b, "window: width %.9g is under 1/256 of the mapped range %.9g .. %.9g: the colour map shows "
+                    "in coarse steps; give volume.range closer to the window", w.width, shape.mapped_range[0],
+                    shape.mapped_range[1]);
       out.push_back(where + b);
     }
   }

@@ -134,7 +134,7 @@ class Stage {
     if (!params.window.isDefault()) {  // the values the colour map spans (a generated volume's run 0..1)
       const auto r = link_.volumeRange();
       const auto v = windowRange(r[0] < r[1] ? r : std::array<double, 2>{0, 1}, params.window);
-      status += fmt::format("  colours {:.4g}..{:.4g}", v[0], v[1]);
+      status += fmt::format("  colours {:.5g}..{:.5g}", v[0], v[1]);  // 16-bit values in full
     }
     const auto input = inputShown(params);
     if (input) status += fmt::format("  input {:.0f} ms", msSince(input->at));  // up to now, before presenting

@@ -39,9 +39,9 @@ Camera applyInput(const Camera& cam, const proto::Input& in) {
 
 std::string windowNote(const Scene& scene, const ColorWindow& w) {
   const auto [lo, hi] = windowRange(mappedRange(scene), w);
-  std::string note = fmt::format("colour window: the colour map spans the values {:.6g} to {:.6g}", lo, hi);
+  std::string note = fmt::format("colour window: the colour map spans the values {:.9g} to {:.9g}", lo, hi);
   if (w == colorWindow(scene)) return note + ", as the scene gives it";
-  return note + fmt::format("; to keep it, give the scene `window: {{level: {:.6g}, width: {:.6g}}}`", (lo + hi) / 2, hi - lo);
+  return note + fmt::format("; to keep it, give the scene `window: {{level: {:.9g}, width: {:.9g}}}`", (lo + hi) / 2, hi - lo);
 }
 
 }  // namespace tessera::master

@@ -123,10 +123,12 @@ void Refinement::input(const proto::Input& in, Clock::time_point now) {
 
 ColorWindow Refinement::movedWindow(const ColorWindow& w, double shift, double scale) {
   ColorWindow out;
-  out.width = std::clamp(w.width * std::clamp(scale, 0.2, 5.0), kMinWindow, kMaxWindow);
+  // Bounds a drag cannot cross; a scene's `window` beyond them is where it starts, and a drag
+  // only brings it back towards them.
+  out.width = std::clamp(w.width * std::clamp(scale, 0.2, 5.0), std::min(kMinWindow, w.width), std::max(kMaxWindow, w.width));
   // At least an eighth of the window stays over the values 0..1, so it cannot be lost.
   const double reach = out.width * 3 / 8;
-  out.center = std::clamp(w.center + shift * w.width, -reach, 1 + reach);
+  out.center = std::clamp(w.center + shift * w.width, std::min(-reach, w.center), std::max(1 + reach, w.center));
   if (shift == 0 && scale == 1) out = w;  // exactly: a release moves nothing
   return out;
 }

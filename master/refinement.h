@@ -67,7 +67,7 @@ class Refinement {
 
   // The colour window's bounds: a width from 1/256 of the range (16 entries of the casters'
   // 4096-entry colour table, 256 levels of their 16-bit voxels) to 16 ranges, and a centre
-  // that keeps some of the window over the values.
+  // that keeps some of the window over the values (a scene's `window` beyond them is kept).
   static constexpr double kMinWindow = 1.0 / 256, kMaxWindow = 16;
   static ColorWindow movedWindow(const ColorWindow& w, double shift, double scale);
   const ColorWindow& window() const { return window_; }

@@ -125,7 +125,7 @@ void addOptions(CLI::App& app, Args& a) {
                  "frame shows it (metrics.jsonl's `window`): centre and width in fractions of the volume's range")
       ->delimiter(',')
       ->expected(2)
-      ->option_text("C,W [0.5,1: the scene's map]");
+      ->option_text("C,W [the scene's `window`; 0.5,1: the whole range]");
   app.add_option("--tiles", a.tiles, "mesh scenes: render as CxR tiles and assemble (bit-identical to 1x1)");
   app.add_option("--aa", a.aa, "mesh scenes: none | msaa | ssaa | fft (default: the scene's)");
   app.add_option("--aa-samples", a.aa_samples, "mesh scenes: MSAA samples (1,2,4) or SSAA factor")->check(CLI::Range(1, 8));

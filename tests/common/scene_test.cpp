@@ -152,6 +152,12 @@ TEST(Scene, AWindowIsInTheVolumesValues) {
   // Far beside the values, a window is held within what a frame may carry (the same end colour).
   const Scene far = parseScene(gen + "window: {level: 1e12, width: 1e9}\n", ".", "s.yaml");
   EXPECT_EQ(colorWindow(far), (ColorWindow{1e6, 1e6}));
+  // Wider than a frame carries yet over the values: they keep their place on the map (0 at 1/6).
+  const ColorWindow wide = colorWindow(parseScene(gen + "window: {level: 1e12, width: 3e12}\n", ".", "s.yaml"));
+  EXPECT_EQ(wide.width, 1e6);
+  EXPECT_NEAR(0.5 - wide.center / wide.width, 1.0 / 6, 1e-12);
+  // A constant volume's value c is mapped with c .. c + 1, as the master maps it.
+  EXPECT_EQ(colorWindow(s, {7, 7}), (ColorWindow{0.6 - 7, 0.4}));
   const Scene thin = parseScene(gen + "window: {level: 0, width: 1e-10}\n", ".", "s.yaml");
   EXPECT_EQ(colorWindow(thin, {0, 1e300}).width, 1e-300) << "a width of 0 would be refused by every stage";
   EXPECT_EQ(parseScene(sceneYaml(s), ".", "t.yaml").window, s.window) << sceneYaml(s);

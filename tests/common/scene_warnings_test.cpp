@@ -58,6 +58,21 @@ TEST(VolumeWarnings, AWindowBesideEveryValueIsSaid) {
   ASSERT_EQ(volumeWarnings(s, shape({32, 32, 32})).size(), 1u);
   s.window = ValueWindow{1100, 400};  // 900 .. 1300 meets the values
   EXPECT_TRUE(volumeWarnings(s, shape({32, 32, 32})).empty());
+  // The voxels are clamped to the range first: data up to 4000 is no help past a range of 0 .. 1000.
+  Volume wider = shape({32, 32, 32});
+  wider.data_range = {0, 4000};
+  s.window = ValueWindow{2000, 400};
+  const auto c = volumeWarnings(s, wider);
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c[0], "data/slice.yaml: window: level 2000, width 400 spans 1800 .. 2200, none of the volume's values 0 .. 1000 "
+                  "(as volume.range clamps them): every voxel takes the colour map's bottom end; widen volume.range or "
+                  "leave it out");
+  // Narrower than the casters resolve the mapped range.
+  s.window = ValueWindow{500, 2};
+  const auto n = volumeWarnings(s, shape({32, 32, 32}));
+  ASSERT_EQ(n.size(), 1u);
+  EXPECT_EQ(n[0], "data/slice.yaml: window: width 2 is under 1/256 of the mapped range 0 .. 1000: the colour map shows in "
+                  "coarse steps; give volume.range closer to the window");
 }
 
 // One slice of 256 x 256 is 1/256 of the box thick: at the presets' opacity (0.02 per 1/256)

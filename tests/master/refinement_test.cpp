@@ -392,6 +392,12 @@ TEST(Refinement, TheColourWindowStaysWithinItsBounds) {
   w = Refinement::movedWindow({0.5, 0.5}, -100, 1);
   EXPECT_DOUBLE_EQ(w.center, -0.5 * 3 / 8);
   EXPECT_EQ(Refinement::movedWindow({3, 1e-9}, 0, 1), (ColorWindow{3, 1e-9})) << "no change: exactly as before";
+  // A scene's window beyond the bounds does not jump there at a drag's first move.
+  EXPECT_DOUBLE_EQ(Refinement::movedWindow({0.5, 1.0 / 4096}, 0, 2).width, 2.0 / 4096);
+  EXPECT_DOUBLE_EQ(Refinement::movedWindow({0.5, 1.0 / 4096}, 0, 0.5).width, 1.0 / 4096);
+  EXPECT_DOUBLE_EQ(Refinement::movedWindow({0.5, 64}, 0, 0.5).width, 32);
+  EXPECT_DOUBLE_EQ(Refinement::movedWindow({5, 0.5}, 1, 1).center, 5);
+  EXPECT_DOUBLE_EQ(Refinement::movedWindow({5, 0.5}, -1, 1).center, 4.5);
   Refinement r = make();
   auto t = Clock::now();
   r.issued(*r.next(t));
