@@ -73,7 +73,8 @@ std::optional<RangeAdvice> backgroundHaze(const ValueHistogram& h, const Transfe
 
 std::string rangeSuggestion(const Scene& scene, const ValueHistogram& fine) {
   const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume);
-  if (!raw || raw->has_range) return "";
+  // A scene's `window` already says which values the map spans; a range would only clip them.
+  if (!raw || raw->has_range || scene.window) return "";
   auto advice = suggestedRange(fine);
   // A haze is opacity summed along rays; a maximum intensity projection sums none.
   if (!advice && scene.blend == Blend::Composite) advice = backgroundHaze(fine, scene.tf);

@@ -12,11 +12,12 @@
 namespace tessera {
 
 // `shape`: the volume's dims, spacing, data range and mapped range (no values needed).
-// Warns of a range that misses the data (rangeProblem) and of a volume so thin that the
-// transfer function's opacity cannot show it.
+// Warns of a range that misses the data (rangeProblem), of a `window` beside every value the
+// range leaves the voxels or narrower than the casters resolve, and of a volume so thin that
+// the transfer function's opacity cannot show it.
 std::vector<std::string> volumeWarnings(const Scene& scene, const Volume& shape);
 
-// "" unless the scene gives no `range` for a file whose values suggest one (suggestedRange
+// "" unless the scene gives neither `range` nor `window` for a file whose values suggest one (suggestedRange
 // over `fine`, the data's histogram): then what lies apart and the `range` to give.
 std::string rangeSuggestion(const Scene& scene, const ValueHistogram& fine);
 

@@ -2,6 +2,7 @@
 #include "common/camera.h"
 #include "common/scene.h"
 
+#include "tests/common/scene_errors.h"
 #include "tests/common/temp_dir.h"
 
 #include <gtest/gtest.h>
@@ -35,20 +36,6 @@ std::string edit(const std::string& from, const std::string& to) {
   if (p != std::string::npos) s.replace(p, from.size(), to);
   return s;
 }
-
-std::string errorOf(const std::string& yaml, const std::string& base = ".") {
-  try {
-    parseScene(yaml, base, "s.yaml");
-  } catch (const SceneError& e) {
-    std::string m = e.what();
-    EXPECT_EQ(m.rfind("s.yaml: ", 0), 0u) << "message must start with the file: " << m;
-    return m;
-  }
-  return "<no error>";
-}
-
-#define EXPECT_ERROR(yaml, text) \
-  EXPECT_NE(errorOf(yaml).find(text), std::string::npos) << "want '" << text << "' in: " << errorOf(yaml)
 
 using test::TempDir;
 }  // namespace
@@ -136,37 +123,6 @@ TEST(Scene, AFittedCameraFramesTheCrop) {
   const double radius = length(Vec3{0.25, 0.5, 0.125});
   EXPECT_NEAR(length(s.camera.eye - s.camera.target), 1.05 * radius / std::sin(15 * std::numbers::pi / 180), 1e-12);
   EXPECT_GT(s.camera.eye.z, s.camera.target.z) << "seen from the front, as the whole box";
-}
-
-// `window` lays the colour map over a span of the values, in the volume's units.
-TEST(Scene, AWindowIsInTheVolumesValues) {
-  const std::string gen = "volume: {generator: {name: hollow-shell, size: 16, seed: 1}}\n";
-  const Scene s = parseScene(gen + "window: {level: 0.6, width: 0.4}\n", ".", "s.yaml");
-  ASSERT_TRUE(s.window);
-  EXPECT_EQ(*s.window, (ValueWindow{0.6, 0.4}));
-  EXPECT_EQ(colorWindow(s), (ColorWindow{0.6, 0.4}));  // a generated volume's values run 0..1
-  const ColorWindow hu = colorWindow(s, {-1000, 3000});
-  EXPECT_DOUBLE_EQ(hu.center, (0.6 + 1000) / 4000);
-  EXPECT_DOUBLE_EQ(hu.width, 0.4 / 4000);
-  EXPECT_EQ(colorWindow(parseScene(gen, ".", "s.yaml")), ColorWindow{});
-  // Far beside the values, a window is held within what a frame may carry (the same end colour).
-  const Scene far = parseScene(gen + "window: {level: 1e12, width: 1e9}\n", ".", "s.yaml");
-  EXPECT_EQ(colorWindow(far), (ColorWindow{1e6, 1e6}));
-  // Wider than a frame carries yet over the values: they keep their place on the map (0 at 1/6).
-  const ColorWindow wide = colorWindow(parseScene(gen + "window: {level: 1e12, width: 3e12}\n", ".", "s.yaml"));
-  EXPECT_EQ(wide.width, 1e6);
-  EXPECT_NEAR(0.5 - wide.center / wide.width, 1.0 / 6, 1e-12);
-  // A constant volume's value c is mapped with c .. c + 1, as the master maps it.
-  EXPECT_EQ(colorWindow(s, {7, 7}), (ColorWindow{0.6 - 7, 0.4}));
-  const Scene thin = parseScene(gen + "window: {level: 0, width: 1e-10}\n", ".", "s.yaml");
-  EXPECT_EQ(colorWindow(thin, {0, 1e300}).width, 1e-300) << "a width of 0 would be refused by every stage";
-  EXPECT_EQ(parseScene(sceneYaml(s), ".", "t.yaml").window, s.window) << sceneYaml(s);
-  // The master sends it with each frame: stages need not agree on it.
-  EXPECT_EQ(sceneIdentity(s), sceneIdentity(parseScene(gen, ".", "s.yaml")));
-  EXPECT_ERROR(gen + "window: {level: 0.5, width: 0}\n", "window.width: 0: expected a positive width");
-  EXPECT_ERROR(gen + "window: {level: 0.5}\n", "window: expected {level: L, width: W}");
-  EXPECT_ERROR(gen + "window: {level: 0.5, width: 1, gamma: 2}\n", "window.gamma: unknown key");
-  EXPECT_ERROR(gen + "window: [0.5, 1]\n", "window: expected {level: L, width: W}");
 }
 
 TEST(Scene, TransferFunctionPresetsByName) {
@@ -311,7 +267,7 @@ TEST(Scene, AVolumeBiggerThanTheMachineLoadsInWindowsAndNamesTheBytesWhole) {
 }
 
 TEST(Scene, FarAwayCameraIsOutOfRangeNotParallel) {
-  const std::string m = errorOf(edit("eye: [0, 0, 2.5]", "eye: [1e300, 0, 0]"));
+  const std::string m = tessera::test::sceneErrorOf(edit("eye: [0, 0, 2.5]", "eye: [1e300, 0, 0]"));
   EXPECT_NE(m.find("camera.eye: distance to the target is 1e+300"), std::string::npos) << m;
   EXPECT_EQ(m.find("parallel"), std::string::npos) << m;
   EXPECT_ERROR(edit("target: [0, 0, 0]", "target: [0, 0, -1e7]"), "camera.eye: distance to the target is 10000002.5");
@@ -347,7 +303,7 @@ TEST(Scene, AbsurdSpacingFovStepAreRefusedWithTheirLimits) {
 
 TEST(Scene, ImageLargerThanTheWireCarriesIsRefused) {
   // A whole-image rgba32f piece of 8192 x 4096 is 512 MiB, over the protocol's message limit.
-  const std::string m = errorOf(edit("image: [64, 48]", "image: [8192, 4096]"));
+  const std::string m = tessera::test::sceneErrorOf(edit("image: [64, 48]", "image: [8192, 4096]"));
   EXPECT_NE(m.find("image: 8192 x 4096 = 33554432 pixels"), std::string::npos) << m;
   EXPECT_NE(m.find("at most 16777216 pixels"), std::string::npos) << m;
   EXPECT_ERROR(edit("image: [64, 48]", "image: [4096, 4096]"), "<no error>");

@@ -131,6 +131,9 @@ TEST(VolumeWarnings, ARangeIsSuggestedPastABackgroundThePresetMakesAHaze) {
   clear.tf = TransferFunction({{0, 0, 0, 0, 0}, {0.2, 0, 0, 0, 0}, {1, 1, 1, 1, 0.5}});
   EXPECT_EQ(rangeSuggestion(clear, h), "");
   EXPECT_EQ(rangeSuggestion(sceneOf(true, {0, 4000}), h), "");
+  Scene windowed = sceneOf(false);  // the scene chose the values its map spans: a range would clip them
+  windowed.window = ValueWindow{1000, 800};
+  EXPECT_EQ(rangeSuggestion(windowed, h), "");
 
   // 8-bit data in the same 4096 bins: 15 of every 16 bins empty between the values. The peak
   // (10 +- 3) ends at 10 + 3 * 3.03 = 19.1; a window of 8 bins used to stop inside it.
