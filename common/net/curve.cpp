@@ -64,7 +64,13 @@ bool writeFarmKeys(const std::string& dir, const FarmKeys& keys) {
   const int err = errno;
   fs::remove(tmp);
   if (!created && err != EEXIST) throw std::runtime_error(key.string() + ": cannot create the farm key");
-  if (created) writeText(fs::path(dir) / "farm.pub", keys.public_z85, 0644);
+  if (created) {
+    // Whole or not at all: the farm's other processes, started at the same time, read it as
+    // soon as farm.key exists (an empty farm.pub once stopped a display of a test's farm).
+    const fs::path pub = fs::path(dir) / "farm.pub", pub_tmp = fs::path(dir) / (".farm.pub." + std::to_string(getpid()));
+    writeText(pub_tmp, keys.public_z85, 0644);
+    fs::rename(pub_tmp, pub);
+  }
   return created;
 }
 

@@ -144,7 +144,9 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   if (scene.series.steps > 1) fixVolumeRange(fixed);
   const int step = a.step >= 0 ? a.step : scene.time.stepAt(a.frame, scene.series.steps);
   auto vol = std::make_shared<const Volume>(loadVolume(fixed, VoxelBox{{0, 0, 0}, volumeDims(scene)}, step));
-  for (const std::string& said : volumeWarnings(scene, *vol)) std::fprintf(stderr, "tessera-render: warning: %s\n", said.c_str());
+  Scene said_of = scene;  // --window replaces the scene's: nothing to say of that one
+  if (!a.window.empty()) said_of.window.reset();
+  for (const std::string& said : volumeWarnings(said_of, *vol)) std::fprintf(stderr, "tessera-render: warning: %s\n", said.c_str());
   // The scene's `window` over the values mapped (a file's `range`, or its data's), or the one asked for.
   const ColorWindow window = a.window.empty() ? colorWindow(scene, vol->mapped_range) : ColorWindow{a.window[0], a.window[1]};
   const TransferFunction tf = windowed(scene.tf, window);

@@ -4,9 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <string>
 #include <thread>
 
 #include <unistd.h>
@@ -95,6 +97,32 @@ TEST(Curve, KeysRoundTripThroughTheirFolderAndBadFilesAreNamed) {
     EXPECT_NE(std::string(e.what()).find("farm.key"), std::string::npos) << e.what();
   }
   fs::remove_all(dir);
+}
+
+// Processes of a farm start together: one creates the keys while the others read them as soon
+// as farm.key exists. No reader may see a farm.pub that is there but not yet written.
+TEST(Curve, KeysBeingCreatedAreNeverReadHalfWritten) {
+  const fs::path root = fs::temp_directory_path() / ("tessera-curve-race-" + std::to_string(::getpid()));
+  for (int round = 0; round < 200; ++round) {
+    const fs::path dir = root / std::to_string(round);
+    std::atomic<bool> done{false};
+    std::string failure;
+    std::thread reader([&] {
+      while (!done && failure.empty()) {
+        if (!fs::exists(dir / "farm.key")) continue;
+        try {
+          (void)readFarmKeys(dir.string());
+        } catch (const std::exception& e) {
+          failure = e.what();
+        }
+      }
+    });
+    (void)loadOrCreateFarmKeys(dir.string());
+    done = true;
+    reader.join();
+    ASSERT_EQ(failure, "") << "round " << round;
+  }
+  fs::remove_all(root);
 }
 
 TEST(Curve, OnlyEndpointsThatLeaveTheHostNeedIt) {

@@ -143,6 +143,24 @@ TEST(FirstContact, ARangeOutsideTheDataIsSaidWithTheDataValues) {
       << r.output;
 }
 
+// A `window` beside every value is said by tessera-render; with --window in its place, not.
+TEST(FirstContact, AWindowBesideTheDataIsSaidUnlessReplaced) {
+  FarmDir dir("bad-window");
+  writeBall(dir);
+  const auto scene = writeSceneFile(dir, "ball.yaml",
+                                    "volume: {file: ball.raw, dims: [32, 32, 32], type: uint16}\n"
+                                    "window: {level: 3000, width: 400}\n");
+  const std::string render = bin("tessera-render") + " " + scene.string() + " --image 32x32 -o " + (dir.path() / "ball.png").string();
+  const auto r = runCommand(render, 120);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("ball.yaml: window: level 3000, width 400 spans 2800 .. 3200, none of the volume's values 0 .. 1000"),
+            std::string::npos)
+      << r.output;
+  const auto replaced = runCommand(render + " --window 0.5,1", 120);
+  ASSERT_EQ(replaced.exit_code, 0) << replaced.output;
+  EXPECT_EQ(replaced.output.find("window:"), std::string::npos) << replaced.output;
+}
+
 TEST(FirstContact, AFarmWhoseFramesShowNothingSaysSoOnce) {
   FarmDir dir("looking-away");
   const auto scene = writeSceneFile(dir, "away.yaml",
