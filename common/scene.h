@@ -90,6 +90,8 @@ VoxelBox cropBox(const Crop& c, const std::array<int, 3>& dims);
 // window's right-drag sets, and the master says once a drag ends. Left out: over its range.
 struct ValueWindow {
   double level = 0, width = 1;
+  double lo() const { return level - width / 2; }
+  double hi() const { return level + width / 2; }
   bool operator==(const ValueWindow&) const = default;
 };
 

@@ -45,14 +45,15 @@ ColorWindow colorWindow(const Scene& s, const std::array<double, 2>& range) {
   // A constant volume's value c is mapped as the master maps it, with c .. c + 1.
   const double span = range[1] > range[0] ? range[1] - range[0] : 1;
   ColorWindow w{(s.window->level - range[0]) / span, std::max(s.window->width / span, 1e-300)};
-  // Held within what a frame may carry (|centre|, width <= 1e6). Wider, the values 0..1 all sit
-  // at one place of the map: kept there. Farther out at most 1e6 wide, they sit beyond an end
-  // of the map, as they do at 1e6.
-  if (w.width > 1e6) {
+  // Held within what a frame may carry (ColorWindow::kLimit). Wider, the values 0..1 all sit
+  // at one place of the map: kept there. Farther out at most kLimit wide, they sit beyond an
+  // end of the map, as they do at kLimit.
+  constexpr double kLimit = ColorWindow::kLimit;
+  if (w.width > kLimit) {
     const double at = std::clamp(0.5 - w.center / w.width, -0.5, 1.5);  // where 0 lies on the map
-    w = {(0.5 - at) * 1e6, 1e6};
+    w = {(0.5 - at) * kLimit, kLimit};
   }
-  w.center = std::clamp(w.center, -1e6, 1e6);
+  w.center = std::clamp(w.center, -kLimit, kLimit);
   return w;
 }
 

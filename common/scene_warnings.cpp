@@ -69,6 +69,29 @@ std::optional<RangeAdvice> backgroundHaze(const ValueHistogram& h, const Transfe
   return RangeAdvice{{a, b}, 1.0 - (double)held / total, why};
 }
 
+// A `window` beside every value the voxels keep (the mapped range clamps them before any
+// window) shows each voxel in one end colour; one narrower than 1/256 of the mapped range
+// shows in coarse steps (the casters' tables and 16-bit voxels resolve the range, not the window).
+std::string windowProblem(const Scene& scene, const Volume& shape) {
+  if (!scene.window) return "";
+  const ValueWindow& w = *scene.window;
+  const auto [mlo, mhi] = shape.mapped_range;
+  const double vlo = std::max(shape.data_range[0], mlo), vhi = std::min(shape.data_range[1], mhi);
+  const bool clipped = vlo != shape.data_range[0] || vhi != shape.data_range[1];
+  char b[500];
+  if (vlo <= vhi && (w.hi() < vlo || w.lo() > vhi))
+    std::snprintf(b, sizeof b, "window: level %.9g, width %.9g spans %.9g .. %.9g, none of the volume's values %.9g .. %.9g%s: "
+                  "every voxel takes the colour map's %s end%s", w.level, w.width, w.lo(), w.hi(), vlo, vhi,
+                  clipped ? " (as volume.range clamps them)" : "", w.hi() < vlo ? "top" : "bottom",
+                  clipped ? "; widen volume.range or leave it out" : "");
+  else if (vlo < vhi && w.width < (mhi - mlo) / 256)
+    std::snprintf(b, sizeof b, "window: width %.9g is under 1/256 of the mapped range %.9g .. %.9g: the colour map shows "
+                  "in coarse steps; give volume.range closer to the window", w.width, mlo, mhi);
+  else
+    return "";
+  return b;
+}
+
 }  // namespace
 
 std::string rangeSuggestion(const Scene& scene, const ValueHistogram& fine) {
@@ -95,28 +118,7 @@ std::vector<std::string> volumeWarnings(const Scene& scene, const Volume& shape)
     const auto* raw = std::get_if<RawVolumeSpec>(&scene.volume);
     out.push_back(where + (raw && raw->has_range ? "volume.range: " : "volume: ") + why);
   }
-  if (scene.window) {  // a window beside every value shows each voxel in one end colour
-    const ValueWindow& w = *scene.window;
-    const double lo = w.level - w.width / 2, hi = w.level + w.width / 2;
-    // Voxels are clamped to the mapped range before any window: those are the values it sees.
-    const double vlo = std::max(shape.data_range[0], shape.mapped_range[0]);
-    const double vhi = std::min(shape.data_range[1], shape.mapped_range[1]);
-    const bool clipped = vlo != shape.data_range[0] || vhi != shape.data_range[1];
-    char b[500];
-    if (vlo <= vhi && (hi < vlo || lo > vhi)) {
-      std::snprintf(b, sizeof b, "window: level %.9g, width %.9g spans %.9g .. %.9g, none of the volume's values %.9g .. %.9g%s: "
-                    "every voxel takes the colour map's %s end%s", w.level, w.width, lo, hi, vlo, vhi,
-                    clipped ? " (as volume.range clamps them)" : "", hi < vlo ? "top" : "bottom",
-                    clipped ? "; widen volume.range or leave it out" : "");
-      out.push_back(where + b);
-    } else if (vlo < vhi && w.width < (shape.mapped_range[1] - shape.mapped_range[0]) / 256) {
-      // The casters' tables and the voxels' 16 bits resolve the mapped range, not the window.
-      std::snprintf(b, sizeof b, "window: width %.9g is under 1/256 of the mapped range %.9g .. %.9g: the colour map shows "
-                    "in coarse steps; give volume.range closer to the window", w.width, shape.mapped_range[0],
-                    shape.mapped_range[1]);
-      out.push_back(where + b);
-    }
-  }
+  if (std::string why = windowProblem(scene, shape); !why.empty()) out.push_back(where + why);
   // A thin stack is faint when opacity adds up along few samples; a projection's is scaled to 1.
   if (scene.blend == Blend::Composite)
     if (std::string why = thinProblem(scene, shape); !why.empty()) out.push_back(where + why);

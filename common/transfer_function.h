@@ -37,6 +37,8 @@ class TransferFunction {
 // default is the map as the scene gives it. A window is a change of the scene's `range`
 // (windowRange) done on the map instead of the voxels, so renderers keep their voxels.
 struct ColorWindow {
+  // The largest |center| and width a frame may carry (FrameParams): far beyond the values.
+  static constexpr double kLimit = 1e6;
   double center = 0.5, width = 1;
   bool isDefault() const { return center == 0.5 && width == 1; }
   bool operator==(const ColorWindow&) const = default;

@@ -262,7 +262,8 @@ Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg) {
           r.fail("step " + std::to_string(m.step) + " or next_step " + std::to_string(m.next_step) + " >= 1000000");
         m.window.center = detail::readFinite(r, "window.center");
         m.window.width = detail::readFinite(r, "window.width");
-        if (r.ok() && !(std::abs(m.window.center) <= 1e6 && m.window.width > 0 && m.window.width <= 1e6))
+        constexpr double kLimit = ColorWindow::kLimit;
+        if (r.ok() && !(std::abs(m.window.center) <= kLimit && m.window.width > 0 && m.window.width <= kLimit))
           r.fail("colour window centre " + std::to_string(m.window.center) + ", width " + std::to_string(m.window.width) +
                  " not within |centre| <= 1e6, 0 < width <= 1e6");
         readRegions(r, m);

@@ -139,8 +139,7 @@ int run(int argc, char** argv) {
               shape.data_range[1], shape.mapped_range[0], shape.mapped_range[1],
               raw && !raw->has_range ? " (no range given: the data's own)" : "");
   if (scene.window)
-    std::printf("# window: the colour map spans the values %.9g .. %.9g\n", scene.window->level - scene.window->width / 2,
-                scene.window->level + scene.window->width / 2);
+    std::printf("# window: the colour map spans the values %.9g .. %.9g\n", scene.window->lo(), scene.window->hi());
   if (!scene.crop.whole()) {
     const VoxelBox c = cropBox(scene.crop, shape.dims);
     std::printf("# crop: voxels [%d, %d) x [%d, %d) x [%d, %d) are rendered, %d x %d x %d of them\n", c.lo[0], c.hi[0],
