@@ -15,6 +15,14 @@ Isa supportedIsa() {
   return Isa::Scalar;
 }
 
+Gathers ownGathers() {
+#if defined(__x86_64__)
+  __builtin_cpu_init();
+  if (__builtin_cpu_is("intel")) return Gathers::Hardware;
+#endif
+  return Gathers::Lanes;
+}
+
 }  // namespace
 
 const char* isaName(Isa isa) {
@@ -44,6 +52,23 @@ Isa cpuIsa() {
     return chooseIsa(env ? env : "", supportedIsa());
   }();
   return isa;
+}
+
+const char* gathersName(Gathers g) { return g == Gathers::Hardware ? "hardware" : "lanes"; }
+
+Gathers chooseGathers(const std::string& requested, Gathers own) {
+  if (requested.empty()) return own;
+  for (Gathers g : {Gathers::Lanes, Gathers::Hardware})
+    if (requested == gathersName(g)) return g;
+  throw std::invalid_argument("TESSERA_GATHER=" + requested + ": expected hardware or lanes");
+}
+
+Gathers cpuGathers() {
+  static const Gathers g = [] {
+    const char* env = std::getenv("TESSERA_GATHER");
+    return chooseGathers(env ? env : "", ownGathers());
+  }();
+  return g;
 }
 
 }  // namespace tessera

@@ -86,8 +86,8 @@ class Stage {
       return 1;
     }
     fixRange();
-    spdlog::info("renderer rank={} joined backend={} simd={}{}", link_.rank(),
-                 scene_.mesh ? "osmesa-mesh" : backendName(opt_.backend), isaName(cpuIsa()),
+    spdlog::info("renderer rank={} joined backend={} simd={} gather={}{}", link_.rank(),
+                 scene_.mesh ? "osmesa-mesh" : backendName(opt_.backend), isaName(cpuIsa()), gathersName(cpuGathers()),
                  swap_ ? " swap pieces at " + swap_endpoint_ : "");
     while (!stopped()) {
       const bool ready = !queued_.empty() && canStart(queued_.front());

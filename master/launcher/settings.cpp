@@ -43,6 +43,7 @@ const Setting kSettings[] = {
     {"TESSERA_CURVE", Kind::Word, 0, 0, "auto|on|off"},
     {"TESSERA_PREMULTIPLIED", Kind::Word, 0, 0, "0|1"},
     {"TESSERA_SIMD", Kind::Word, 0, 0, "scalar|avx2|avx512"},
+    {"TESSERA_GATHER", Kind::Word, 0, 0, "hardware|lanes"},
     {"TESSERA_LOG", Kind::Word, 0, 0, "trace|debug|info|warn|warning|error|critical|off"},
     {"TESSERA_ENDPOINTS", Kind::Free},
     {"TESSERA_RUN", Kind::Free},

@@ -192,10 +192,10 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
     std::printf("wrote %s\n", a.pam.c_str());
   }
   if (a.print_stats) {
-    std::printf("time_ms=%.1f cpu_ms=%.1f%s samples=%llu skipped=%llu terminated=%llu skip_empty=%d simd=%s",
+    std::printf("time_ms=%.1f cpu_ms=%.1f%s samples=%llu skipped=%llu terminated=%llu skip_empty=%d simd=%s gather=%s",
                 best_ms, best_cpu_ms, a.repeat > 1 ? " (best of repeats)" : "", (unsigned long long)stats.samples,
                 (unsigned long long)stats.samples_skipped, (unsigned long long)stats.samples_terminated,
-                opt.quality.skip_empty ? 1 : 0, isaName(cpuIsa()));
+                opt.quality.skip_empty ? 1 : 0, isaName(cpuIsa()), gathersName(cpuGathers()));
     if (a.repeat > 1) std::printf(" mean_ms=%.1f", later_ms / (a.repeat - 1));
     std::printf("\n");
   }

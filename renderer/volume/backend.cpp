@@ -71,7 +71,9 @@ std::unique_ptr<VolumeBackend> makeVolumeBackend(BackendKind kind, std::shared_p
   if (std::string why = backendProblem(kind, shading, blend); !why.empty()) throw std::invalid_argument(why);
   if (kind == BackendKind::Osmesa)
     return croppedBackend(std::make_unique<GlVolumeRenderer>(volume, std::move(tf)), volume, crop);
-  cpuIsa();  // a bad TESSERA_SIMD fails here, on the caller's thread, not in a ray-casting thread
+  // A bad TESSERA_SIMD or TESSERA_GATHER fails here, on the caller's thread, not in a ray-casting thread.
+  cpuIsa();
+  cpuGathers();
   return croppedBackend(std::make_unique<Raycaster>(volume, std::move(tf), shading, light, blend), volume, crop);
 }
 

@@ -12,6 +12,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "common/cpu.h"
 #include "renderer/volume/kernels.h"
 #include "renderer/volume/leaper.h"
 
@@ -46,6 +47,7 @@ struct Consts {
   const float* rgba;
   const int32_t* nonzero;
   int first_nz, last_nz;  // TfTable::firstNonzero/lastNonzero
+  bool gather;             // read voxels (and gradients) by gather instructions (cpuGathers)
   // Shading (fast_shade.h); grad == nullptr: unlit.
   const int16_t* grad;
   int gdims[2];           // held voxels per row / per column
@@ -90,6 +92,7 @@ Consts frameConsts(const FastContext& ctx) {
   c.nonzero = ctx.table->nonzero();
   c.first_nz = ctx.table->firstNonzero();
   c.last_nz = ctx.table->lastNonzero();
+  c.gather = cpuGathers() == Gathers::Hardware;
   c.grad = nullptr;
   if (!ctx.shade) return c;
   const ShadeParams& p = *ctx.shade;

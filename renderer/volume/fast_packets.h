@@ -77,27 +77,35 @@ inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off,
     if (occupied == 0) return 0;
   }
   const __m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(brick, _mm256_set1_epi32(VolumeAccel::kBrickSize)), local);
-  // The eight corners as four x pairs, each a 32-bit read of two uint16 voxels per lane. Read
-  // one lane at a time, not by gather instructions: on AMD Zen 4 (1024^2, 2 threads) the frame
-  // took 0.95-0.96x the time with the AVX-512 kernel, the hollow shell and the unlit head alike,
-  // and 0.93-0.99x with the AVX2 kernel; the hardware gathers' latency held up every packet.
+  // The eight corners as four x pairs, each a 32-bit read of two uint16 voxels per lane: by
+  // gather instructions or one lane at a time, as suits the CPU (common/cpu.h, cpuGathers). On
+  // AMD Zen 4 (1024^2, 2 threads) the lane reads took 0.95-0.96x the time of a frame with the
+  // AVX-512 kernel and 0.93-0.99x with the AVX2 kernel; on an Intel Xeon the gathers were faster.
+  // The choice is the same for every packet of a frame: a branch the CPU predicts.
   constexpr int oy = VolumeAccel::kEdge, oz = VolumeAccel::kEdge * VolumeAccel::kEdge;
-  alignas(32) int32_t id[kLanes];
-  _mm256_store_si256(reinterpret_cast<__m256i*>(id), idx);
-  auto gather = [&](const uint16_t* base) {
-    auto at = [&](int l) {
-      int32_t v;
-      std::memcpy(&v, base + id[l], 4);
-      return v;
+  __m256i g00, g10, g01, g11;
+  if (c.gather) {
+    auto gather = [&](const uint16_t* base) {
+      return _mm256_i32gather_epi32(reinterpret_cast<const int*>(base), idx, sizeof(uint16_t));
     };
-    __m128i lo = _mm_cvtsi32_si128(at(0)), hi = _mm_cvtsi32_si128(at(4));
-    lo = _mm_insert_epi32(lo, at(1), 1), hi = _mm_insert_epi32(hi, at(5), 1);
-    lo = _mm_insert_epi32(lo, at(2), 2), hi = _mm_insert_epi32(hi, at(6), 2);
-    lo = _mm_insert_epi32(lo, at(3), 3), hi = _mm_insert_epi32(hi, at(7), 3);
-    return _mm256_set_m128i(hi, lo);
-  };
-  const __m256i g00 = gather(c.vol), g10 = gather(c.vol + oy);
-  const __m256i g01 = gather(c.vol + oz), g11 = gather(c.vol + oy + oz);
+    g00 = gather(c.vol), g10 = gather(c.vol + oy), g01 = gather(c.vol + oz), g11 = gather(c.vol + oy + oz);
+  } else {
+    alignas(32) int32_t id[kLanes];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(id), idx);
+    auto oneByOne = [&](const uint16_t* base) {
+      auto at = [&](int l) {
+        int32_t v;
+        std::memcpy(&v, base + id[l], 4);
+        return v;
+      };
+      __m128i lo = _mm_cvtsi32_si128(at(0)), hi = _mm_cvtsi32_si128(at(4));
+      lo = _mm_insert_epi32(lo, at(1), 1), hi = _mm_insert_epi32(hi, at(5), 1);
+      lo = _mm_insert_epi32(lo, at(2), 2), hi = _mm_insert_epi32(hi, at(6), 2);
+      lo = _mm_insert_epi32(lo, at(3), 3), hi = _mm_insert_epi32(hi, at(7), 3);
+      return _mm256_set_m128i(hi, lo);
+    };
+    g00 = oneByOne(c.vol), g10 = oneByOne(c.vol + oy), g01 = oneByOne(c.vol + oz), g11 = oneByOne(c.vol + oy + oz);
+  }
   const __m256i low = _mm256_set1_epi32(0xFFFF);
   auto lerpx = [&](__m256i g) {
     const __m256 v0 = _mm256_cvtepi32_ps(_mm256_and_si256(g, low));

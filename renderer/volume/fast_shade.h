@@ -65,12 +65,20 @@ void rayLights(const ShadeParams& p, const RaySpan* spans, int n, LightBlock& ou
   for (int l = 0; l < 8; ++l)
     vox[l] = (int64_t)ii[0][l] + (int64_t)c.gdims[0] * ((int64_t)ii[1][l] + (int64_t)c.gdims[1] * ii[2][l]);
   const auto* base = reinterpret_cast<const long long*>(c.grad);
-  // The corner `off` elements away: x, y, z components of the eight lanes. Read one lane at a
-  // time, not by gather instructions (see classifyPacket's voxel reads).
+  // The corner `off` elements away: x, y, z components of the eight lanes. Read by gather
+  // instructions or one lane at a time, as the voxels are (classifyPacket).
+  const __m256i vox_lo = _mm256_load_si256(reinterpret_cast<const __m256i*>(vox));
+  const __m256i vox_hi = _mm256_load_si256(reinterpret_cast<const __m256i*>(vox + 4));
   auto corner = [&](int64_t off, __m256 g[3]) {
     const long long* q = base + off;
-    const __m256 lo4 = _mm256_castsi256_ps(_mm256_setr_epi64x(q[vox[0]], q[vox[1]], q[vox[2]], q[vox[3]]));
-    const __m256 hi4 = _mm256_castsi256_ps(_mm256_setr_epi64x(q[vox[4]], q[vox[5]], q[vox[6]], q[vox[7]]));
+    __m256 lo4, hi4;
+    if (c.gather) {
+      lo4 = _mm256_castsi256_ps(_mm256_i64gather_epi64(q, vox_lo, sizeof(long long)));
+      hi4 = _mm256_castsi256_ps(_mm256_i64gather_epi64(q, vox_hi, sizeof(long long)));
+    } else {
+      lo4 = _mm256_castsi256_ps(_mm256_setr_epi64x(q[vox[0]], q[vox[1]], q[vox[2]], q[vox[3]]));
+      hi4 = _mm256_castsi256_ps(_mm256_setr_epi64x(q[vox[4]], q[vox[5]], q[vox[6]], q[vox[7]]));
+    }
     // Dwords (x | y << 16) and (z | 0 << 16) of the eight lanes, in lane order.
     const __m256i xy = _mm256_castpd_si256(_mm256_permute4x64_pd(
         _mm256_castps_pd(_mm256_shuffle_ps(lo4, hi4, 0x88)), 0xD8));

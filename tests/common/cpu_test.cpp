@@ -1,4 +1,5 @@
-// TESSERA_SIMD may lower the instruction set the CPU supports, never raise it.
+// TESSERA_SIMD may lower the instruction set the CPU supports, never raise it; TESSERA_GATHER
+// picks either way of reading voxels, whatever the CPU's own choice.
 #include "common/cpu.h"
 
 #include <gtest/gtest.h>
@@ -34,6 +35,20 @@ TEST(Cpu, HigherOrUnknownLevelsAreRefusedByName) {
 
 TEST(Cpu, NamesRoundTrip) {
   for (Isa isa : {Isa::Scalar, Isa::Avx2, Isa::Avx512}) EXPECT_EQ(chooseIsa(isaName(isa), Isa::Avx512), isa);
+}
+
+TEST(Cpu, EitherWayOfReadingVoxelsCanBeForced) {
+  for (Gathers own : {Gathers::Lanes, Gathers::Hardware}) {
+    EXPECT_EQ(chooseGathers("", own), own);
+    EXPECT_EQ(chooseGathers("lanes", own), Gathers::Lanes);
+    EXPECT_EQ(chooseGathers("hardware", own), Gathers::Hardware);
+  }
+  try {
+    chooseGathers("avx512", Gathers::Lanes);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "TESSERA_GATHER=avx512: expected hardware or lanes");
+  }
 }
 
 }  // namespace

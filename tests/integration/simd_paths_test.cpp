@@ -1,7 +1,8 @@
 // One binary, every instruction set: tessera-render picks the fast kernel for the CPU, and
 // each lower level TESSERA_SIMD can force (down to the scalar path of CPUs without AVX2)
 // renders the same image bit for bit: the kernel's arithmetic is explicit (fused
-// multiply-adds in every path), so the instruction set must not change a single value.
+// multiply-adds in every path), so the instruction set must not change a single value. Nor
+// may the way the vector kernels read voxels (TESSERA_GATHER: gather instructions or lanes).
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -13,9 +14,9 @@
 namespace tessera::test {
 namespace {
 
-std::string simdOf(const std::string& stats_output) {
+std::string statOf(const std::string& stats_output, const std::string& key) {
   std::smatch m;
-  return std::regex_search(stats_output, m, std::regex("simd=(\\w+)")) ? m[1].str() : "";
+  return std::regex_search(stats_output, m, std::regex(key + "=(\\w+)")) ? m[1].str() : "";
 }
 
 // Shading: the vector kernels light eight samples at once, the portable one sample by sample.
@@ -38,13 +39,14 @@ TEST_P(SimdPaths, EveryLevelTheCpuHasRendersTheSameImage) {
   // The sample counts (taken, skipped, terminated) show the empty-space and termination
   // decisions, which an image cannot; with and without skipping (two loops of the kernel).
   struct Render {
-    std::string simd, counts, floats;
+    std::string simd, gather, counts, floats;
     Image8 image;
   };
-  auto render = [&](const std::string& level, const std::string& flags) {
-    const std::string pam = (dir.path() / ("simd-" + level + ".pam")).string();
-    const std::string raw = (dir.path() / ("simd-" + level + ".f32")).string();
-    const auto r = runCommand((level.empty() ? "" : "env TESSERA_SIMD=" + level + " ") + bin("tessera-render") + " " +
+  auto render = [&](const std::string& level, const std::string& gather, const std::string& flags) {
+    const std::string pam = (dir.path() / ("simd-" + level + gather + ".pam")).string();
+    const std::string raw = (dir.path() / ("simd-" + level + gather + ".f32")).string();
+    const std::string env = (level.empty() ? "" : " TESSERA_SIMD=" + level) + (gather.empty() ? "" : " TESSERA_GATHER=" + gather);
+    const auto r = runCommand((env.empty() ? "" : "env" + env + " ") + bin("tessera-render") + " " +
                                   scene + " --stats " + flags + " -o " + dir.path().string() + "/x.png --premultiplied " +
                                   pam + " --raw " + raw,
                               120);
@@ -56,22 +58,31 @@ TEST_P(SimdPaths, EveryLevelTheCpuHasRendersTheSameImage) {
       EXPECT_NE(m[1].str(), "0") << "nothing skipped: the scene does not test the leaper";
     }
     std::ifstream in(raw, std::ios::binary);
-    return Render{simdOf(r.output), counts, std::string(std::istreambuf_iterator<char>(in), {}), readPam(pam)};
+    return Render{statOf(r.output, "simd"), statOf(r.output, "gather"), counts,
+                  std::string(std::istreambuf_iterator<char>(in), {}), readPam(pam)};
   };
   for (const std::string flags : {"", "--no-skip"}) {
     SCOPED_TRACE("flags '" + flags + "'");
-    const Render best = render("", flags);
+    const Render best = render("", "", flags);
     ASSERT_FALSE(best.simd.empty()) << "tessera-render --stats does not name its kernel";
+    ASSERT_FALSE(best.gather.empty()) << "tessera-render --stats does not say how it reads voxels";
     ASSERT_FALSE(best.counts.empty()) << "tessera-render --stats prints no sample counts";
     ASSERT_GT(best.floats.size(), 160u * 120 * 16 - 1) << "no float image";
     int levels = 0;
     for (const std::string level : {"scalar", "avx2", "avx512"}) {
-      const Render other = render(level, flags);
-      EXPECT_EQ(other.simd, level);
-      EXPECT_EQ(other.counts, best.counts) << level << " against " << best.simd;
-      EXPECT_TRUE(other.floats == best.floats) << level << " and " << best.simd << " differ in their float images";
-      EXPECT_TRUE(dir.matches(other.image, best.image, 0, level + "_vs_" + best.simd));
-      ++levels;
+      // The portable kernel reads one sample at a time: TESSERA_GATHER changes nothing there.
+      for (const std::string gather : {"lanes", "hardware"}) {
+        if (level == "scalar" && gather == "hardware") continue;
+        const std::string name = level + "/" + gather;
+        const Render other = render(level, gather, flags);
+        EXPECT_EQ(other.simd, level);
+        EXPECT_EQ(other.gather, gather);
+        EXPECT_EQ(other.counts, best.counts) << name << " against " << best.simd << "/" << best.gather;
+        EXPECT_TRUE(other.floats == best.floats) << name << " and " << best.simd << "/" << best.gather
+                                                 << " differ in their float images";
+        EXPECT_TRUE(dir.matches(other.image, best.image, 0, level + "_" + gather + "_vs_best"));
+        ++levels;
+      }
       if (level == best.simd) break;
     }
     EXPECT_GE(levels, 1);
@@ -87,6 +98,13 @@ TEST(SimdLevel, ALevelAboveTheCpuOrAnUnknownWordIsRefused) {
   const auto r = runCommand("env TESSERA_SIMD=sse9 " + bin("tessera-render") + " -o " + dir.path().string() + "/x.png", 60);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("TESSERA_SIMD=sse9: expected scalar, avx2 or avx512"), std::string::npos) << r.output;
+}
+
+TEST(SimdLevel, AnUnknownWayOfReadingVoxelsIsRefused) {
+  FarmDir dir("gather-bad");
+  const auto r = runCommand("env TESSERA_GATHER=avx " + bin("tessera-render") + " -o " + dir.path().string() + "/x.png", 60);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("TESSERA_GATHER=avx: expected hardware or lanes"), std::string::npos) << r.output;
 }
 
 }  // namespace
