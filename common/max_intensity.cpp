@@ -7,9 +7,15 @@
 
 namespace tessera {
 
-MaxIntensity::MaxIntensity(const TransferFunction& tf) : tf_(tf) {
-  const auto& pts = tf.points();
-  const double top = tf.maxAlpha(0, 1);
+TransferFunction mirrored(const TransferFunction& tf) {
+  std::vector<TfPoint> pts(tf.points().rbegin(), tf.points().rend());
+  for (TfPoint& p : pts) p.s = 1 - p.s;
+  return TransferFunction(std::move(pts));
+}
+
+MaxIntensity::MaxIntensity(const TransferFunction& tf, bool minimum) : tf_(minimum ? mirrored(tf) : tf) {
+  const auto& pts = tf_.points();
+  const double top = tf_.maxAlpha(0, 1);
   if (!(top > 0)) {
     floor_ = std::numeric_limits<double>::infinity();
     floor_q_ = std::numeric_limits<uint32_t>::max();

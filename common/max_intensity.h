@@ -8,6 +8,12 @@
 // [0, 1] (a valid premultiplied pixel, so it travels and crops as any piece does), or
 // transparent black where no value reaches `floor()`: below it every value maps to transparent,
 // so no piece needs to carry it. Values compare in the ray caster's 16-bit units (q = s * 65535).
+//
+// Minimum intensity projection (`blend: minimum`) is the maximum projection of the complement:
+// a value pixel holds 1 - m, m the ray's smallest value, and is mapped by the colour map
+// mirrored (its point at s moved to 1 - s). So pieces merge by their maxima here too (1 - m is
+// largest where m is smallest), transparent pixels still lose to every value, and every stage
+// that merges or maps a maximum projection does the minimum one unchanged.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -19,7 +25,8 @@ namespace tessera {
 
 class MaxIntensity {
  public:
-  explicit MaxIntensity(const TransferFunction& tf);
+  // `minimum`: the map of a minimum projection's complemented values (`tf` mirrored).
+  explicit MaxIntensity(const TransferFunction& tf, bool minimum = false);
   // Smallest 16-bit value a ray must reach to be kept: values below it map to transparent
   // (alpha 0 up to the colour map's first opacity). UINT32_MAX when no value has opacity.
   uint32_t floorQ() const { return floor_q_; }
@@ -39,17 +46,22 @@ class MaxIntensity {
 // user's window/level): made again when a frame's window differs from the last one's.
 class WindowedMaxIntensity {
  public:
-  explicit WindowedMaxIntensity(TransferFunction tf) : tf_(std::move(tf)), map_(tf_) {}
+  WindowedMaxIntensity(TransferFunction tf, bool minimum) : tf_(std::move(tf)), minimum_(minimum), map_(tf_, minimum) {}
   const MaxIntensity& at(const ColorWindow& w) {
-    if (!(w == window_)) map_ = MaxIntensity(windowed(tf_, w)), window_ = w;
+    if (!(w == window_)) map_ = MaxIntensity(windowed(tf_, w), minimum_), window_ = w;
     return map_;
   }
 
  private:
   TransferFunction tf_;
+  bool minimum_;
   ColorWindow window_;
   MaxIntensity map_;
 };
+
+// tf with each point at s moved to 1 - s: mirrored(tf).eval(s) == tf.eval(1 - s), but at a
+// step's own value, which takes the step's other side.
+TransferFunction mirrored(const TransferFunction& tf);
 
 // Value pixels merged: dst = max(dst, src) per channel, within rect r (same sizes).
 void compositeMaximum(ImageF& dst, const ImageF& src, const Rect& r);

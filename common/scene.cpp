@@ -219,7 +219,14 @@ VoxelBox cropBox(const Crop& c, const std::array<int, 3>& dims) {
   return b;
 }
 
-const char* blendName(Blend b) { return b == Blend::Maximum ? "maximum" : "composite"; }
+const char* blendName(Blend b) {
+  switch (b) {
+    case Blend::Maximum: return "maximum";
+    case Blend::Minimum: return "minimum";
+    case Blend::Composite: break;
+  }
+  return "composite";
+}
 
 Scene parseScene(const std::string& yaml_text, const std::string& base_dir, const std::string& name_for_errors) {
   detail::Parser p(name_for_errors, base_dir);
@@ -255,9 +262,12 @@ Scene parseScene(const std::string& yaml_text, const std::string& base_dir, cons
     if (is_mesh) p.fail("blend", "blends volume samples; a mesh scene has none");
     const std::string b = p.string(root["blend"], "blend");
     if (b == "maximum") s.blend = Blend::Maximum;
-    else if (b != "composite") p.fail("blend", "'" + b + "': expected composite or maximum (maximum intensity projection)");
-    if (s.blend == Blend::Maximum && s.shading.on)
-      p.fail("blend", "maximum shows each ray's largest value, which is not lit: leave `shading` out");
+    else if (b == "minimum") s.blend = Blend::Minimum;
+    else if (b != "composite")
+      p.fail("blend", "'" + b + "': expected composite, maximum or minimum (maximum or minimum intensity projection)");
+    if (isProjection(s.blend) && s.shading.on)
+      p.fail("blend", b + " shows each ray's " + (s.blend == Blend::Maximum ? "largest" : "smallest") +
+                          " value, which is not lit: leave `shading` out");
   }
   if (root["crop"]) {
     if (is_mesh) p.fail("crop", "cuts the rendered volume; a mesh scene renders none");

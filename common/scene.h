@@ -67,10 +67,13 @@ struct Shading {
 };
 
 // `blend:` how a ray's samples make its pixel, as VTK's and ParaView's blend modes: `composite`
-// (front-to-back emission and absorption, the default) or `maximum` (maximum intensity
-// projection: the colour map at the largest value along the ray; common/max_intensity.h).
-enum class Blend { Composite, Maximum };
+// (front-to-back emission and absorption, the default), `maximum` (maximum intensity
+// projection: the colour map at the largest value along the ray) or `minimum` (minimum
+// intensity projection, at the smallest: airways and vessels darker than their surroundings);
+// the two projections: common/max_intensity.h.
+enum class Blend { Composite, Maximum, Minimum };
 const char* blendName(Blend b);
+inline bool isProjection(Blend b) { return b != Blend::Composite; }
 
 // `crop: {x: [lo, hi], y: ..., z: ...}`: only this part of the volume is rendered, as
 // ParaView's Crop and 3D Slicer's ROI cut a volume open; each axis a fraction of the box

@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
     const Scene parsed = args.scene();
     opt.width = parsed.width;
     opt.height = parsed.height;
-    if (parsed.blend == Blend::Maximum) opt.maximum = parsed.tf;
+    if (isProjection(parsed.blend)) opt.maximum = parsed.tf, opt.minimum = parsed.blend == Blend::Minimum;
     opt.scene = sceneIdentity(parsed);
     opt.endpoints = endpoints;
     return compositor::runStage(opt, ctx, stop);

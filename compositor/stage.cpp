@@ -27,7 +27,7 @@ class Stage {
                Gather::waitingBudget(opt.width, opt.height)),
         gather_(0) {
     link_.expectFrameSize(opt.width, opt.height);
-    if (opt.maximum) mip_.emplace(*opt.maximum);
+    if (opt.maximum) mip_.emplace(*opt.maximum, opt.minimum);
   }
 
   int run(const std::atomic<bool>* stop) {
@@ -191,7 +191,7 @@ class Stage {
   Gather gather_;
   std::vector<float> row_;
   Image8 frame_;
-  std::optional<WindowedMaxIntensity> mip_;  // blend: maximum
+  std::optional<WindowedMaxIntensity> mip_;  // blend: maximum or minimum
   std::map<uint64_t, double> decode_ms_;  // by frame
   DropCounter drops_;
   DropCounter unsent_;  // strips this compositor could not send (apart: drops_ counts by sender)

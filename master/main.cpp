@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
   const std::map<std::string, proto::PixelFormat> formats{
       {"rgba8", proto::PixelFormat::RGBA8}, {"rgba16f", proto::PixelFormat::RGBA16F}, {"rgba32f", proto::PixelFormat::RGBA32F}};
   std::string format = "rgba16f";
-  app.add_option("--format", format, "pixel format of pieces: rgba16f (default, within 1/255) | rgba8 | rgba32f (always, for blend: maximum)")
+  app.add_option("--format", format, "pixel format of pieces: rgba16f (default, within 1/255) | rgba8 | rgba32f (always, for blend: maximum or minimum)")
       ->envname("TESSERA_FORMAT")
       ->check(CLI::IsMember({"rgba8", "rgba16f", "rgba32f"}));
   app.add_option("--metrics", opt.metrics_path, "JSON-lines metrics file")->envname("TESSERA_METRICS");

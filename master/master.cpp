@@ -254,7 +254,7 @@ class Master {
     setView(p, spec);
     p.codec = opt_.codec;
     // Projections' values travel exact: rgba16f rounds by up to 1/2048, > 1/255 on steep maps.
-    p.format = opt_.scene.blend == Blend::Maximum ? proto::PixelFormat::RGBA32F : opt_.format;
+    p.format = isProjection(opt_.scene.blend) ? proto::PixelFormat::RGBA32F : opt_.format;
     p.first_wanted = first_wanted_;
     plan_->fill(p, w);
     p.display_endpoint = opt_.endpoints.display();

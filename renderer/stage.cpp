@@ -35,8 +35,9 @@ class Stage {
       images_ = std::make_unique<BrickImages>(scene_, opt.backend, opt.cache_mb, opt.threads);
       swap_ = std::make_unique<SwapExchange>(ctx, maxPixelMessageBytes(scene_.width, scene_.height),
                                              2 * 16 * size_t(scene_.width) * size_t(scene_.height));
-      swap_->setMaximum(scene_.blend == Blend::Maximum);
-      if (scene_.blend == Blend::Maximum) mip_.emplace(scene_.tf);  // seen through each frame's window
+      swap_->setMaximum(isProjection(scene_.blend));
+      // Seen through each frame's window.
+      if (isProjection(scene_.blend)) mip_.emplace(scene_.tf, scene_.blend == Blend::Minimum);
       bindSwap();
     }
   }
@@ -360,7 +361,7 @@ class Stage {
   Image8 band8_;                   // a binary swap's band, quantized (the frame's size: strips name screen rows)
   Outbox outbox_{ctx_, link_.dataIdentity()};  // to compositors, swap partners and the display
   std::unique_ptr<SwapExchange> swap_;  // volume scenes
-  std::optional<WindowedMaxIntensity> mip_;  // blend: maximum: maps the bands this renderer finishes
+  std::optional<WindowedMaxIntensity> mip_;  // blend: maximum or minimum: maps the bands this renderer finishes
   size_t swap_size_logged_ = 0;  // renderers in the swap, when last said
   std::string swap_endpoint_;  // what Hello tells the master
   std::deque<proto::FrameParams> queued_;

@@ -46,7 +46,7 @@ void parseSize(const std::string& s, int& w, int& h) {
 // rectangle outside which the image is transparent. `recycled`: the image before, transparent
 // (ImageF::clear), whose memory this one takes, as a renderer's frames do: fresh pages for a
 // 1024^2 image were ~9 ms of a ~150 ms frame here, which a frame in a running farm, or in
-// VTK's window, does not pay. `mip` (blend: maximum): the bricks' value pixels are merged by
+// VTK's window, does not pay. `mip` (blend: maximum or minimum): the bricks' value pixels are merged by
 // their maxima and mapped once, as the farm's compositors do.
 ImageF renderScene(const renderer::VolumeBackend& rc, const Volume& vol, const BrickTree& tree, const Camera& cam,
                    int w, int h, const renderer::RenderOptions& opt, renderer::RenderStats* stats, const MaxIntensity* mip,
@@ -153,7 +153,7 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   auto chosen = renderer::makeVolumeBackend(renderer::parseBackend(a.backend), vol, tf, scene.shading, scene.light,
                                             scene.blend, scene.crop);
   std::optional<MaxIntensity> mip;
-  if (scene.blend == Blend::Maximum) mip.emplace(tf);
+  if (isProjection(scene.blend)) mip.emplace(tf, scene.blend == Blend::Minimum);
   const MaxIntensity* mp = mip ? &*mip : nullptr;
   // Split once, outside the timed renders, as the farm's master does once per run (no tree:
   // the whole volume, and no classification of every voxel for it).

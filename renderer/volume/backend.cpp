@@ -61,7 +61,8 @@ const char* backendName(BackendKind kind) { return kind == BackendKind::Cpu ? "c
 std::string backendProblem(BackendKind kind, const Shading& shading, Blend blend) {
   if (kind != BackendKind::Osmesa) return "";
   if (shading.on) return "the osmesa volume backend does not shade; use backend cpu or leave out `shading`";
-  if (blend != Blend::Composite) return "the osmesa volume backend composites only; use backend cpu for `blend: maximum`";
+  if (blend != Blend::Composite)
+    return std::string("the osmesa volume backend composites only; use backend cpu for `blend: ") + blendName(blend) + "`";
   return "";
 }
 

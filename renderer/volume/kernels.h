@@ -20,10 +20,13 @@ struct SampleCounts {
 
 // Maximum intensity projection's skipping (max_kernel.cpp): per brick of VolumeAccel its
 // largest 16-bit value (of its 9^3, apron included: all a sample in it reads), the volume's,
-// and the floor below which nothing shows (MaxIntensity::floorQ).
+// and the floor below which nothing shows (MaxIntensity::floorQ). `complement`: the minimum
+// projection, the maximum of 65535 - q (common/max_intensity.h); the values above are then the
+// complement's (65535 less each brick's smallest value).
 struct MaxSkip {
   const uint16_t* brick_max = nullptr;
   uint32_t volume_max = 65535, floor_q = 0;
+  bool complement = false;
 };
 // At least VolumeAccel's 16-bit value of any voxel whose normalised value is at most `value`.
 uint32_t quantizedUpperBound(float value);
@@ -52,12 +55,15 @@ void castFastBatch(const FastContext& c, const RaySpan* spans, float* const* out
                    bool* terminated);
 
 // Maximum intensity projection (c.maximum set): the ray's value pixel (common/max_intensity.h), its
-// largest value in 16-bit units / 65535, or transparent when none reaches the floor. With
+// largest value in 16-bit units / 65535 (with c.maximum->complement: of 65535 - q, the minimum
+// projection), or transparent when none reaches the floor. With
 // c.skip, samples in bricks that cannot raise the maximum are passed over (counted as skipped);
 // once the volume's largest value is reached the rest count as terminated. Returns false.
 bool castMaximum(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts);
 // The same in double precision on the volume's values, with every sample: `floor` in [0, 1].
-void castReferenceMaximum(const Volume& v, double floor, const RaySpan& span, double out[4], SampleCounts& counts);
+// `complement`: the largest 1 - value (the minimum projection).
+void castReferenceMaximum(const Volume& v, double floor, bool complement, const RaySpan& span, double out[4],
+                          SampleCounts& counts);
 
 // Double precision, exact transfer function, no skipping, no early termination; `shade`
 // (null: unlit) lights each sample with its exact gradient (sampleGradient).

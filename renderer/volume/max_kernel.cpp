@@ -1,6 +1,7 @@
 // Maximum intensity projection's ray kernels (scene `blend: maximum`, common/max_intensity.h):
 // a ray's largest trilinear value, fast (the bricked 16-bit copy, bricks passed over whose
-// largest voxel cannot raise the ray's maximum) and in double precision (the reference).
+// largest voxel cannot raise the ray's maximum) and in double precision (the reference). The
+// minimum projection (`blend: minimum`) is the same search over the values' complements.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -38,7 +39,13 @@ int64_t lastInBrick(const RaySpan& span, const int i[3], int64_t k) {
 
 }  // namespace
 
-TESSERA_CLONES bool castMaximum(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts) {
+namespace {
+
+// castMaximum for a maximum (kComplement false) or a minimum projection: a template, so that the
+// per-sample loop does not ask which.
+template <bool kComplement>
+[[gnu::always_inline]] inline void castProjection(const FastContext& c, const RaySpan& span, float out[4],
+                                                  SampleCounts& counts) {
   const MaxSkip& m = *c.maximum;
   const Volume& v = *c.volume;
   const uint16_t* vol = c.accel->bricked.data();
@@ -81,7 +88,8 @@ TESSERA_CLONES bool castMaximum(const FastContext& c, const RaySpan& span, float
     auto lerp = [](float a, float b, float t) { return a + t * (b - a); };
     const float x00 = lerp(p[0], p[1], f[0]), x10 = lerp(p[oy], p[oy + 1], f[0]);
     const float x01 = lerp(p[oz], p[oz + 1], f[0]), x11 = lerp(p[oy + oz], p[oy + oz + 1], f[0]);
-    const float s = lerp(lerp(x00, x10, f[1]), lerp(x01, x11, f[1]), f[2]);
+    const float trilinear = lerp(lerp(x00, x10, f[1]), lerp(x01, x11, f[1]), f[2]);
+    const float s = kComplement ? VolumeAccel::kQuantScale - trilinear : trilinear;
     if (s > best) {
       best = s;
       last_brick = -1;  // this brick may hold nothing larger now: the next sample asks again
@@ -97,15 +105,24 @@ TESSERA_CLONES bool castMaximum(const FastContext& c, const RaySpan& span, float
   out[0] = shows ? best / VolumeAccel::kQuantScale : 0.0f;
   out[1] = out[2] = 0;
   out[3] = shows ? 1.0f : 0.0f;
+}
+
+}  // namespace
+
+TESSERA_CLONES bool castMaximum(const FastContext& c, const RaySpan& span, float out[4], SampleCounts& counts) {
+  if (c.maximum->complement) castProjection<true>(c, span, out, counts);
+  else castProjection<false>(c, span, out, counts);
   return false;
 }
 
-void castReferenceMaximum(const Volume& v, double floor, const RaySpan& span, double out[4], SampleCounts& counts) {
+void castReferenceMaximum(const Volume& v, double floor, bool complement, const RaySpan& span, double out[4],
+                          SampleCounts& counts) {
   double best = -1;
   for (int64_t k = span.k_first; k < span.k_end; ++k) {
     const double kd = (double)k;
-    best = std::max(best, sampleTrilinear(v, span.u0[0] + kd * span.du[0], span.u0[1] + kd * span.du[1],
-                                          span.u0[2] + kd * span.du[2]));
+    const double s =
+        sampleTrilinear(v, span.u0[0] + kd * span.du[0], span.u0[1] + kd * span.du[1], span.u0[2] + kd * span.du[2]);
+    best = std::max(best, complement ? 1 - s : s);
   }
   counts.taken += (uint64_t)std::max<int64_t>(0, span.k_end - span.k_first);
   const bool shows = best >= floor;

@@ -40,8 +40,8 @@ struct Raycaster::Impl {
   Vec3 light;
   std::shared_ptr<const GradientVolume> gradients;  // with shading (shared by casters of the volume)
   Blend blend = Blend::Composite;
-  double max_floor = 0;                // blend: maximum: MaxIntensity::floor
-  MaxSkip max_skip;                    // blend: maximum, pointing into brick_max
+  double max_floor = 0;                // blend: maximum or minimum: MaxIntensity::floor
+  MaxSkip max_skip;                    // blend: maximum or minimum, pointing into brick_max
   std::vector<uint16_t> brick_max;
 };
 
@@ -73,25 +73,30 @@ Raycaster::Raycaster(std::shared_ptr<const Volume> volume, TransferFunction tf, 
   impl_->shading = shading;
   impl_->light = light;
   impl_->blend = blend;
-  if (blend == Blend::Maximum && shading.on) throw std::invalid_argument("Raycaster: blend maximum is not lit (no shading)");
+  if (isProjection(blend) && shading.on)
+    throw std::invalid_argument(std::string("Raycaster: blend ") + blendName(blend) + " is not lit (no shading)");
   if (shading.on) impl_->gradients = perVolume<GradientVolume>(impl_->volume);
   const TransferFunction& f = impl_->tf;
-  if (blend == Blend::Maximum) {
-    // A block is empty when its values cannot reach the floor: nothing below it shows.
-    const MaxIntensity mip(f);
+  if (isProjection(blend)) {
+    // A block is empty when its values cannot reach the floor: nothing below it shows. The
+    // minimum projection searches the complements (common/max_intensity.h): a block's largest
+    // complement is 1 less its smallest value.
+    const bool minimum = blend == Blend::Minimum;
+    const MaxIntensity mip(f, minimum);
     const uint32_t floor_q = mip.floorQ();
     impl_->max_floor = mip.floor();
-    impl_->emptiness =
-        impl_->accel->hierarchy.classify([floor_q](float, float hi) { return quantizedUpperBound(hi) < floor_q; });
-    // Each brick's largest 16-bit value, exactly: the kernel's skip and its early end compare
-    // the values it interpolates (one pass over the bricked copy per volume and colour map).
+    impl_->emptiness = impl_->accel->hierarchy.classify(
+        [floor_q, minimum](float lo, float hi) { return quantizedUpperBound(minimum ? 1 - lo : hi) < floor_q; });
+    // Each brick's largest 16-bit value (complement), exactly: the kernel's skip and its early
+    // end compare the values it interpolates (one pass over the bricked copy per volume and map).
     const auto& bricks = impl_->accel->nb;
     const uint16_t* q = impl_->accel->bricked.data();
     impl_->brick_max.resize((size_t)bricks[0] * bricks[1] * bricks[2]);
     for (size_t b = 0; b < impl_->brick_max.size(); ++b, q += VolumeAccel::kBrickSize)
-      impl_->brick_max[b] = *std::max_element(q, q + VolumeAccel::kBrickSize);
+      impl_->brick_max[b] = minimum ? (uint16_t)(65535 - *std::min_element(q, q + VolumeAccel::kBrickSize))
+                                    : *std::max_element(q, q + VolumeAccel::kBrickSize);
     const uint16_t top = *std::max_element(impl_->brick_max.begin(), impl_->brick_max.end());
-    impl_->max_skip = MaxSkip{impl_->brick_max.data(), top, floor_q};
+    impl_->max_skip = MaxSkip{impl_->brick_max.data(), top, floor_q, minimum};
   } else {
     impl_->emptiness = impl_->accel->hierarchy.classify([&f](float lo, float hi) { return TfTable::rangeIsEmpty(f, lo, hi); });
     impl_->occupancy = cellOccupancy(*impl_->accel, impl_->emptiness, f);
@@ -137,7 +142,8 @@ struct FrameRays {
   bool clipping;          // rays are cut to `clip`; the samples cut off count as skipped
   const DepthBounds* depth;  // per-cell depth bounds of non-empty nodes (perspective + skipping)
   const FastContext& fast;
-  const double* max_floor;   // blend: maximum (the reference's floor); null: composite
+  const double* max_floor;   // blend: maximum or minimum (the reference's floor); null: composite
+  bool minimum;              // blend: minimum (the reference searches the complements)
   const ShadeParams* shade;  // null: unlit
   ImageF& img;
   bool count;  // count the samples skipped outside the rays cast (stats were asked for)
@@ -161,7 +167,7 @@ class TileWorker {
         if (f_.q.reference) {
           float* o = f_.img.at(px, py);
           double d[4];
-          if (f_.max_floor) castReferenceMaximum(f_.volume, *f_.max_floor, span, d, counts);
+          if (f_.max_floor) castReferenceMaximum(f_.volume, *f_.max_floor, f_.minimum, span, d, counts);
           else castReference(f_.volume, f_.tf, f_.q.step, f_.shade, span, d, counts);
           for (int c = 0; c < 4; ++c) o[c] = (float)d[c];
           mark(px, py);
@@ -299,7 +305,7 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
     fast.table = table ? &*table : nullptr;
     fast.emptiness = &impl_->emptiness;
     fast.occupancy = impl_->occupancy.empty() ? nullptr : impl_->occupancy.data();
-    if (impl_->blend == Blend::Maximum) fast.maximum = &impl_->max_skip;
+    if (isProjection(impl_->blend)) fast.maximum = &impl_->max_skip;
     fast.skip = q.skip_empty;
     fast.early_termination = (float)std::min(q.early_termination, 2.0);
   }
@@ -322,8 +328,9 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   SampleCounts total;
   Rect act;
 
-  const double* max_floor = impl_->blend == Blend::Maximum ? &impl_->max_floor : nullptr;
+  const double* max_floor = isProjection(impl_->blend) ? &impl_->max_floor : nullptr;
   const FrameRays rays{v, impl_->tf, q, gen, geom, brick, clip, clipping, depth ? &*depth : nullptr, fast, max_floor,
+                       impl_->blend == Blend::Minimum,
                         shade ? &*shade : nullptr, img, stats != nullptr,
                         SpanRow(gen, geom, brick, clipping ? clip : brick, q.step)};
   auto worker = [&] {

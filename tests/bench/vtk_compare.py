@@ -80,6 +80,8 @@ def load_case(args):
         case["shading"] = dict(SHADING_DEFAULTS, **(sh if isinstance(sh, dict) else {}))
     case["light"] = sc.get("light")
     case["blend"] = sc.get("blend", "composite")
+    if case["blend"] not in ("composite", "maximum"):
+        sys.exit(f"vtk_compare: {args.scene}: blend: {case['blend']} is not compared (composite and maximum are)")
     if case["blend"] == "maximum" and max(p[4] for p in case["tf"]) != 1:
         sys.exit(f"vtk_compare: {args.scene}: for blend: maximum give the transfer function an opacity of 1 at its "
                  f"top (Tessera scales a projection's opacity so that its largest is 1, VTK does not)")

@@ -1,7 +1,7 @@
-// The farm's maximum intensity projection (scene `blend: maximum`) against tessera-render's:
-// pieces carry each ray's largest value, merged by maxima in the compositors or in the
-// renderers' binary swap, and mapped once, so the frames match the one-process render within
-// the accuracy contract.
+// The farm's maximum and minimum intensity projections (scene `blend: maximum`, `minimum`)
+// against tessera-render's: pieces carry each ray's largest value (or its smallest's
+// complement), merged by maxima in the compositors or in the renderers' binary swap, and
+// mapped once, so the frames match the one-process render within the accuracy contract.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -36,6 +36,30 @@ void runAndCompare(const char* name, int renderers, int compositors, const char*
 TEST(MaxIntensityFarm, CompositorsMergeMaximaAsTesseraRenderDoes) { runAndCompare("mip-direct", 4, 2, "direct-send"); }
 
 TEST(MaxIntensityFarm, BinarySwapMergesMaximaAsTesseraRenderDoes) { runAndCompare("mip-swap", 3, 0, "binary-swap"); }
+
+// The minimum projection travels as the maximum of the values' complements: the same merges,
+// mapped by the mirrored colour map. Its map is steep where most rays' smallest values of the
+// Marschner-Lobb volume lie (0.1 to 0.2) and clear above 0.5, so rays whose smallest value is
+// larger show nothing and bricks without one below it are passed over.
+void runMinimumAndCompare(const char* name, int renderers, int compositors, const char* compositing) {
+  FarmDir dir(name);
+  const int frames = 3;
+  const fs::path scene = dir.path() / "minip.yaml";
+  std::ofstream(scene) << "volume: {generator: {name: marschner-lobb, size: 48}}\n"
+                          "transfer_function: [[0, 1, 1, 0.8, 1], [0.1, 1, 0.6, 0.1, 1], [0.2, 0.1, 0.2, 0.9, 0.2],"
+                          " [0.5, 0, 0, 0, 0], [1, 0, 0, 0, 0]]\n"
+                          "blend: minimum\nimage: [64, 48]\norbit: {frames: "
+                       << frames << ", degrees: 90}\n";
+  expectFarmMatchesRender(dir, scene, frames, renderers, compositors, compositing, 400, "minip");
+}
+
+TEST(MaxIntensityFarm, CompositorsMergeMinimaAsTesseraRenderDoes) {
+  runMinimumAndCompare("minip-direct", 4, 2, "direct-send");
+}
+
+TEST(MaxIntensityFarm, BinarySwapMergesMinimaAsTesseraRenderDoes) {
+  runMinimumAndCompare("minip-swap", 3, 0, "binary-swap");
+}
 
 TEST(MaxIntensityFarm, TheOsmesaBackendRefusesItByName) {
   FarmDir dir("mip-osmesa");
