@@ -101,7 +101,7 @@ class InteractiveFarm {
     mo_.renderers = renderers;
     for (int r = 0; r < renderers; ++r) ro_.push_back({scene, ep_, 1});  // one thread each
     co_ = {ep_, "", 512, 512, std::nullopt, sceneIdentity(scene)};
-    if (scene.blend == Blend::Maximum) co_.maximum = scene.tf;
+    if (isProjection(scene.blend)) co_.maximum = scene.tf, co_.minimum = scene.blend == Blend::Minimum;
     dopt_ = {ep_, (dir.path() / "out").string(), display::StageOptions::Window::Off, std::nullopt};
     dopt_.scene = sceneIdentity(scene);
     stages_.push_back(std::async(std::launch::async, [&] { return master::run(mo_, ctx_, &stop_); }));
@@ -163,7 +163,8 @@ Image8 windowedRender(const Scene& scene, const Camera& cam, const ColorWindow& 
   renderer::RenderOptions opt;
   opt.quality = scene.quality;
   ImageF img = caster.render(cam, scene.width, scene.height, renderer::wholeVolume(*volume), opt);
-  if (scene.blend == Blend::Maximum) MaxIntensity(tf).map(img.px.data(), (size_t)img.width * img.height);
+  if (isProjection(scene.blend))
+    MaxIntensity(tf, scene.blend == Blend::Minimum).map(img.px.data(), (size_t)img.width * img.height);
   return toRGBA8(img);
 }
 
@@ -204,16 +205,25 @@ TEST(InProcessFarm, InteractiveFramesFollowInputAndIdleFramesAreNotRendered) {
   EXPECT_TRUE(dir.matches(readPng(dir.frame(3).string()), before, 1, "home")) << "r did not bring back the scene's view";
 }
 
-// Maximum intensity projection maps the merged values once, where the frame is finished (the
+// The intensity projections map the merged values once, where the frame is finished (the
 // compositor with direct send, the renderers' bands with binary swap): through the frame's
-// colour window.
-TEST(InProcessFarm, AColourWindowRecoloursAMaximumIntensityFarm) {
-  for (bool binary_swap : {false, true}) {
-    SCOPED_TRACE(binary_swap ? "binary swap" : "direct send");
-    const std::string name = binary_swap ? "interactive-mip-swap" : "interactive-mip";
+// colour window, and for the minimum projection the window's map mirrored (the window first).
+// The minimum projection's volume has no empty space (every ray's smallest value would be 0):
+// the Marschner-Lobb volume, with a map opaque below 0.5.
+TEST(InProcessFarm, AColourWindowRecoloursAnIntensityProjectionFarm) {
+  for (const auto& [blend, binary_swap] : {std::pair{Blend::Maximum, false}, std::pair{Blend::Maximum, true},
+                                           std::pair{Blend::Minimum, false}, std::pair{Blend::Minimum, true}}) {
+    SCOPED_TRACE(std::string(blendName(blend)) + (binary_swap ? ", binary swap" : ", direct send"));
+    const std::string name = std::string("interactive-") + (blend == Blend::Maximum ? "mip" : "minip") +
+                             (binary_swap ? "-swap" : "");
     FarmDir dir(name);
     Scene scene = smallScene(1);
-    scene.blend = Blend::Maximum;
+    scene.blend = blend;
+    if (blend == Blend::Minimum) {
+      scene.volume = GeneratorSpec{"marschner-lobb", 32, 1};
+      scene.tf = TransferFunction({{0, 1, 1, 0.8, 1}, {0.15, 1, 0.6, 0.1, 1}, {0.3, 0.1, 0.2, 0.9, 0.6},
+                                   {0.5, 0, 0, 0, 0}, {1, 0, 0, 0, 0}});
+    }
     InteractiveFarm farm(dir, scene, 2, "farm-" + name, binary_swap);
     EXPECT_TRUE(farm.waitFor(0, 30s)) << "first frame missing";
     proto::Input window;
