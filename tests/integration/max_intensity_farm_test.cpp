@@ -11,17 +11,20 @@
 namespace tessera::test {
 namespace {
 
+// The Marschner-Lobb volume as a projection (`blend`, `tf` its transfer function's points).
+fs::path writeProjectionScene(const FarmDir& dir, int frames, const std::string& blend, const std::string& tf) {
+  const fs::path scene = dir.path() / (blend + ".yaml");
+  std::ofstream(scene) << "volume: {generator: {name: marschner-lobb, size: 48}}\ntransfer_function: " << tf
+                       << "\nblend: " << blend << "\nimage: [64, 48]\norbit: {frames: " << frames << ", degrees: 90}\n";
+  return scene;
+}
+
 // A colour map steep where most rays' largest values of the Marschner-Lobb volume lie (0.8 to
 // 0.9, opacity 0 to 1): a value rounded as rgba16f pieces would round it (by up to 1/2048)
 // moves the colour by more than a level, so only exact values match.
 fs::path writeMipScene(const FarmDir& dir, int frames) {
-  const fs::path scene = dir.path() / "mip.yaml";
-  std::ofstream(scene) << "volume: {generator: {name: marschner-lobb, size: 48}}\n"
-                          "transfer_function: [[0, 0, 0, 0, 0], [0.8, 0.1, 0.2, 0.9, 0], [0.9, 1, 0.6, 0.1, 1],"
-                          " [1, 1, 1, 0.8, 1]]\n"
-                          "blend: maximum\nimage: [64, 48]\norbit: {frames: "
-                       << frames << ", degrees: 90}\n";
-  return scene;
+  return writeProjectionScene(dir, frames, "maximum",
+                              "[[0, 0, 0, 0, 0], [0.8, 0.1, 0.2, 0.9, 0], [0.9, 1, 0.6, 0.1, 1], [1, 1, 1, 0.8, 1]]");
 }
 
 // A 3-frame orbit on `renderers` + `compositors` with `compositing`, frame by frame, within the
@@ -44,12 +47,9 @@ TEST(MaxIntensityFarm, BinarySwapMergesMaximaAsTesseraRenderDoes) { runAndCompar
 void runMinimumAndCompare(const char* name, int renderers, int compositors, const char* compositing) {
   FarmDir dir(name);
   const int frames = 3;
-  const fs::path scene = dir.path() / "minip.yaml";
-  std::ofstream(scene) << "volume: {generator: {name: marschner-lobb, size: 48}}\n"
-                          "transfer_function: [[0, 1, 1, 0.8, 1], [0.1, 1, 0.6, 0.1, 1], [0.2, 0.1, 0.2, 0.9, 0.2],"
-                          " [0.5, 0, 0, 0, 0], [1, 0, 0, 0, 0]]\n"
-                          "blend: minimum\nimage: [64, 48]\norbit: {frames: "
-                       << frames << ", degrees: 90}\n";
+  const fs::path scene = writeProjectionScene(dir, frames, "minimum",
+                                              "[[0, 1, 1, 0.8, 1], [0.1, 1, 0.6, 0.1, 1], [0.2, 0.1, 0.2, 0.9, 0.2],"
+                                              " [0.5, 0, 0, 0, 0], [1, 0, 0, 0, 0]]");
   expectFarmMatchesRender(dir, scene, frames, renderers, compositors, compositing, 400, "minip");
 }
 
