@@ -1,6 +1,7 @@
 #include "common/cpu.h"
 
 #include <cstdlib>
+#include <fstream>
 #include <stdexcept>
 
 namespace tessera {
@@ -16,11 +17,14 @@ Isa supportedIsa() {
 }
 
 Gathers ownGathers() {
+  bool intel = false;
 #if defined(__x86_64__)
   __builtin_cpu_init();
-  if (__builtin_cpu_is("intel")) return Gathers::Hardware;
+  intel = __builtin_cpu_is("intel");
 #endif
-  return Gathers::Lanes;
+  std::string report;
+  std::getline(std::ifstream("/sys/devices/system/cpu/vulnerabilities/gather_data_sampling"), report);
+  return gathersFor(intel, report);
 }
 
 }  // namespace
@@ -52,6 +56,12 @@ Isa cpuIsa() {
     return chooseIsa(env ? env : "", supportedIsa());
   }();
   return isa;
+}
+
+Gathers gathersFor(bool intel, const std::string& gds_report) {
+  // "Mitigation: Microcode" (or "...: AVX disabled, no microcode", where no gather runs at all).
+  const bool mitigated = gds_report.rfind("Mitigation", 0) == 0;
+  return intel && !mitigated ? Gathers::Hardware : Gathers::Lanes;
 }
 
 const char* gathersName(Gathers g) { return g == Gathers::Hardware ? "hardware" : "lanes"; }

@@ -30,14 +30,19 @@ Isa chooseIsa(const std::string& requested, Isa supported);
 // How the SIMD ray caster reads a packet's eight scattered voxels: by the CPU's gather
 // instructions or one lane at a time (scalar loads put into the vector). Which is faster
 // depends on the core, not on the instruction set: on an Intel Xeon (Emerald Rapids) the
-// gathers took 0.92x the time of a hollow-shell frame, on an AMD EPYC (Zen 4) the lane reads
-// 0.95x. So Intel CPUs gather and the others read lanes; TESSERA_GATHER=hardware|lanes
-// overrides (to test or compare both; an unknown word throws std::invalid_argument). The
-// image is the same either way: the same values, read differently.
+// AVX-512 gathers took 0.955x the time of a hollow-shell frame, on an AMD EPYC (Zen 4) the
+// lane reads 0.95x. So Intel CPUs gather and the others read lanes, except an Intel CPU whose
+// kernel reports the microcode fix for Gather Data Sampling ("Downfall": Skylake to Ice Lake
+// and Tiger Lake), which makes gathers several times slower (not measured here: no such CPU).
+// TESSERA_GATHER=hardware|lanes overrides (to test or compare both; an unknown word throws
+// std::invalid_argument). The image is the same either way: the same values, read differently.
 enum class Gathers : uint8_t { Lanes, Hardware };
 Gathers cpuGathers();
 const char* gathersName(Gathers g);
 // What TESSERA_GATHER asks for given the CPU's own choice (what cpuGathers() uses; tested).
 Gathers chooseGathers(const std::string& requested, Gathers own);
+// The CPU's own choice from its vendor and the kernel's report on Gather Data Sampling (the
+// contents of /sys/devices/system/cpu/vulnerabilities/gather_data_sampling, "" if none; tested).
+Gathers gathersFor(bool intel, const std::string& gds_report);
 
 }  // namespace tessera

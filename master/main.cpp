@@ -45,7 +45,7 @@ int main(int argc, char** argv) {
   return stageMain(app, argc, argv, args, [&](const Endpoints& endpoints, zmq::context_t& ctx, auto stop) {
     opt.scene = args.scene();
     // Each brick ends its rays on its own: below this the farm could not match tessera-render
-    // (a projection's rays end only at the volume's largest value, exactly).
+    // (a projection's rays end only at the volume's largest or smallest value, exactly).
     if (std::string why = farmAccuracyProblem(opt.scene.quality, opt.renderers);
         !why.empty() && opt.scene.blend == Blend::Composite)
       throw std::invalid_argument((args.scene_path.empty() ? std::string("built-in scene") : args.scene_path) + ": " + why);

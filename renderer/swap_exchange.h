@@ -33,7 +33,7 @@ class SwapExchange {
   zmq::socket_t& socket() { return inbox_.socket(); }
   // Pieces older than this are of no use (the renderer's newest epoch and first wanted frame).
   void setWanted(uint32_t epoch, uint64_t first_wanted) { epoch_ = epoch, first_wanted_ = first_wanted; }
-  void setMaximum(bool maximum) { maximum_ = maximum; }  // blend: maximum (blendLayer)
+  void setMaximum(bool maximum) { maximum_ = maximum; }  // blend: maximum or minimum (blendLayer)
   void setRoster(const proto::Roster& roster, DropCounter& drops);
   void receive(DropCounter& drops);  // drains the socket (non-blocking)
 

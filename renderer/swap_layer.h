@@ -30,14 +30,14 @@ inline LayerView viewOf(const ImageF& full, const Rect& active, const Rect& part
 // The viewed pixels as wire pixels.
 void packView(const LayerView& v, proto::PixelFormat f, std::vector<std::byte>& out);
 // `mine` blended with a partner's pixels of screen rect `theirs` (wire format f): the partner's
-// run of bricks in front of or behind this renderer's; with `maximum` (blend: maximum) value
+// run of bricks in front of or behind this renderer's; with `maximum` (blend: maximum or minimum) value
 // pixels merged by their maxima, in either order. `storage`: memory to reuse.
 Layer blendLayer(const LayerView& mine, std::span<const std::byte> pixels, const Rect& theirs, proto::PixelFormat f,
                  bool partner_in_front, std::vector<float>&& storage = {}, bool maximum = false);
 
 // A finished band as a Strips stream (and its count of pixels with alpha > 0), quantized once
 // as the compositors quantize their regions. `frame8`: scratch of the frame's size, kept by
-// the caller (strip headers name screen rows). `mip` (blend: maximum): the band's value pixels
+// the caller (strip headers name screen rows). `mip` (blend: maximum or minimum): the band's value pixels
 // are mapped first, in place.
 void bandStrips(Layer& band, int width, int height, Image8& frame8, proto::Strips& out, const MaxIntensity* mip = nullptr);
 

@@ -63,7 +63,7 @@ enum class BackendKind { Cpu, Osmesa };
 // "cpu" | "osmesa"; throws std::invalid_argument naming the value otherwise.
 BackendKind parseBackend(const std::string& name);
 const char* backendName(BackendKind kind);
-// Shading (with `light`, zero: a headlight) and `blend: maximum` (value pixels, see
+// Shading (with `light`, zero: a headlight) and `blend: maximum` or `minimum` (value pixels, see
 // common/max_intensity.h) are the cpu backend's; osmesa refuses them by name: this says why
 // ("" when the backend renders them), so that a renderer refuses at start, not per frame.
 std::string backendProblem(BackendKind kind, const Shading& shading, Blend blend);

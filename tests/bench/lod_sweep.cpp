@@ -131,7 +131,7 @@ int run(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   Scene s = scene_path.empty() ? defaultScene() : loadScene(scene_path);
   if (s.mesh) throw std::invalid_argument("tessera-lod-sweep: a volume scene is needed, not a geometry scene");
-  if (s.blend != Blend::Composite) throw std::invalid_argument("tessera-lod-sweep: composite scenes only, not blend: maximum");
+  if (s.blend != Blend::Composite) throw std::invalid_argument(std::string("tessera-lod-sweep: composite scenes only, not blend: ") + blendName(s.blend));
   if (!s.crop.whole()) throw std::invalid_argument("tessera-lod-sweep: whole volumes only, leave out `crop`");
   fixVolumeRange(s);
   s.tf = windowed(s.tf, colorWindow(s));  // the scene's `window`, as the farm shows it

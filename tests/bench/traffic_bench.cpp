@@ -194,7 +194,7 @@ int main(int argc, char** argv) {
   }
   Scene scene = scene_path.empty() ? defaultScene() : loadScene(scene_path);
   if (scene.blend != Blend::Composite) {  // its pieces are blended "over" below
-    std::fprintf(stderr, "tessera-traffic-bench: composite scenes only, not blend: maximum\n");
+    std::fprintf(stderr, "tessera-traffic-bench: composite scenes only, not blend: %s\n", blendName(scene.blend));
     return 2;
   }
   auto vol = std::make_shared<const Volume>(loadVolume(scene, VoxelBox{{0, 0, 0}, volumeDims(scene)}, 0));

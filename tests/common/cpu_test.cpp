@@ -37,6 +37,14 @@ TEST(Cpu, NamesRoundTrip) {
   for (Isa isa : {Isa::Scalar, Isa::Avx2, Isa::Avx512}) EXPECT_EQ(chooseIsa(isaName(isa), Isa::Avx512), isa);
 }
 
+TEST(Cpu, IntelGathersUnlessTheKernelReportsTheDownfallMicrocodeFix) {
+  EXPECT_EQ(gathersFor(true, "Not affected"), Gathers::Hardware);  // Emerald Rapids, Sapphire Rapids
+  EXPECT_EQ(gathersFor(true, ""), Gathers::Hardware);              // an older kernel without the report
+  EXPECT_EQ(gathersFor(true, "Vulnerable"), Gathers::Hardware);
+  EXPECT_EQ(gathersFor(true, "Mitigation: Microcode"), Gathers::Lanes);
+  EXPECT_EQ(gathersFor(false, "Not affected"), Gathers::Lanes);  // AMD
+}
+
 TEST(Cpu, EitherWayOfReadingVoxelsCanBeForced) {
   for (Gathers own : {Gathers::Lanes, Gathers::Hardware}) {
     EXPECT_EQ(chooseGathers("", own), own);

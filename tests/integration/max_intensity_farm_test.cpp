@@ -11,11 +11,14 @@
 namespace tessera::test {
 namespace {
 
-// The Marschner-Lobb volume as a projection (`blend`, `tf` its transfer function's points).
-fs::path writeProjectionScene(const FarmDir& dir, int frames, const std::string& blend, const std::string& tf) {
+// The Marschner-Lobb volume as a projection (`blend`, `tf` its transfer function's points,
+// `more` further scene keys).
+fs::path writeProjectionScene(const FarmDir& dir, int frames, const std::string& blend, const std::string& tf,
+                              const std::string& more = "") {
   const fs::path scene = dir.path() / (blend + ".yaml");
   std::ofstream(scene) << "volume: {generator: {name: marschner-lobb, size: 48}}\ntransfer_function: " << tf
-                       << "\nblend: " << blend << "\nimage: [64, 48]\norbit: {frames: " << frames << ", degrees: 90}\n";
+                       << "\nblend: " << blend << "\nimage: [64, 48]\norbit: {frames: " << frames << ", degrees: 90}\n"
+                       << more;
   return scene;
 }
 
@@ -43,13 +46,15 @@ TEST(MaxIntensityFarm, BinarySwapMergesMaximaAsTesseraRenderDoes) { runAndCompar
 // The minimum projection travels as the maximum of the values' complements: the same merges,
 // mapped by the mirrored colour map. Its map is steep where most rays' smallest values of the
 // Marschner-Lobb volume lie (0.1 to 0.2) and clear above 0.5, so rays whose smallest value is
-// larger show nothing and bricks without one below it are passed over.
+// larger show nothing and bricks without one below it are passed over. Cropped, as a minimum
+// projection is seen (scenes/minip.yaml): the crop box cuts the bricks.
 void runMinimumAndCompare(const char* name, int renderers, int compositors, const char* compositing) {
   FarmDir dir(name);
   const int frames = 3;
   const fs::path scene = writeProjectionScene(dir, frames, "minimum",
                                               "[[0, 1, 1, 0.8, 1], [0.1, 1, 0.6, 0.1, 1], [0.2, 0.1, 0.2, 0.9, 0.2],"
-                                              " [0.5, 0, 0, 0, 0], [1, 0, 0, 0, 0]]");
+                                              " [0.5, 0, 0, 0, 0], [1, 0, 0, 0, 0]]",
+                                              "crop: {x: [0.1, 0.8], z: [0.25, 0.75]}\n");
   expectFarmMatchesRender(dir, scene, frames, renderers, compositors, compositing, 400, "minip");
 }
 
