@@ -119,6 +119,12 @@ std::vector<std::string> volumeWarnings(const Scene& scene, const Volume& shape)
     out.push_back(where + (raw && raw->has_range ? "volume.range: " : "volume: ") + why);
   }
   if (std::string why = windowProblem(scene, shape); !why.empty()) out.push_back(where + why);
+  // A minimum over a whole volume is, for most rays, the background around the object (a CT's
+  // air): the image shows that one value's colour.
+  if (scene.blend == Blend::Minimum && scene.crop.whole())
+    out.push_back(where + "blend: minimum over the whole volume: most rays' smallest value is the background's "
+                          "around the object (a scan's air), so most pixels show its colour; crop a slab of the "
+                          "inside (`crop`, e.g. crop: {z: [0.4, 0.6]}) and look through it, as scenes/minip.yaml does");
   // A thin stack is faint when opacity adds up along few samples; a projection's is scaled to 1.
   if (scene.blend == Blend::Composite)
     if (std::string why = thinProblem(scene, shape); !why.empty()) out.push_back(where + why);

@@ -45,6 +45,22 @@ TEST(VolumeWarnings, ARangeThatMissesTheDataNamesTheSceneAndTheKey) {
   EXPECT_EQ(c[0].rfind("data/slice.yaml: volume: every voxel has the value 7", 0), 0u) << c[0];
 }
 
+// A minimum projection of a whole volume shows the background around the object: said, with
+// the crop that helps; a cropped one is not warned about.
+TEST(VolumeWarnings, AMinimumProjectionOfTheWholeVolumeAdvisesACrop) {
+  Scene s = sceneOf(true, {0, 1000});
+  s.blend = Blend::Minimum;
+  const auto w = volumeWarnings(s, shape({32, 32, 32}));
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_EQ(w[0].rfind("data/slice.yaml: blend: minimum over the whole volume", 0), 0u) << w[0];
+  EXPECT_NE(w[0].find("crop: {z: [0.4, 0.6]}"), std::string::npos) << w[0];
+  s.crop.axes[2] = {0.4, 0.6};
+  EXPECT_TRUE(volumeWarnings(s, shape({32, 32, 32})).empty());
+  s.blend = Blend::Maximum;
+  s.crop = Crop{};
+  EXPECT_TRUE(volumeWarnings(s, shape({32, 32, 32})).empty());
+}
+
 // A `window` beside all of the data's values (a CT window on an MRI's 0..1000, say) is said;
 // one that meets them is not.
 TEST(VolumeWarnings, AWindowBesideEveryValueIsSaid) {
