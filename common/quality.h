@@ -16,6 +16,7 @@ struct Quality {
   double early_termination = 1.0 - 0.5 / 255;  // stop when accumulated alpha >= this; > 1 disables
   bool skip_empty = true;
   bool reference = false;          // double precision, no skipping, no early termination
+  bool jitter = false;             // each pixel's samples offset within the step (pixelJitter), not mid-step
   bool operator==(const Quality&) const = default;
 };
 // reference: step L0/16, no ET, no skipping; default: step L0, ET 1 - 0.5/255; fast: step 2*L0,

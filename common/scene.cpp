@@ -72,7 +72,7 @@ Quality Parser::quality(const YAML::Node& n) const {
       fail("quality", e.what());
     }
   }
-  checkKeys(n, "quality", {"step", "early_termination", "skip_empty"});
+  checkKeys(n, "quality", {"step", "early_termination", "skip_empty", "jitter"});
   Quality q = namedQuality(QualityName::Default);
   q.name = QualityName::Custom;
   if (n["step"]) {
@@ -84,6 +84,7 @@ Quality Parser::quality(const YAML::Node& n) const {
     if (!(q.early_termination > 0)) fail("quality.early_termination", "must be > 0 (values > 1 disable it)");
   }
   if (n["skip_empty"]) q.skip_empty = boolean(n["skip_empty"], "quality.skip_empty");
+  if (n["jitter"]) q.jitter = boolean(n["jitter"], "quality.jitter");
   return q;
 }
 

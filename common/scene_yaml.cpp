@@ -91,7 +91,8 @@ void quality(YAML::Emitter& e, const Quality& q) {
     return;
   }
   e << YAML::BeginMap << YAML::Key << "step" << YAML::Value << num(q.step) << YAML::Key << "early_termination"
-    << YAML::Value << num(q.early_termination) << YAML::Key << "skip_empty" << YAML::Value << q.skip_empty << YAML::EndMap;
+    << YAML::Value << num(q.early_termination) << YAML::Key << "skip_empty" << YAML::Value << q.skip_empty
+    << YAML::Key << "jitter" << YAML::Value << q.jitter << YAML::EndMap;
 }
 
 }  // namespace

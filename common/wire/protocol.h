@@ -44,12 +44,13 @@
 namespace tessera::proto {
 
 inline constexpr uint32_t kMagic = 0x52455354;  // bytes "TSER" on the wire
-inline constexpr uint16_t kVersion = 16;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
+inline constexpr uint16_t kVersion = 17;  // 2: FrameParams' mode, Hello's run; 3: Stats' reuse and loads;
   // 4: interaction (Input seq/size, FrameParams cancel/input_seq, FrameDone input_ms); 5: time steps; 6: Stats
   // carry their FrameParams' epoch; 7: Piece pixels Up-filtered; 8: binary-swap plans in FrameParams; 9: swap
   // bands go to the display as Strips; 10: Strips strip-filtered, Heartbeats name the awaited swap partner;
   // 11: Stats' wait_ms; 12: Welcome's volume_range; 13: Shutdown's run; 14: Input's home;
-  // 15: Hello's scene; 16: the colour window (Input's window_shift/scale, FrameParams' window)
+  // 15: Hello's scene; 16: the colour window (Input's window_shift/scale, FrameParams' window);
+  // 17: FrameParams' quality.jitter
 inline constexpr size_t kHeaderSize = 36;
 inline constexpr uint32_t kMaxPayload = 256u << 20;  // larger is rejected as oversized
 
@@ -152,6 +153,7 @@ struct Shutdown {                                                          // ma
 //   quality.early_termination  f64      8     finite
 //   quality.skip_empty         bool     1
 //   quality.reference          bool     1
+//   quality.jitter             bool     1
 //   width, height              i32 x2   8     1..16384 each
 //   codec                      u8       1     < kCodecCount
 //   format                     u8       1     1..PixelFormat::Last

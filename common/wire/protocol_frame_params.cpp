@@ -61,6 +61,7 @@ void writeQuality(ByteWriter& w, const Quality& q) {
   w.f64(q.early_termination);
   w.boolean(q.skip_empty);
   w.boolean(q.reference);
+  w.boolean(q.jitter);
 }
 Quality readQuality(ByteReader& r) {
   Quality q;
@@ -72,6 +73,7 @@ Quality readQuality(ByteReader& r) {
   q.early_termination = readFinite(r, "quality.early_termination");
   q.skip_empty = r.boolean("quality.skip_empty");
   q.reference = r.boolean("quality.reference");
+  q.jitter = r.boolean("quality.jitter");
   if (r.ok() && !(q.step > 0)) r.fail("quality.step " + std::to_string(q.step) + " not positive");
   return q;
 }

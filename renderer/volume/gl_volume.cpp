@@ -47,9 +47,10 @@ void checkGl(const char* what) {
 }
 
 // Per-pixel spans in double precision (the CPU caster's own code) for the rows of the
-// footprint: s0 = (u0, k_first), s1 = (du, k_end) per pixel, zero where a ray misses.
-void raySpans(const RayGenerator& gen, const VolumeGeometry& geom, const Brick& brick, double step, const Rect& fp,
-              unsigned threads, std::vector<float>& s0, std::vector<float>& s1) {
+// footprint: s0 = (u0, k_first), s1 = (du, k_end) per pixel, zero where a ray misses. The
+// jitter lives in u0, so the shader samples the CPU caster's grid either way.
+void raySpans(const RayGenerator& gen, const VolumeGeometry& geom, const Brick& brick, double step, bool jitter,
+              const Rect& fp, unsigned threads, std::vector<float>& s0, std::vector<float>& s1) {
   s0.assign((size_t)fp.w * fp.h * 4, 0.0f);
   s1.assign((size_t)fp.w * fp.h * 4, 0.0f);
   std::atomic<bool> too_long{false};
@@ -57,7 +58,8 @@ void raySpans(const RayGenerator& gen, const VolumeGeometry& geom, const Brick& 
     for (long long r = r0; r < r1; ++r)
       for (int x = 0; x < fp.w; ++x) {
         RaySpan span;
-        if (!raySpan(geom, gen.pixelRay(fp.x + x, fp.y + (int)r), brick, step, span)) continue;
+        const int px = fp.x + x, py = fp.y + (int)r;
+        if (!raySpan(geom, gen.pixelRay(px, py), brick, step, span, jitter ? pixelJitter(px, py) : 0.5)) continue;
         if (span.k_end >= kMaxSamples) {
           too_long = true;
           continue;
@@ -293,7 +295,7 @@ ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const 
   if (fp.empty()) return img;
 
   std::vector<float> s0, s1;
-  raySpans(gen, geom, brick, q.step, fp, threadCount(opt.threads, fp.h), s0, s1);
+  raySpans(gen, geom, brick, q.step, q.jitter && !q.reference, fp, threadCount(opt.threads, fp.h), s0, s1);
   std::vector<float> rgba, counts;
   m.castRays(q, fp, s0, s1, rgba, stats ? &counts : nullptr);
 

@@ -32,12 +32,15 @@ struct VolumeGeometry {
   }
 };
 
-// The samples of one ray inside one brick. Sample k sits at t_k = t0 + (k + 0.5) * step,
+// The samples of one ray inside one brick. Sample k sits at t_k = t0 + (k + offset) * step,
 // t0 = max(0, entry into the WHOLE volume), so every brick shares one grid along the ray;
-// a brick takes exactly the k with t_k in [t_in, t_out) of its own box.
+// a brick takes exactly the k with t_k in [t_in, t_out) of its own box. The offset is 0.5
+// (mid-step), or the pixel's own with `quality.jitter` (pixelJitter): a function of the pixel
+// alone, so every brick still shares the ray's grid.
 // In voxel coordinates (voxel centres at integers) sample k is at u0 + k * du.
 struct RaySpan {
   double t0 = 0;
+  double offset = 0.5;
   int64_t k_first = 0, k_end = 0;  // samples [k_first, k_end); empty if equal
   std::array<double, 3> u0{}, du{};
   bool empty() const { return k_end <= k_first; }
@@ -48,8 +51,18 @@ struct RaySpan {
 // boxes therefore partition every ray exactly. Returns false if the interval is empty.
 bool boxInterval(const VolumeGeometry& g, const Ray& r, const BrickBox& b, double& t_in, double& t_out);
 
-// Computes the span of `brick` on the global grid of `step`. Returns false if empty.
-bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span);
+// Where in its step pixel (px, py)'s samples sit with `quality.jitter`, in [0, 1): a
+// dither in integer arithmetic, so every process and instruction set computes the same bits.
+// Neighbouring pixels get offsets spread over the step, so the rings an unjittered grid draws
+// on opaque surfaces (wood grain) become fine noise.
+double pixelJitter(int px, int py);
+// pixelJitter of pixels (px0 + i, py), i < kSpanLanes (raySpans' lanes).
+void rowJitter(int px0, int py, double* offsets);
+
+// Computes the span of `brick` on the global grid of `step` with samples at `offset` within
+// their step (0.5, or pixelJitter). Returns false if empty.
+bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, RaySpan& span,
+             double offset = 0.5);
 
 // The same span cut to `clip` (a box inside `brick`, e.g. the part of the volume that can
 // be non-empty) and to the ray parameters [t_lo, t_hi) (e.g. the depths of non-empty
@@ -59,29 +72,31 @@ bool raySpan(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, doubl
 bool raySpanClipped(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, const BrickBox& clip, double step,
                     RaySpan& span, int64_t* before = nullptr, int64_t* after = nullptr,
                     double t_lo = -std::numeric_limits<double>::infinity(),
-                    double t_hi = std::numeric_limits<double>::infinity());
+                    double t_hi = std::numeric_limits<double>::infinity(), double offset = 0.5);
 
 // The constants of raySpans for one frame and brick: the camera's basis, and the planes of
-// the whole volume's, the brick's and the clip's boxes (VolumeGeometry::plane).
+// the whole volume's, the brick's and the clip's boxes (VolumeGeometry::plane); `jitter`:
+// each pixel's samples at pixelJitter, else mid-step.
 struct SpanRow {
-  SpanRow(const RayGenerator& gen, const VolumeGeometry& g, const BrickBox& brick, const BrickBox& clip, double step);
+  SpanRow(const RayGenerator& gen, const VolumeGeometry& g, const BrickBox& brick, const BrickBox& clip, double step,
+          bool jitter);
   RayGenerator::Basis basis;
   double half[3], cell[3], origin[3];
   double whole_lo[3], whole_hi[3], brick_lo[3], brick_hi[3], clip_lo[3], clip_hi[3];
-  bool brick_is_whole, clip_is_brick;
+  bool brick_is_whole, clip_is_brick, jitter;
   double step, inv_step;
 };
 inline constexpr int kSpanLanes = 8;
 // The spans of pixels (px0 + i, py), i < n <= kSpanLanes, several rays at a time (SIMD
 // where the CPU has it): bit for bit raySpanClipped(pixelRay(px0 + i, py), brick, clip,
-// step, span, nullptr, nullptr, t_lo[i], t_hi[i]). t_lo and t_hi hold kSpanLanes values
+// step, span, nullptr, nullptr, t_lo[i], t_hi[i], offset) with the pixel's offset. t_lo and t_hi hold kSpanLanes values
 // (the lanes past n are computed and dropped). Bit i of the result: pixel i's ray has
 // samples (spans[i] means something only then).
 unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo, const double* t_hi, RaySpan* spans);
 
 // How many samples of the global grid of `step` lie in `brick` (raySpan's k_end - k_first,
 // without the sample positions).
-int64_t spanSamples(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step);
+int64_t spanSamples(const VolumeGeometry& g, const Ray& r, const BrickBox& brick, double step, double offset);
 
 // Pixels whose centre ray can hit the brick, shared by both volume backends so they touch
 // the same pixels: the bounding box of its projected corners plus one pixel; the whole

@@ -72,12 +72,12 @@ void makeRays(const RayGenerator::Basis& b, int px0, int py, Lanes& r) {
 // ray_setup.cpp's sampleT and firstAtOrAfter's loops, repeated here on purpose: this file is
 // compiled once per instruction set, and every copy must keep its code to itself
 // (tests/renderer/kernel_symbols.cmake).
-double sampleT(double t0, int64_t k, double step) { return t0 + ((double)k + 0.5) * step; }
+double sampleT(double t0, int64_t k, double step, double offset) { return t0 + ((double)k + offset) * step; }
 
 // firstAtOrAfter's correction of its guess (rarely more than one step).
-int64_t settle(int64_t k, double t0, double t, double step) {
-  while (k > 0 && sampleT(t0, k - 1, step) >= t) --k;
-  while (sampleT(t0, k, step) < t) ++k;
+int64_t settle(int64_t k, double t0, double t, double step, double offset) {
+  while (k > 0 && sampleT(t0, k - 1, step, offset) >= t) --k;
+  while (sampleT(t0, k, step, offset) < t) ++k;
   return k;
 }
 
@@ -86,8 +86,11 @@ int64_t settle(int64_t k, double t0, double t, double step) {
 unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo, const double* t_hi, RaySpan* spans) {
   Lanes r;
   makeRays(row.basis, px0, py, r);
-  alignas(64) double w_in[L], w_out[L], b_in[L], b_out[L], c_in[L], c_out[L], t0[L], g_in[L], g_out[L];
+  alignas(64) double w_in[L], w_out[L], b_in[L], b_out[L], c_in[L], c_out[L], t0[L], g_in[L], g_out[L], off[L];
   alignas(64) int64_t ok[L];
+  if (row.jitter) rowJitter(px0, py, off);  // out of line: shared by every instruction set's copy
+  else
+    for (int i = 0; i < L; ++i) off[i] = 0.5;
   for (int i = 0; i < L; ++i) ok[i] = i < n;
   // brickInterval: the whole volume's entry starts the grid; the brick's part of it.
   interval(r, row.whole_lo, row.whole_hi, w_in, w_out, ok);
@@ -117,19 +120,20 @@ unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo
   // firstAtOrAfter's guesses for both ends.
   for (int i = 0; i < L; ++i) {
     ok[i] &= (int64_t)(c_in[i] < c_out[i]);
-    g_in[i] = std::ceil((c_in[i] - t0[i]) * row.inv_step - 0.5);
-    g_out[i] = std::ceil((c_out[i] - t0[i]) * row.inv_step - 0.5);
+    g_in[i] = std::ceil((c_in[i] - t0[i]) * row.inv_step - off[i]);
+    g_out[i] = std::ceil((c_out[i] - t0[i]) * row.inv_step - off[i]);
   }
   unsigned hits = 0;
   for (int i = 0; i < n; ++i) {
     if (!ok[i]) continue;
     RaySpan& s = spans[i];
     s.t0 = t0[i];
-    s.k_first = settle(g_in[i] > 0 ? (int64_t)g_in[i] : 0, t0[i], c_in[i], row.step);
-    s.k_end = settle(g_out[i] > 0 ? (int64_t)g_out[i] : 0, t0[i], c_out[i], row.step);
+    s.offset = off[i];
+    s.k_first = settle(g_in[i] > 0 ? (int64_t)g_in[i] : 0, t0[i], c_in[i], row.step, off[i]);
+    s.k_end = settle(g_out[i] > 0 ? (int64_t)g_out[i] : 0, t0[i], c_out[i], row.step, off[i]);
     if (s.k_end <= s.k_first) continue;
     // samplePositions
-    const double tb = s.t0 + 0.5 * row.step;
+    const double tb = s.t0 + off[i] * row.step;
     for (int a = 0; a < 3; ++a) {
       s.u0[a] = (r.o[a][i] + tb * r.d[a][i] + row.half[a]) / row.cell[a] - 0.5 - row.origin[a];
       s.du[a] = r.d[a][i] * row.step / row.cell[a];

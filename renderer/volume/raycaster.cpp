@@ -224,18 +224,19 @@ class TileWorker {
   // skipped are counted: exact, but it costs a brick's renderer 6% in a farm, which needs no counts).
   bool spanOf(int px, int py, RaySpan& span, int64_t& after) {
     const double step = f_.q.step;
-    if (!f_.clipping) return raySpan(f_.geom, f_.gen.pixelRay(px, py), f_.brick, step, span);
+    const double offset = f_.rows.jitter ? pixelJitter(px, py) : 0.5;
+    if (!f_.clipping) return raySpan(f_.geom, f_.gen.pixelRay(px, py), f_.brick, step, span, offset);
     const DepthBounds* depth = f_.depth;
     const size_t ci = depth ? depth->cell(px, py) : 0;
     if (depth && !(depth->lo[ci] <= depth->hi[ci])) {  // no non-empty node here
-      if (f_.count) counts.skipped += (uint64_t)spanSamples(f_.geom, f_.gen.pixelRay(px, py), f_.brick, step);
+      if (f_.count) counts.skipped += (uint64_t)spanSamples(f_.geom, f_.gen.pixelRay(px, py), f_.brick, step, offset);
       return false;
     }
     constexpr double inf = std::numeric_limits<double>::infinity();
     int64_t before = 0;
     const bool hit = raySpanClipped(f_.geom, f_.gen.pixelRay(px, py), f_.brick, f_.clip, step, span,
                                     f_.count ? &before : nullptr, f_.count ? &after : nullptr,
-                                    depth ? depth->lo[ci] : -inf, depth ? depth->hi[ci] : inf);
+                                    depth ? depth->lo[ci] : -inf, depth ? depth->hi[ci] : inf, offset);
     counts.skipped += (uint64_t)before;
     if (!hit) counts.skipped += (uint64_t)after;
     return hit;
@@ -332,7 +333,7 @@ ImageF Raycaster::render(const Camera& cam, int width, int height, const Brick& 
   const FrameRays rays{v, impl_->tf, q, gen, geom, brick, clip, clipping, depth ? &*depth : nullptr, fast, max_floor,
                        impl_->blend == Blend::Minimum,
                         shade ? &*shade : nullptr, img, stats != nullptr,
-                        SpanRow(gen, geom, brick, clipping ? clip : brick, q.step)};
+                        SpanRow(gen, geom, brick, clipping ? clip : brick, q.step, q.jitter && !q.reference)};
   auto worker = [&] {
     TileWorker w(rays);
     try {

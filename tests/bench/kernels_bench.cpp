@@ -111,7 +111,7 @@ void BM_RaySpans(benchmark::State& state, bool quarter) {
   const renderer::VolumeGeometry g(v);
   const RayGenerator gen(sc.camera, kSide, kSide);
   const BrickBox brick = quarter ? BrickBox{{0, 128, 128}, {256, 256, 256}} : BrickBox{{0, 0, 0}, {256, 256, 256}};
-  const renderer::SpanRow row(gen, g, brick, brick, 1.0 / 256);
+  const renderer::SpanRow row(gen, g, brick, brick, 1.0 / 256, false);
   constexpr double kInf = std::numeric_limits<double>::infinity();
   double lo[renderer::kSpanLanes], hi[renderer::kSpanLanes];
   std::fill_n(lo, renderer::kSpanLanes, -kInf);

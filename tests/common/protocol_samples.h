@@ -16,7 +16,7 @@ inline FrameParams sampleParams() {
   p.epoch = 3;
   p.camera.eye = {1.5, -2, 3.25};
   p.camera.fov = 45;
-  p.quality = {QualityName::Fast, 1.0 / 128, 0.95, true, false};
+  p.quality = {QualityName::Fast, 1.0 / 128, 0.95, true, false, true};
   p.width = 640;
   p.height = 480;
   p.codec = Codec::Lz4;

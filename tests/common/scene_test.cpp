@@ -63,6 +63,10 @@ TEST(Scene, Qualities) {
   EXPECT_DOUBLE_EQ(s.quality.step, 0.002);
   EXPECT_FALSE(s.quality.skip_empty);
   EXPECT_DOUBLE_EQ(s.quality.early_termination, namedQuality("default").early_termination);
+  EXPECT_FALSE(s.quality.jitter);
+  EXPECT_TRUE(parseScene(std::string(kGood) + "quality: {jitter: true}\n", ".", "s.yaml").quality.jitter);
+  EXPECT_ERROR(std::string(kGood) + "quality: {jitter: 2}\n", "quality.jitter");
+  EXPECT_ERROR(std::string(kGood) + "quality: {jiter: true}\n", "jiter");
   EXPECT_EQ(parseScene(std::string(kGood) + "quality: reference\n", ".", "s.yaml").quality, r);
   EXPECT_ERROR(std::string(kGood) + "quality: ultra\n", "quality: unknown quality 'ultra'");
   EXPECT_ERROR(std::string(kGood) + "quality: {step: 0}\n", "quality.step");
@@ -139,7 +143,8 @@ TEST(Scene, TransferFunctionPresetsByName) {
 TEST(Scene, EffectiveSceneYamlParsesBackToTheSameScene) {
   for (const std::string& yaml : {std::string(kGood), std::string("volume: {generator: {name: noise-cloud, size: 8}}\n"),
                                  std::string("volume: {generator: {name: hollow-shell, size: 8}}\nquality: {step: "
-                                             "0.01, early_termination: 0.9, skip_empty: false}\norbit: {frames: 7}\n")}) {
+                                             "0.01, early_termination: 0.9, skip_empty: false, jitter: true}\norbit: "
+                                             "{frames: 7}\n")}) {
     const Scene a = parseScene(yaml, ".", "a.yaml");
     const Scene b = parseScene(sceneYaml(a), ".", "b.yaml");
     EXPECT_EQ(b.tf, a.tf) << sceneYaml(a);

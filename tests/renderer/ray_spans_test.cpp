@@ -2,6 +2,7 @@
 // time: the same spans bit for bit, for every instruction set this CPU has.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -25,7 +26,8 @@ std::vector<std::pair<const char*, SpansFn>> available() {
 }
 
 bool same(const RaySpan& a, const RaySpan& b) {
-  return std::memcmp(&a.t0, &b.t0, sizeof a.t0) == 0 && a.k_first == b.k_first && a.k_end == b.k_end &&
+  return std::memcmp(&a.t0, &b.t0, sizeof a.t0) == 0 && std::memcmp(&a.offset, &b.offset, sizeof a.offset) == 0 &&
+         a.k_first == b.k_first && a.k_end == b.k_end &&
          std::memcmp(a.u0.data(), b.u0.data(), sizeof a.u0) == 0 && std::memcmp(a.du.data(), b.du.data(), sizeof a.du) == 0;
 }
 
@@ -41,10 +43,10 @@ Volume window(std::array<int, 3> whole, std::array<int, 3> origin, std::array<in
 
 // Every pixel of a w x h image through raySpans and through raySpanClipped.
 int compareAll(SpansFn fn, const char* isa, const Camera& cam, int w, int h, const Volume& v, const BrickBox& brick,
-               const BrickBox& clip, double step, bool depth_cut) {
+               const BrickBox& clip, double step, bool depth_cut, bool jitter) {
   const RayGenerator gen(cam, w, h);
   const VolumeGeometry g(v);
-  const SpanRow row(gen, g, brick, clip, step);
+  const SpanRow row(gen, g, brick, clip, step, jitter);
   constexpr double kInf = std::numeric_limits<double>::infinity();
   int hits = 0;
   for (int py = 0; py < h; ++py)
@@ -61,7 +63,9 @@ int compareAll(SpansFn fn, const char* isa, const Camera& cam, int w, int h, con
       EXPECT_EQ(got >> n, 0u) << isa << ": a hit beyond the n pixels asked";
       for (int i = 0; i < n; ++i) {
         RaySpan want;
-        const bool hit = raySpanClipped(g, gen.pixelRay(px0 + i, py), brick, clip, step, want, nullptr, nullptr, lo[i], hi[i]);
+        const double offset = jitter ? pixelJitter(px0 + i, py) : 0.5;
+        const bool hit =
+            raySpanClipped(g, gen.pixelRay(px0 + i, py), brick, clip, step, want, nullptr, nullptr, lo[i], hi[i], offset);
         if (hit != (((got >> i) & 1) != 0) || (hit && !same(want, spans[i]))) {
           ADD_FAILURE() << isa << ": pixel " << px0 + i << "," << py << (hit ? " differs" : " hit on one side only");
           return hits;  // one report per image
@@ -89,12 +93,33 @@ TEST(RaySpans, BitIdenticalToOneRayAtATime) {
       cam.orthographic = c % 3 == 2;
       cam.height = 1.2;
       const int w = 37 + c, h = 23 + c;                   // rows that do not fill the lanes
-      hits += compareAll(fn, name, cam, w, h, v, brick, brick, 1.0 / 64, false);
-      hits += compareAll(fn, name, cam, w, h, v, brick, clip, 1.0 / 100, c % 2 == 0);
-      hits += compareAll(fn, name, cam, w, h, v, whole, whole, 1.0 / 256, c % 2 == 1);
+      const bool jitter = c % 4 >= 2;  // quality.jitter: each pixel's own offset on both sides
+      hits += compareAll(fn, name, cam, w, h, v, brick, brick, 1.0 / 64, false, jitter);
+      hits += compareAll(fn, name, cam, w, h, v, brick, clip, 1.0 / 100, c % 2 == 0, jitter);
+      hits += compareAll(fn, name, cam, w, h, v, whole, whole, 1.0 / 256, c % 2 == 1, !jitter);
     }
     EXPECT_GT(hits, 5000) << name << ": the cases must hit";
   }
+}
+
+// The jitter offsets: in [0, 1), spread evenly over the step, and different from one pixel to
+// the next (rings become noise only if neighbours sample at different depths).
+TEST(RaySpans, PixelJitterSpreadsNeighboursOverTheStep) {
+  int bins[8] = {};
+  int equal_neighbours = 0;
+  for (int py = 0; py < 64; ++py)
+    for (int px = 0; px < 64; ++px) {
+      const double j = pixelJitter(px, py);
+      ASSERT_GE(j, 0.0);
+      ASSERT_LT(j, 1.0);
+      ++bins[(int)(j * 8)];
+      equal_neighbours += std::abs(j - pixelJitter(px + 1, py)) < 1.0 / 16;
+      equal_neighbours += std::abs(j - pixelJitter(px, py + 1)) < 1.0 / 16;
+    }
+  for (int b = 0; b < 8; ++b) EXPECT_NEAR(bins[b], 512, 20) << "bin " << b;  // 64^2 / 8
+  EXPECT_EQ(equal_neighbours, 0) << "neighbouring pixels within 1/16 of a step of each other";
+  EXPECT_EQ(pixelJitter(3, 5), pixelJitter(3, 5));
+  EXPECT_NE(pixelJitter(3, 5), pixelJitter(5, 3));
 }
 
 }  // namespace
