@@ -51,7 +51,7 @@ void setView(proto::FrameParams& p, const FrameSpec& spec) {
 
 Refinement::Refinement(const Camera& camera, const Quality& quality, int width, int height, const Playback& time,
                        int steps)
-    : camera_(camera), home_(camera), quality_(quality), max_w_(width), max_h_(height), width_(width), height_(height),
+    : camera_(camera), home_(camera), quality_(quality), jitter_(quality.jitter), max_w_(width), max_h_(height), width_(width), height_(height),
       play_(time), steps_(steps), step_(time.stepAt(0, steps)) {}
 
 Refinement::Refinement(const Scene& scene)
@@ -93,6 +93,7 @@ Quality Refinement::interactiveQuality(const Quality& full) {
   Quality q = namedQuality(QualityName::Default);
   q.name = QualityName::Custom;
   q.step = 2 * std::max(full.step, q.step);
+  q.jitter = full.jitter;  // a moving frame at twice the step rings more, not less
   return q;
 }
 
@@ -111,7 +112,10 @@ void Refinement::input(const proto::Input& in, Clock::time_point now) {
   if (windowed_) window_ = movedWindow(in.home ? home_window_ : window_, in.window_shift, in.window_scale);
   if (in.interacting && !interacting(now)) std::fill(std::begin(seen_ms_), std::end(seen_ms_), 0.0);
   camera_ = moved;
-  if (in.quality) quality_ = namedQuality(*in.quality);
+  if (in.quality) {  // the keys pick a preset's step and termination; the scene's jitter stays
+    quality_ = namedQuality(*in.quality);
+    if (jitter_ && !quality_.reference) quality_.jitter = true, quality_.name = QualityName::Custom;
+  }
   width_ = w, height_ = h;
   timeKey(in.time);
   held_ = in.interacting;

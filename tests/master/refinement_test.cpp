@@ -62,6 +62,44 @@ TEST(Refinement, ADragGivesReducedFramesOfTheNewestCameraThenTheFullOneOnRelease
   EXPECT_EQ(sharp->input_seq, 201u);
 }
 
+// A scene's `quality: {jitter: true}` holds for the moving frames and through the quality keys
+// (they pick a preset's step; the reference samples mid-step, as it always does).
+TEST(Refinement, TheScenesJitterStaysThroughDragsAndQualityKeys) {
+  Quality jittered = namedQuality(QualityName::Default);
+  jittered.name = QualityName::Custom;
+  jittered.jitter = true;
+  Refinement r(Camera{}, jittered, 1024, 768);
+  auto t = Clock::now();
+  r.issued(*r.next(t));
+  r.input(drag(1, 0.5), t);
+  auto moving = r.next(t);
+  ASSERT_TRUE(moving && moving->interactive);
+  EXPECT_TRUE(moving->quality.jitter);
+  r.issued(*moving);
+  proto::Input key;
+  key.seq = 2;
+  key.quality = QualityName::Fast;
+  r.input(key, t + milliseconds(10));
+  auto fast = r.next(t + milliseconds(10));
+  ASSERT_TRUE(fast && !fast->interactive);
+  EXPECT_TRUE(fast->quality.jitter);
+  EXPECT_EQ(fast->quality.step, namedQuality(QualityName::Fast).step);
+  r.issued(*fast);
+  key.seq = 3;
+  key.quality = QualityName::Reference;
+  r.input(key, t + milliseconds(20));
+  auto ref = r.next(t + milliseconds(20));
+  ASSERT_TRUE(ref);
+  EXPECT_EQ(ref->quality, namedQuality(QualityName::Reference));
+  r.issued(*ref);
+  key.seq = 4;
+  key.quality = QualityName::Default;
+  r.input(key, t + milliseconds(30));
+  auto back = r.next(t + milliseconds(30));
+  ASSERT_TRUE(back);
+  EXPECT_TRUE(back->quality.jitter) << "the scene's jitter, not the reference's mid-step";
+}
+
 TEST(Refinement, AHeldButStillMouseGetsTheFullFrameAfterThePause) {
   Refinement r = make();
   auto t = Clock::now();
