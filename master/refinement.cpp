@@ -51,7 +51,8 @@ void setView(proto::FrameParams& p, const FrameSpec& spec) {
 
 Refinement::Refinement(const Camera& camera, const Quality& quality, int width, int height, const Playback& time,
                        int steps)
-    : camera_(camera), home_(camera), quality_(quality), jitter_(quality.jitter), max_w_(width), max_h_(height), width_(width), height_(height),
+    : camera_(camera), home_(camera), quality_(quality), jitter_(quality.jitter), max_w_(width), max_h_(height),
+      width_(width), height_(height),
       play_(time), steps_(steps), step_(time.stepAt(0, steps)) {}
 
 Refinement::Refinement(const Scene& scene)

@@ -101,7 +101,7 @@ class Refinement {
   Camera camera_, home_;  // now, and the scene's (an input's `home`)
   std::function<Camera(double aspect)> fit_home_;  // set: home fits the scene's box to this aspect
   Quality quality_;
-  bool jitter_;  // the scene's quality.jitter, kept through the quality keys' presets
+  bool jitter_ = false;  // the scene's quality.jitter, kept through the quality keys' presets
   ColorWindow window_, home_window_, said_window_;
   bool windowed_ = true;  // the colour window moves (not a mesh scene)
   int max_w_, max_h_, width_, height_;

@@ -295,7 +295,7 @@ ImageF GlVolumeRenderer::render(const Camera& cam, int width, int height, const 
   if (fp.empty()) return img;
 
   std::vector<float> s0, s1;
-  raySpans(gen, geom, brick, q.step, q.jitter && !q.reference, fp, threadCount(opt.threads, fp.h), s0, s1);
+  raySpans(gen, geom, brick, q.step, q.jitter, fp, threadCount(opt.threads, fp.h), s0, s1);
   std::vector<float> rgba, counts;
   m.castRays(q, fp, s0, s1, rgba, stats ? &counts : nullptr);
 

@@ -104,6 +104,23 @@ TEST(Jitter, BricksShareTheJitteredGrid) {
   }
 }
 
+// Asked for sample counts, a render sets rays up one at a time (spanOf, spanSamples): the
+// same jittered spans as the fast set-up's, and every sample of the grid counted once.
+TEST(Jitter, CountedRendersTakeTheSameSamples) {
+  auto vol = test::generated("hollow-shell", 40);
+  const Raycaster rc(vol, test::defaultTf());
+  const Camera cam = Orbit{12, {0.2, 1, 0.1}}.at(test::defaultCamera(), 3);
+  RenderOptions skip = jittered(true), all = jittered(true);
+  all.quality.skip_empty = false;
+  RenderStats s_skip, s_all;
+  const ImageF fast = rc.render(cam, 64, 56, wholeVolume(*vol), skip);
+  EXPECT_TRUE(rc.render(cam, 64, 56, wholeVolume(*vol), skip, &s_skip) == fast);
+  EXPECT_TRUE(rc.render(cam, 64, 56, wholeVolume(*vol), all, &s_all) == fast);
+  EXPECT_GT(s_skip.samples_skipped, 0u);
+  EXPECT_EQ(s_skip.samples + s_skip.samples_skipped + s_skip.samples_terminated,
+            s_all.samples + s_all.samples_skipped + s_all.samples_terminated);
+}
+
 // The OSMesa backend takes its spans from the CPU's set-up, jitter included.
 TEST(Jitter, OsmesaSamplesTheSameGrid) {
   auto vol = test::generated("marschner-lobb", 40);

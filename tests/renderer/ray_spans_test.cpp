@@ -118,8 +118,11 @@ TEST(RaySpans, PixelJitterSpreadsNeighboursOverTheStep) {
     }
   for (int b = 0; b < 8; ++b) EXPECT_NEAR(bins[b], 512, 20) << "bin " << b;  // 64^2 / 8
   EXPECT_EQ(equal_neighbours, 0) << "neighbouring pixels within 1/16 of a step of each other";
-  EXPECT_EQ(pixelJitter(3, 5), pixelJitter(3, 5));
-  EXPECT_NE(pixelJitter(3, 5), pixelJitter(5, 3));
+  // Pinned bits: every process and build must compute the same offsets (the farm's contract).
+  EXPECT_EQ(pixelJitter(0, 0), 0.0);
+  EXPECT_EQ(pixelJitter(1, 0), 9323330 * 0x1p-24);
+  EXPECT_EQ(pixelJitter(0, 1), 5188677 * 0x1p-24);
+  EXPECT_EQ(pixelJitter(3, 5), 3581730 * 0x1p-24);
 }
 
 }  // namespace
