@@ -81,16 +81,19 @@ int64_t settle(int64_t k, double t0, double t, double step, double offset) {
   return k;
 }
 
-}  // namespace
-
-unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo, const double* t_hi, RaySpan* spans) {
+// Jitter as a template argument: mid-step, the offsets are the constant 0.5 the compiler folds
+// (the default frame's set-up as fast as before jitter existed).
+template <bool Jitter>
+unsigned spansOf(const SpanRow& row, int px0, int py, int n, const double* t_lo, const double* t_hi, RaySpan* spans) {
   Lanes r;
   makeRays(row.basis, px0, py, r);
   alignas(64) double w_in[L], w_out[L], b_in[L], b_out[L], c_in[L], c_out[L], t0[L], g_in[L], g_out[L], off[L];
   alignas(64) int64_t ok[L];
-  if (row.jitter) rowJitter(px0, py, off);  // out of line: shared by every instruction set's copy
-  else
-    for (int i = 0; i < L; ++i) off[i] = 0.5;
+  if constexpr (Jitter) rowJitter(px0, py, off);  // out of line: shared by every instruction set's copy
+  const auto offset = [&](int i) {
+    if constexpr (Jitter) return off[i];
+    else return 0.5;
+  };
   for (int i = 0; i < L; ++i) ok[i] = i < n;
   // brickInterval: the whole volume's entry starts the grid; the brick's part of it.
   interval(r, row.whole_lo, row.whole_hi, w_in, w_out, ok);
@@ -120,20 +123,20 @@ unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo
   // firstAtOrAfter's guesses for both ends.
   for (int i = 0; i < L; ++i) {
     ok[i] &= (int64_t)(c_in[i] < c_out[i]);
-    g_in[i] = std::ceil((c_in[i] - t0[i]) * row.inv_step - off[i]);
-    g_out[i] = std::ceil((c_out[i] - t0[i]) * row.inv_step - off[i]);
+    g_in[i] = std::ceil((c_in[i] - t0[i]) * row.inv_step - offset(i));
+    g_out[i] = std::ceil((c_out[i] - t0[i]) * row.inv_step - offset(i));
   }
   unsigned hits = 0;
   for (int i = 0; i < n; ++i) {
     if (!ok[i]) continue;
     RaySpan& s = spans[i];
     s.t0 = t0[i];
-    s.offset = off[i];
-    s.k_first = settle(g_in[i] > 0 ? (int64_t)g_in[i] : 0, t0[i], c_in[i], row.step, off[i]);
-    s.k_end = settle(g_out[i] > 0 ? (int64_t)g_out[i] : 0, t0[i], c_out[i], row.step, off[i]);
+    s.offset = offset(i);
+    s.k_first = settle(g_in[i] > 0 ? (int64_t)g_in[i] : 0, t0[i], c_in[i], row.step, offset(i));
+    s.k_end = settle(g_out[i] > 0 ? (int64_t)g_out[i] : 0, t0[i], c_out[i], row.step, offset(i));
     if (s.k_end <= s.k_first) continue;
     // samplePositions
-    const double tb = s.t0 + off[i] * row.step;
+    const double tb = s.t0 + offset(i) * row.step;
     for (int a = 0; a < 3; ++a) {
       s.u0[a] = (r.o[a][i] + tb * r.d[a][i] + row.half[a]) / row.cell[a] - 0.5 - row.origin[a];
       s.du[a] = r.d[a][i] * row.step / row.cell[a];
@@ -141,6 +144,12 @@ unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo
     hits |= 1u << i;
   }
   return hits;
+}
+
+}  // namespace
+
+unsigned raySpans(const SpanRow& row, int px0, int py, int n, const double* t_lo, const double* t_hi, RaySpan* spans) {
+  return row.jitter ? spansOf<true>(row, px0, py, n, t_lo, t_hi, spans) : spansOf<false>(row, px0, py, n, t_lo, t_hi, spans);
 }
 
 }  // namespace tessera::renderer::TESSERA_KERNEL_ISA
