@@ -76,28 +76,22 @@ TEST(Refinement, TheScenesJitterStaysThroughDragsAndQualityKeys) {
   ASSERT_TRUE(moving && moving->interactive);
   EXPECT_TRUE(moving->quality.jitter);
   r.issued(*moving);
-  proto::Input key;
-  key.seq = 2;
-  key.quality = QualityName::Fast;
-  r.input(key, t + milliseconds(10));
-  auto fast = r.next(t + milliseconds(10));
-  ASSERT_TRUE(fast && !fast->interactive);
-  EXPECT_TRUE(fast->quality.jitter);
-  EXPECT_EQ(fast->quality.step, namedQuality(QualityName::Fast).step);
-  r.issued(*fast);
-  key.seq = 3;
-  key.quality = QualityName::Reference;
-  r.input(key, t + milliseconds(20));
-  auto ref = r.next(t + milliseconds(20));
-  ASSERT_TRUE(ref);
-  EXPECT_EQ(ref->quality, namedQuality(QualityName::Reference));
-  r.issued(*ref);
-  key.seq = 4;
-  key.quality = QualityName::Default;
-  r.input(key, t + milliseconds(30));
-  auto back = r.next(t + milliseconds(30));
-  ASSERT_TRUE(back);
-  EXPECT_TRUE(back->quality.jitter) << "the scene's jitter, not the reference's mid-step";
+  // Pressing a quality key: the full frame it asks for (issued).
+  const auto press = [&](uint64_t seq, QualityName q) {
+    proto::Input key;
+    key.seq = seq;
+    key.quality = q;
+    r.input(key, t + milliseconds(10 * seq));
+    auto s = r.next(t + milliseconds(10 * seq));
+    EXPECT_TRUE(s && !s->interactive);
+    if (s) r.issued(*s);
+    return s ? s->quality : Quality{};
+  };
+  const Quality fast = press(2, QualityName::Fast);
+  EXPECT_TRUE(fast.jitter);
+  EXPECT_EQ(fast.step, namedQuality(QualityName::Fast).step);
+  EXPECT_EQ(press(3, QualityName::Reference), namedQuality(QualityName::Reference));
+  EXPECT_TRUE(press(4, QualityName::Default).jitter) << "the scene's jitter, not the reference's mid-step";
 }
 
 TEST(Refinement, AHeldButStillMouseGetsTheFullFrameAfterThePause) {
