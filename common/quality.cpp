@@ -45,6 +45,11 @@ Quality namedQuality(QualityName name) {
   throw std::invalid_argument("'custom' is not a named quality (reference | default | fast)");
 }
 
+Quality presetKeepingJitter(Quality preset, bool scene_jitter) {
+  if (scene_jitter && !preset.reference) preset.jitter = true, preset.name = QualityName::Custom;
+  return preset;
+}
+
 Quality namedQuality(const std::string& name) {
   for (QualityName q : {QualityName::Reference, QualityName::Default, QualityName::Fast})
     if (name == qualityName(q)) return namedQuality(q);

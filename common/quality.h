@@ -23,6 +23,10 @@ struct Quality {
 // ET as default (every preset is farm-exact: see farmAccuracyProblem).
 Quality namedQuality(QualityName name);         // Custom: std::invalid_argument
 Quality namedQuality(const std::string& name);  // a preset by its word; std::invalid_argument names it
+// A preset chosen over a scene's quality (tessera-render --quality, the window's keys): its step
+// and termination, with the scene's `jitter` (Custom then), except for the reference, which
+// samples mid-step.
+Quality presetKeepingJitter(Quality preset, bool scene_jitter);
 
 // Anti-aliasing of geometry: none | msaa (samples 2 or 4) | ssaa (k x k, samples = k) | fft
 // (Gaussian low-pass of the final image, sigma in pixels).

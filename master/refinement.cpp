@@ -113,10 +113,7 @@ void Refinement::input(const proto::Input& in, Clock::time_point now) {
   if (windowed_) window_ = movedWindow(in.home ? home_window_ : window_, in.window_shift, in.window_scale);
   if (in.interacting && !interacting(now)) std::fill(std::begin(seen_ms_), std::end(seen_ms_), 0.0);
   camera_ = moved;
-  if (in.quality) {  // the keys pick a preset's step and termination; the scene's jitter stays
-    quality_ = namedQuality(*in.quality);
-    if (jitter_ && !quality_.reference) quality_.jitter = true, quality_.name = QualityName::Custom;
-  }
+  if (in.quality) quality_ = presetKeepingJitter(namedQuality(*in.quality), jitter_);
   width_ = w, height_ = h;
   timeKey(in.time);
   held_ = in.interacting;

@@ -134,10 +134,8 @@ void addOptions(CLI::App& app, Args& a) {
 
 int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<std::array<double, 3>> bg) {
   renderer::RenderOptions opt;
-  opt.quality = a.quality_name.empty() ? scene.quality : namedQuality(a.quality_name);
-  // A preset names the step and termination; the scene's jitter stays (the reference samples
-  // mid-step), as the window's quality keys keep it.
-  if (scene.quality.jitter && !opt.quality.reference) opt.quality.jitter = true, opt.quality.name = QualityName::Custom;
+  opt.quality = a.quality_name.empty() ? scene.quality
+                                       : presetKeepingJitter(namedQuality(a.quality_name), scene.quality.jitter);
   if (a.no_skip) opt.quality.skip_empty = false;
   opt.threads = a.threads;
   const Camera cam = scene.orbit.at(scene.camera, a.frame);
@@ -185,7 +183,8 @@ int renderVolume(const Scene& scene, const Args& a, int w, int h, std::optional<
   if (a.print_stats) renderScene(*chosen, *vol, tree, cam, w, h, opt, &stats, mp);
   writePng(a.out, img, bg);
   std::printf("wrote %s (%dx%d, quality %s%s, %d brick%s, frame %d, step %d, backend %s)\n", a.out.c_str(), w, h,
-              qualityName(opt.quality.name), opt.quality.jitter ? ", jittered" : "", a.bricks, a.bricks == 1 ? "" : "s", a.frame, step, a.backend.c_str());
+              qualityName(opt.quality.name), opt.quality.jitter ? ", jittered" : "", a.bricks, a.bricks == 1 ? "" : "s",
+              a.frame, step, a.backend.c_str());
   if (!a.raw.empty()) {
     writeRawF32(a.raw, img);
     std::printf("wrote %s\n", a.raw.c_str());
