@@ -76,11 +76,13 @@ TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
   TimeSeries t;
   if (n.IsMap()) {
     checkKeys(n, "volume.series", {"pattern", "first", "last"});
-    const std::string pattern = resolve(string(require(n, "volume.series", "pattern"), "volume.series.pattern"));
+    // Checked and formatted as written, then joined to the scene's folder: a '%' in the
+    // folder's name is not a conversion.
+    const std::string pattern = string(require(n, "volume.series", "pattern"), "volume.series.pattern");
     if (std::string why = patternProblem(pattern); !why.empty()) fail("volume.series.pattern", why);
     const long long first = integer(require(n, "volume.series", "first"), "volume.series.first", 0, 999999999);
     const long long last = integer(require(n, "volume.series", "last"), "volume.series.last", first, first + kMaxSteps - 1);
-    for (long long i = first; i <= last; ++i) t.files.push_back(formatted(pattern, i));
+    for (long long i = first; i <= last; ++i) t.files.push_back(resolve(formatted(pattern, i)));
     for (const std::string* f : {&t.files.front(), &t.files.back()})
       if (std::string m = fileProblem(*f); !m.empty()) fail("volume.series.pattern", m + " (pattern " + pattern + ")");
   } else if (n.IsSequence()) {

@@ -85,11 +85,11 @@ class Stage {
         return renderer == rank ? "" : "claims renderer " + std::to_string(renderer) + " from renderer " + std::to_string(rank);
       };
       if (h->type == proto::Type::Framebuffer) {
-        auto fb = proto::decodeFramebuffer(view(m));
+        auto fb = proto::decodeFramebuffer(view(m), largestPart());
         why = !fb ? fb.error() : claims(fb->renderer);
         if (why.empty()) why = gather_.addFramebuffer(std::move(*fb));
       } else {
-        auto piece = proto::decodePiece(view(m));
+        auto piece = proto::decodePiece(view(m), largestPart());
         why = !piece ? piece.error() : claims(piece->renderer);
         if (why.empty()) why = gather_.addPiece(std::move(*piece));
       }
@@ -102,6 +102,9 @@ class Stage {
       decode_ms_[h->frame] += msSince(t0);
     }
   }
+
+  // A part covers at most the whole image in the largest piece format (rgba32f).
+  size_t largestPart() const { return 16 * (size_t)opt_.width * (size_t)opt_.height; }
 
   void composite(Gather::Ready& r) {
     proto::StageStats st;

@@ -76,14 +76,10 @@ class Stage {
   // sender they name must be the one their connection is.
   void readStrips(std::vector<DataInbox::Message> messages) {
     for (auto& [rank, m, role] : messages) {
-      auto s = proto::decodeStrips(view(m));
+      // At most a whole frame's pixels, each in a strip of its own: checked before decoding.
+      auto s = proto::decodeStrips(view(m), maxStripStreamBytes(opt_.width, opt_.height));
       if (!s) {
         drops_.drop(rank, s.error());
-        continue;
-      }
-      if (const size_t most = maxStripStreamBytes(opt_.width, opt_.height); s->stream.size() > most) {
-        drops_.drop(rank, fmt::format("strips of {} bytes: more than a whole frame's pixels, each in a strip of its own ({} bytes)",
-                                      s->stream.size(), most));
         continue;
       }
       if (s->sender != rank) {

@@ -120,7 +120,9 @@ class Master {
 
   void onHello(const std::string& identity, const proto::Hello& h) {
     // A stage of another farm, or of another scene: no rank, no work, and it is told why.
-    if (const std::string why = helloRefusal(h, opt_.run, scene_); !why.empty()) {
+    std::string why = helloRefusal(h, opt_.run, scene_);
+    if (why.empty()) why = advertiseRefusal(h, opt_.endpoints.base);
+    if (!why.empty()) {
       refuse(why);
       return sendTo(identity, proto::encode(proto::Shutdown{why, opt_.run}, kMasterRank));
     }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/net/endpoints.h"
 #include "common/net/stage_link.h"
 #include "master/plan.h"
 
@@ -190,6 +191,17 @@ std::string helloRefusal(const proto::Hello& h, const std::string& run, const st
                      "(every default filled in; camera, quality, orbit and time playback aside) is {} there and {} "
                      "here; give every stage the same scene file (TESSERA_SCENE)",
                      roleName(h.role), h.pid, line, lineAt(h.scene, at, i - at), lineAt(scene, at, i - at));
+}
+
+std::string advertiseRefusal(const proto::Hello& h, const std::string& endpoint_base) {
+  if (h.endpoint.empty()) return "";
+  std::string why;
+  if (h.role == proto::Role::Compositor && endpoint_base.rfind("tcp://", 0) == 0) why = hostProblem(h.endpoint);
+  if (h.role == proto::Role::Renderer) why = peerEndpointProblem(h.endpoint, endpoint_base);
+  if (why.empty()) return "";
+  return fmt::format("the {} (pid {}) advertises an address its peers cannot connect to: {}; check "
+                     "TESSERA_ADVERTISE_HOST",
+                     roleName(h.role), h.pid, why);
 }
 
 Workers aliveWorkers(const Membership& members) {

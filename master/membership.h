@@ -88,6 +88,10 @@ Workers aliveWorkers(const Membership& members);
 // Why a stage's Hello may not join this farm: another run (TESSERA_RUN), or another scene (its
 // sceneIdentity against the master's, naming the first line that differs); "" when it may.
 std::string helloRefusal(const proto::Hello& h, const std::string& run, const std::string& scene);
+// Why the address a stage advertises is one its peers cannot connect to (a compositor's host
+// on a tcp farm, a renderer's swap socket), naming it: such a stage would make its healthy
+// peers fail every frame. "" when it is fine.
+std::string advertiseRefusal(const proto::Hello& h, const std::string& endpoint_base);
 
 // Who frame `frame` waits for (`w`), e.g. "stats from renderer 1 (pid 1234) and strips from
 // compositor 0 (pid 99)"; `culprit` gets the first of them (nullptr if none is a member), or,

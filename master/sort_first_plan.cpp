@@ -20,7 +20,7 @@ void SortFirstPlan::fill(proto::FrameParams& p, const Workers& w) {
   }
   for (const CompositorSlot& c : w.compositors)
     if (bounds.count(c.rank)) p.regions.push_back({c.rank, bounds[c.rank], c.endpoint});
-  frames_[p.frame] = {0, CostGrid(p.width, p.height), work.tiles};
+  frames_[p.frame] = {{}, CostGrid(p.width, p.height), work.tiles};
 }
 
 // A renderer's per-tile times, in FrameParams::tiles order; a frame's costs replace the
@@ -29,11 +29,12 @@ void SortFirstPlan::stats(const proto::StageStats& s, const Workers& w) {
   if (s.role != proto::Role::Renderer) return;
   auto it = frames_.find(s.frame);
   if (it == frames_.end()) return;
-  auto& [reports, grid, tiles] = it->second;
+  auto& [reported, grid, tiles] = it->second;
+  if (!reported.insert(s.rank).second) return;
   size_t k = 0;
   for (const auto& t : tiles)
     if (t.renderer == s.rank && k < s.tile_ms.size()) grid.add(t.tile, s.tile_ms[k++]);
-  if (++reports >= (int)w.renderers.size()) {
+  if (reported.size() >= w.renderers.size()) {
     cost_ = grid;
     frames_.erase(frames_.begin(), std::next(it));
   }

@@ -4,6 +4,7 @@
 // renderer sends one framebuffer.
 #pragma once
 #include <map>
+#include <set>
 
 #include "master/plan.h"
 #include "master/tiling.h"
@@ -20,7 +21,7 @@ class SortFirstPlan : public Plan {
 
  private:
   struct TileReports {
-    int reports = 0;
+    std::set<uint32_t> reported;  // renderers: a repeated report is not counted (or added) twice
     CostGrid grid{1, 1};
     std::vector<proto::TileAssignment> tiles;
   };

@@ -73,7 +73,7 @@ void SortLastPlan::fill(proto::FrameParams& p, const Workers& w) {
   work.order = tree_.visibilityOrder(volume_.shape, p.camera);
   if (binary_swap_) addSwapPlan(work, w);
   std::vector<Rect> active;
-  for (const auto& f : balance_ ? last_active_ : decltype(last_active_){}) {
+  for (const auto& [renderer, f] : balance_ ? last_active_ : decltype(last_active_){}) {
     const int x0 = (int)std::floor(f[0] * p.width), y0 = (int)std::floor(f[1] * p.height);
     active.push_back({x0, y0, (int)std::ceil(f[2] * p.width) - x0, (int)std::ceil(f[3] * p.height) - y0});
   }
@@ -122,7 +122,8 @@ void SortLastPlan::stats(const proto::StageStats& s, const Workers&) {
   sizes_.erase(sizes_.begin(), size);
   const auto [w, h] = size->second;
   const Rect& a = s.active;
-  if (!a.empty()) last_active_.push_back({(double)a.x / w, (double)a.y / h, (double)(a.x + a.w) / w, (double)(a.y + a.h) / h});
+  if (a.empty()) last_active_.erase(s.rank);
+  else last_active_[s.rank] = {(double)a.x / w, (double)a.y / h, (double)(a.x + a.w) / w, (double)(a.y + a.h) / h};
 }
 
 }  // namespace tessera::master

@@ -40,8 +40,9 @@ class SortLastPlan : public Plan {
   BrickTree tree_;
   std::vector<uint32_t> owner_;  // renderer rank of each brick
   // Renderers' active rects of the latest reported frame, as fractions of its image (x0, y0,
-  // x1, y1), so frames of another size can use them.
-  std::vector<std::array<double, 4>> last_active_;
+  // x1, y1), so frames of another size can use them; by renderer, so a repeated report
+  // replaces its first.
+  std::map<uint32_t, std::array<double, 4>> last_active_;
   uint64_t latest_active_frame_ = 0;  // that frame + 1 (0: none yet)
   std::map<uint64_t, std::pair<int, int>> sizes_;  // frames filled and not reported yet: their size
 };

@@ -8,7 +8,13 @@ namespace tessera::renderer {
 
 void Outbox::send(const std::string& endpoint, std::vector<std::byte>&& bytes) {
   auto it = pushes_.find(endpoint);
-  if (it == pushes_.end()) it = pushes_.emplace(endpoint, connectDataSender(ctx_, endpoint, identity_)).first;
+  if (it == pushes_.end()) {
+    try {
+      it = pushes_.emplace(endpoint, connectDataSender(ctx_, endpoint, identity_)).first;
+    } catch (const zmq::error_t& e) {  // an address ZeroMQ refuses: this part is lost, not the others
+      return unsent_.drop(0, fmt::format("part not sent to '{}': cannot connect ({})", endpoint, e.what()));
+    }
+  }
   if (!sendBytes(it->second, std::move(bytes)))
     unsent_.drop(0, fmt::format("part not sent to {}: the queue to it stayed full for {} ms", endpoint,
                                 kDataSendTimeout.count()));

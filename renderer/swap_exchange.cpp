@@ -26,7 +26,7 @@ void SwapExchange::receive(DropCounter& drops) { accept(inbox_.receive(drops), d
 void SwapExchange::accept(std::vector<DataInbox::Message> messages, DropCounter& drops) {
   for (auto& [rank, m, role] : messages) {
     auto t0 = Clock::now();
-    auto piece = proto::decodePiece(view(m));
+    auto piece = proto::decodePiece(view(m), max_held_bytes_);  // larger could not be held: not decoded
     if (!piece) {
       drops.drop(rank, "swap piece: " + piece.error());
       continue;
@@ -36,10 +36,6 @@ void SwapExchange::accept(std::vector<DataInbox::Message> messages, DropCounter&
       continue;
     }
     if (stale(*piece)) continue;  // a frame given up or cancelled: expected, not a fault
-    if (piece->pixels.size() > max_held_bytes_) {
-      drops.drop(rank, "swap piece of " + std::to_string(piece->pixels.size()) + " bytes exceeds what may be held");
-      continue;
-    }
     evictFor(piece->pixels.size(), drops);
     held_bytes_ += piece->pixels.size();
     held_.push_back({std::move(*piece), msSince(t0)});

@@ -5,6 +5,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
@@ -52,6 +54,36 @@ Endpoints makeEndpoints(const std::string& base) {
 }
 
 std::string farmRun() { return envOr("TESSERA_RUN", ""); }
+
+std::string hostProblem(const std::string& host) {
+  if (host.empty()) return "no host";
+  if (host.size() > 253) return "a host name of " + std::to_string(host.size()) + " characters (at most 253)";
+  if (host.front() == '[') {  // IPv6, as ZeroMQ takes it
+    in6_addr a{};
+    if (host.back() != ']' || inet_pton(AF_INET6, host.substr(1, host.size() - 2).c_str(), &a) != 1)
+      return "'" + host + "' is not an IPv6 address in brackets";
+    return "";
+  }
+  // Names and IPv4 addresses; '_' too, as container names have it and resolvers take it.
+  for (char c : host)
+    if (!(std::isalnum((unsigned char)c) || c == '.' || c == '-' || c == '_'))
+      return "'" + host + "' has the character '" + std::string(1, c) + "', which no host name or address has";
+  return "";
+}
+
+std::string peerEndpointProblem(const std::string& endpoint, const std::string& base) {
+  const std::string transport = base.substr(0, base.find("://") + 3);
+  if (!startsWith(endpoint, transport)) return "'" + endpoint + "' is not a " + transport + " endpoint, as this farm's are";
+  if (transport != "tcp://") return endpoint.size() > transport.size() ? "" : "'" + endpoint + "' names no socket";
+  const std::string rest = endpoint.substr(6);
+  const size_t colon = rest.rfind(':');
+  if (colon == std::string::npos) return "'" + endpoint + "' has no port (tcp://HOST:PORT)";
+  const std::string port = rest.substr(colon + 1);
+  if (port.empty() || port.size() > 5 || !std::all_of(port.begin(), port.end(), [](char c) { return c >= '0' && c <= '9'; }) ||
+      std::stoi(port) < 1 || std::stoi(port) > 65535)
+    return "'" + endpoint + "' has no port from 1 to 65535";
+  return hostProblem(rest.substr(0, colon));
+}
 
 std::string defaultEndpointBase() {
   return envOr("TESSERA_ENDPOINTS",

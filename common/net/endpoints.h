@@ -44,6 +44,11 @@ std::string resolveAdvertiseHost(const std::string& advertise, const Endpoints& 
 // The farm this process belongs to: TESSERA_RUN (tessera-up makes one per run), "" if unset.
 // Stages say it in their Hello; a master refuses a stage of another run.
 std::string farmRun();
+// Why a peer's advertised address cannot be connected to ("" when it can): `host` as
+// ZeroMQ's tcp takes it (a name or IPv4 address of letters, digits, '.', '-', '_', or an
+// IPv6 address in brackets); `endpoint` on the transport of the farm's `base`.
+std::string hostProblem(const std::string& host);
+std::string peerEndpointProblem(const std::string& endpoint, const std::string& base);
 // The environment variable `name`, or `fallback` when it is unset or empty.
 std::string envOr(const char* name, const std::string& fallback);
 

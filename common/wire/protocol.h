@@ -378,9 +378,12 @@ Result<Probe> decodeProbe(std::span<const std::byte> msg);
 Result<Shutdown> decodeShutdown(std::span<const std::byte> msg);
 Result<Roster> decodeRoster(std::span<const std::byte> msg);
 Result<FrameParams> decodeFrameParams(std::span<const std::byte> msg);
-Result<Piece> decodePiece(std::span<const std::byte> msg);     // checks active within region, pixel count
-Result<Strips> decodeStrips(std::span<const std::byte> msg);
-Result<Framebuffer> decodeFramebuffer(std::span<const std::byte> msg);
+// `max_bytes`: the most decoded pixel bytes the receiver takes (its frame's worth): a part
+// that claims more is refused before anything is allocated or decompressed (a few KB of
+// zstd can claim 256 MB).
+Result<Piece> decodePiece(std::span<const std::byte> msg, size_t max_bytes = SIZE_MAX);  // checks active within region, pixel count
+Result<Strips> decodeStrips(std::span<const std::byte> msg, size_t max_bytes = SIZE_MAX);
+Result<Framebuffer> decodeFramebuffer(std::span<const std::byte> msg, size_t max_bytes = SIZE_MAX);
 Result<StageStats> decodeStageStats(std::span<const std::byte> msg);
 Result<FrameDone> decodeFrameDone(std::span<const std::byte> msg);
 Result<Input> decodeInput(std::span<const std::byte> msg);

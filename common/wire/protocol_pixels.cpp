@@ -25,6 +25,11 @@ void appendPixels(std::vector<std::byte>& msg, Type type, uint64_t frame, uint32
   detail::finishMessage(msg, type, frame, sender, codec, meta + pixels.size());
 }
 
+std::string tooLarge(const char* what, size_t bytes, size_t most) {
+  return std::string(what) + ": " + std::to_string(bytes) + " pixel bytes, more than the " + std::to_string(most) +
+         " this stage's frames can hold (refused before decoding)";
+}
+
 // The decoded size of the pixels that follow the metadata, or a failure.
 Result<size_t> pixelBytes(const Header& h, const ByteReader& r) {
   if (h.raw_size < r.pos()) {
@@ -67,7 +72,7 @@ std::vector<std::byte> encode(const Piece& m, uint32_t sender, Codec codec) {
   return msg;
 }
 
-Result<Piece> decodePiece(std::span<const std::byte> msg) {
+Result<Piece> decodePiece(std::span<const std::byte> msg, size_t max_bytes) {
   using R = Result<Piece>;
   auto o = detail::openMessage(msg, Type::Piece, true);
   if (!o) return R::fail(o.error());
@@ -99,6 +104,7 @@ Result<Piece> decodePiece(std::span<const std::byte> msg) {
     return R::fail("Piece: " + std::to_string(*bytes) + " pixel bytes for active " + detail::rectText(m.active) +
                    " (expected " + std::to_string(want) + ")");
   }
+  if (want > max_bytes) return R::fail(tooLarge("Piece", want, max_bytes));
   if (!plausibleRawSize(o->header.codec, r.rest(), want)) {
     return R::fail("Piece: " + std::to_string(r.remaining()) + " " + codecName(o->header.codec) +
                    " bytes cannot hold " + std::to_string(want) + " pixel bytes");
@@ -135,7 +141,7 @@ std::vector<std::byte> encode(const Strips& m, uint32_t sender, Codec codec) {
   return msg;
 }
 
-Result<Strips> decodeStrips(std::span<const std::byte> msg) {
+Result<Strips> decodeStrips(std::span<const std::byte> msg, size_t max_bytes) {
   using R = Result<Strips>;
   auto o = detail::openMessage(msg, Type::Strips, true);
   if (!o) return R::fail(o.error());
@@ -158,6 +164,7 @@ Result<Strips> decodeStrips(std::span<const std::byte> msg) {
     return R::fail("Strips: strip_bytes " + std::to_string(strip_bytes) + " does not divide a " +
                    std::to_string(*bytes) + "-byte stream into strips of a header and whole rgba8 pixels");
   }
+  if (*bytes > max_bytes) return R::fail(tooLarge("Strips", *bytes, max_bytes));
   if (!plausibleRawSize(o->header.codec, r.rest(), *bytes)) {
     return R::fail("Strips: " + std::to_string(r.remaining()) + " " + codecName(o->header.codec) +
                    " bytes cannot hold a " + std::to_string(*bytes) + "-byte stream");
@@ -184,7 +191,7 @@ std::vector<std::byte> encode(const Framebuffer& m, uint32_t sender, Codec codec
   return msg;
 }
 
-Result<Framebuffer> decodeFramebuffer(std::span<const std::byte> msg) {
+Result<Framebuffer> decodeFramebuffer(std::span<const std::byte> msg, size_t max_bytes) {
   using R = Result<Framebuffer>;
   auto o = detail::openMessage(msg, Type::Framebuffer, true);
   if (!o) return R::fail(o.error());
@@ -207,6 +214,7 @@ Result<Framebuffer> decodeFramebuffer(std::span<const std::byte> msg) {
   if (*bytes != want)
     return R::fail("Framebuffer: " + std::to_string(*bytes) + " pixel bytes for " + std::to_string(m.width) + "x" +
                    std::to_string(m.height));
+  if (want > max_bytes) return R::fail(tooLarge("Framebuffer", want, max_bytes));
   if (!plausibleRawSize(o->header.codec, r.rest(), want))
     return R::fail("Framebuffer: " + std::to_string(r.remaining()) + " bytes cannot hold " + std::to_string(want));
   m.pixels.resize(want);

@@ -15,6 +15,11 @@ namespace {
 
 using namespace test;
 
+// The pixel decoders without a receiver's bound, as values (the bound is a defaulted argument).
+Result<Piece> anyPiece(std::span<const std::byte> m) { return decodePiece(m); }
+Result<Strips> anyStrips(std::span<const std::byte> m) { return decodeStrips(m); }
+Result<Framebuffer> anyFramebuffer(std::span<const std::byte> m) { return decodeFramebuffer(m); }
+
 TEST(Protocol, HeaderLayoutOnTheWire) {
   Bytes m = encode(Welcome{Role::Compositor, 5}, 77);
   ASSERT_EQ(m.size(), kHeaderSize + 21);  // role, rank, volume_range
@@ -81,16 +86,16 @@ TEST(Protocol, PixelMessagesRoundTripWithEveryCodecAndFormat) {
       Piece p = samplePiece(f);
       Bytes m = encode(p, 11, codec);
       EXPECT_EQ(decodeHeader(m)->codec, codec);
-      expectRoundTrip(p, m, decodePiece, Type::Piece);
+      expectRoundTrip(p, m, anyPiece, Type::Piece);
     }
     Piece empty = samplePiece(PixelFormat::RGBA8);
     empty.active = {};
     empty.pixels.clear();
-    expectRoundTrip(empty, encode(empty, 11, codec), decodePiece, Type::Piece);
+    expectRoundTrip(empty, encode(empty, 11, codec), anyPiece, Type::Piece);
     Strips s = sampleStrips();
-    expectRoundTrip(s, encode(s, 11, codec), decodeStrips, Type::Strips);
+    expectRoundTrip(s, encode(s, 11, codec), anyStrips, Type::Strips);
     Framebuffer fb = sampleFramebuffer();
-    expectRoundTrip(fb, encode(fb, 11, codec), decodeFramebuffer, Type::Framebuffer);
+    expectRoundTrip(fb, encode(fb, 11, codec), anyFramebuffer, Type::Framebuffer);
     // Compression does something: the stream is 70% zeros.
     if (codec != Codec::None) {
       EXPECT_LT(encode(s, 11, codec).size(), s.stream.size()) << codecName(codec);
@@ -113,9 +118,9 @@ TEST(Protocol, TruncatedAtEveryLengthFails) {
   expectTruncationsFail(encode(Hello{Role::Renderer, 1, "ipc://x", "run-a", "image: [8, 8]\n"}, 1), decodeHello);
   expectTruncationsFail(encode(sampleParams(), 1), decodeFrameParams);
   expectTruncationsFail(encode(sampleSortFirstParams(), 1), decodeFrameParams);
-  expectTruncationsFail(encode(samplePiece(PixelFormat::RGBA8), 1, Codec::Lzo), decodePiece);
-  expectTruncationsFail(encode(sampleStrips(), 1, Codec::Zstd), decodeStrips);
-  expectTruncationsFail(encode(sampleFramebuffer(), 1, Codec::Lz4), decodeFramebuffer);
+  expectTruncationsFail(encode(samplePiece(PixelFormat::RGBA8), 1, Codec::Lzo), anyPiece);
+  expectTruncationsFail(encode(sampleStrips(), 1, Codec::Zstd), anyStrips);
+  expectTruncationsFail(encode(sampleFramebuffer(), 1, Codec::Lz4), anyFramebuffer);
   expectTruncationsFail(encode(Input{9, 1, 2, 3, QualityName::Fast, true, 640, 480, TimeKey::Last, true, 0.5, 2}, 1), decodeInput);
   expectTruncationsFail(encode(Probe{}, 1), decodeProbe);
 }
@@ -190,6 +195,38 @@ TEST(Protocol, OversizedRawSizeIsRejectedBeforeAllocating) {
   Bytes small = encode(sampleStrips(), 1, Codec::Lz4);
   putLE(small, 24, 8, 4);  // smaller than the metadata
   EXPECT_FALSE(decodeStrips(small));
+}
+
+// A few KB of zstd can claim hundreds of MB of zeros: a receiver's bound (its frame's worth)
+// refuses such a part before it allocates or decodes anything, naming both sizes.
+TEST(Protocol, PartsLargerThanTheReceiversFrameAreRefusedBeforeDecoding) {
+  Piece p = samplePiece(PixelFormat::RGBA32F);
+  p.region = p.active = {0, 0, 1024, 1024};
+  p.pixels.assign((size_t)16 << 20, std::byte{0});
+  const Bytes piece = encode(p, 3, Codec::Zstd);
+  ASSERT_LT(piece.size(), 4096u);
+  auto r = decodePiece(piece, (size_t)16 << 20);
+  ASSERT_TRUE(r) << r.error();
+  r = decodePiece(piece, ((size_t)16 << 20) - 1);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("Piece: 16777216 pixel bytes, more than the 16777215 this stage's frames can hold"),
+            std::string::npos)
+      << r.error();
+  Strips s = sampleStrips();
+  s.stream.assign((size_t)1 << 20, 0);
+  const Bytes strips = encode(s, 1, Codec::Zstd);
+  EXPECT_TRUE(decodeStrips(strips, (size_t)1 << 20));
+  auto rs = decodeStrips(strips, 1000);
+  ASSERT_FALSE(rs);
+  EXPECT_NE(rs.error().find("Strips: 1048576 pixel bytes, more than the 1000"), std::string::npos) << rs.error();
+  Framebuffer f = sampleFramebuffer();
+  f.width = f.height = 512;
+  f.pixels.assign((size_t)512 * 512 * 4, std::byte{0});
+  const Bytes fb = encode(f, 1, Codec::Zstd);
+  EXPECT_TRUE(decodeFramebuffer(fb, f.pixels.size()));
+  auto rf = decodeFramebuffer(fb, f.pixels.size() - 1);
+  ASSERT_FALSE(rf);
+  EXPECT_NE(rf.error().find("Framebuffer: 1048576 pixel bytes, more than"), std::string::npos) << rf.error();
 }
 
 TEST(Protocol, PieceActiveOutsideRegionIsRejected) {

@@ -284,5 +284,42 @@ TEST(HelloRefusal, FilesByNameAndHeaderAndLongLinesWhereTheyDiffer) {
       << why;
 }
 
+
+// An address no peer can connect to (a typo in TESSERA_ADVERTISE_HOST) is refused at the Hello,
+// naming it: joined, it would make every healthy partner fail its frames instead.
+TEST(AdvertiseRefusal, AnAddressPeersCannotReachIsRefusedAndNamed) {
+  proto::Hello h{Role::Renderer, 77, "tcp://10.0.0.5:40123", "run", ""};
+  const std::string tcp = "tcp://127.0.0.1:5550", ipc = "ipc:///tmp/farm";
+  EXPECT_EQ(advertiseRefusal(h, tcp), "");
+  for (const char* fine : {"tcp://node-3.cluster_a:1", "tcp://[::1]:65535", "tcp://n42:40000"}) {
+    h.endpoint = fine;
+    EXPECT_EQ(advertiseRefusal(h, tcp), "") << fine;
+  }
+  for (const char* bad : {"x", "tcp://node 3:40123", "tcp://node3", "tcp://node3:0", "tcp://node3:70000", "tcp://:40123",
+                          "tcp://a/b:1", "tcp://[::g]:1", "ipc:///tmp/farm/renderer-1"}) {
+    h.endpoint = bad;
+    const std::string why = advertiseRefusal(h, tcp);
+    EXPECT_NE(why.find("the renderer (pid 77) advertises an address its peers cannot connect to"), std::string::npos)
+        << bad << ": " << why;
+    EXPECT_NE(why.find("TESSERA_ADVERTISE_HOST"), std::string::npos) << why;
+  }
+  h.endpoint = "tcp://10.0.0.5:40123";
+  EXPECT_NE(advertiseRefusal(h, ipc).find("is not a ipc:// endpoint"), std::string::npos) << advertiseRefusal(h, ipc);
+  h.endpoint = "ipc:///tmp/farm/renderer-1";
+  EXPECT_EQ(advertiseRefusal(h, ipc), "");
+  // A compositor says its host; on an ipc farm its host is not used.
+  h.role = Role::Compositor;
+  for (const char* fine : {"", "compositor-1", "10.1.2.3"}) {
+    h.endpoint = fine;
+    EXPECT_EQ(advertiseRefusal(h, tcp), "") << fine;
+  }
+  h.endpoint = "my host";
+  EXPECT_NE(advertiseRefusal(h, tcp).find("the compositor (pid 77) advertises"), std::string::npos);
+  EXPECT_NE(advertiseRefusal(h, tcp).find("'my host' has the character ' '"), std::string::npos) << advertiseRefusal(h, tcp);
+  EXPECT_EQ(advertiseRefusal(h, ipc), "");
+  h.role = Role::Display;  // advertises nothing its peers use
+  EXPECT_EQ(advertiseRefusal(h, tcp), "");
+}
+
 }  // namespace
 }  // namespace tessera::master

@@ -239,5 +239,63 @@ TEST(SortFirstPlan, CostsOfAFullyReportedFrameRebalanceTheTiles) {
   EXPECT_EQ(half.sortFirst()->tiles[0].tile.area() + half.sortFirst()->tiles[1].tile.area(), 21 * 16);
 }
 
+
+// A renderer's report that comes twice (a resent or stray Stats) counts once: the plans that
+// heard it twice make the frames of the plans that heard it once.
+TEST(SortLastPlan, ARepeatedReportCountsOnce) {
+  Scene scene = defaultScene();
+  scene.volume = GeneratorSpec{"hollow-shell", 16, 1};
+  auto bandsAfter = [&](int repeats) {
+    SortLastPlan plan(summarizeVolume(scene), scene.tf, true);
+    Workers w = twoByTwo();
+    plan.reassign(w);
+    proto::FrameParams issued = sized(64, 48);
+    issued.frame = 3;
+    plan.fill(issued, w);
+    proto::StageStats s;
+    s.frame = 3;
+    s.rank = 0;
+    s.active = {0, 0, 64, 8};
+    for (int i = 0; i < repeats; ++i) plan.stats(s, w);
+    s.rank = 2;
+    s.active = {0, 30, 64, 18};
+    plan.stats(s, w);
+    proto::FrameParams p = sized(64, 48);
+    p.frame = 4;
+    plan.fill(p, w);
+    std::vector<int> heights;
+    for (const auto& r : p.regions) heights.push_back(r.region.h);
+    return heights;
+  };
+  ASSERT_EQ(bandsAfter(1).size(), 2u);
+  EXPECT_EQ(bandsAfter(10), bandsAfter(1));
+}
+
+TEST(SortFirstPlan, ARepeatedReportCountsOnce) {
+  auto tilesAfter = [](int repeats) {
+    SortFirstPlan plan(true, 1);
+    Workers w{{0, 1}, {{0, ""}}};
+    proto::FrameParams p0 = sized(64, 48);
+    p0.frame = 0;
+    plan.fill(p0, w);
+    for (uint32_t r : {0u, 1u})
+      for (int i = 0; i < (r == 0 ? repeats : 1); ++i) {
+        proto::StageStats s;
+        s.frame = 0;
+        s.rank = r;
+        s.tile_ms = {r == 0 ? 1.0 : 100.0};  // the renderer heard last has the expensive tile
+        plan.stats(s, w);
+      }
+    proto::FrameParams p1 = sized(64, 48);
+    p1.frame = 1;
+    plan.fill(p1, w);
+    std::vector<int> areas;
+    for (const auto& t : p1.sortFirst()->tiles) areas.push_back(t.tile.area());
+    return areas;
+  };
+  ASSERT_EQ(tilesAfter(1).size(), 2u);
+  EXPECT_EQ(tilesAfter(2), tilesAfter(1));
+}
+
 }  // namespace
 }  // namespace tessera::master
