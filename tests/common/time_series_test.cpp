@@ -184,6 +184,21 @@ TEST(TimeSeries, EveryFormLoadsTheSameStepsAsRawFiles) {
   EXPECT_EQ(scene(t, "  series: run.series\n" + kRaw).series.times, (std::vector<double>{0, 0.25, 0.5, 1}));
 }
 
+// The pattern is formatted as written and then joined to the scene's folder: a '%' in a
+// folder's name (a URL-encoded download, "run%20one") is no conversion of its.
+TEST(TimeSeries, APercentInTheScenesFolderIsNotPartOfThePattern) {
+  for (const char* folder : {"series-run%20one", "series-q%x", "series-%d"}) {
+    TempDir t(folder);
+    writeRawSteps(t);
+    const Scene s = scene(t, "  series: {pattern: t%d.raw, first: 0, last: 3}\n" + kRaw);
+    ASSERT_EQ(s.series.steps, kSteps) << folder;
+    EXPECT_EQ(s.series.files.back(), t.file("t3.raw")) << folder;
+    const Scene ref = scene(t, "  series: [t0.raw, t1.raw, t2.raw, t3.raw]\n" + kRaw);
+    EXPECT_EQ(loadVolume(s, VoxelBox{{0, 0, 0}, {kSx, kSy, kSz}}, 2).values,
+              loadVolume(ref, VoxelBox{{0, 0, 0}, {kSx, kSy, kSz}}, 2).values);
+  }
+}
+
 TEST(TimeSeries, ScenesPlayOnePassWithoutAnOrbitAndRoundTrip) {
   TempDir t("series-scene");
   writeRawSteps(t);
