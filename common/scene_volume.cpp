@@ -5,6 +5,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <fmt/format.h>
+
 #include "common/io/volume_files.h"
 #include "common/scene_parser.h"
 
@@ -158,8 +160,9 @@ RawVolumeSpec Parser::volumeFile(const YAML::Node& n, const std::string& file, T
   }
   spacingAndRange(n, s);
   if (std::string p = spacingProblem(s.spacing); !p.empty() && !n["spacing"])
-    fail(key, file + ": the header's spacing [" + std::to_string(s.spacing[0]) + ", " + std::to_string(s.spacing[1]) +
-                  ", " + std::to_string(s.spacing[2]) + "]: " + p + "; give volume.spacing: [x, y, z] to replace it");
+    fail(key, fmt::format("{}: the header's spacing [{:.7g}, {:.7g}, {:.7g}]: {}; give volume.spacing: [x, y, z] to "
+                          "replace it",
+                          file, s.spacing[0], s.spacing[1], s.spacing[2], p));
   return s;
 }
 

@@ -1,7 +1,10 @@
 // Time series: which step a frame shows, and where a step's samples are.
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <stdexcept>
+
+#include <fmt/format.h>
 
 #include "common/io/volume_files.h"
 #include "common/scene.h"
@@ -28,9 +31,11 @@ void checkSameShape(const RawVolumeSpec& step, const RawVolumeSpec& first, const
   };
   if (step.dims != first.dims) differ("dims", dimsText(step.dims), dimsText(first.dims));
   if (step.type != first.type) differ("type", voxelTypeName(step.type), voxelTypeName(first.type));
+  // Spacings equal to float32's precision are one (headers written by different tools round
+  // 0.5 to 0.50000006): the steps are drawn with step 0's.
   for (int a = 0; a < 3 && !spacing_given; ++a)
-    if (step.spacing[a] != first.spacing[a])
-      differ("spacing[" + std::to_string(a) + "]", std::to_string(step.spacing[a]), std::to_string(first.spacing[a]));
+    if (!(std::fabs(step.spacing[a] - first.spacing[a]) <= 1e-6 * std::fabs(first.spacing[a])))
+      differ(fmt::format("spacing[{}]", a), fmt::format("{:.7g}", step.spacing[a]), fmt::format("{:.7g}", first.spacing[a]));
 }
 
 }  // namespace

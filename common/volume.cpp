@@ -15,6 +15,8 @@
 
 #include <unistd.h>
 
+#include <fmt/format.h>
+
 #include "common/parallel.h"
 
 namespace tessera {
@@ -65,13 +67,13 @@ std::string spacingProblem(const std::array<double, 3>& sp) {
   double lo = INFINITY, hi = 0;
   for (double s : sp) {
     if (!std::isfinite(s) || !(s >= kMinSpacing && s <= kMaxSpacing))
-      return "spacing " + std::to_string(s) + " must be finite and in [1e-30, 1e30]";
+      return fmt::format("spacing {:.7g} must be finite and in [1e-30, 1e30]", s);
     lo = std::min(lo, s);
     hi = std::max(hi, s);
   }
   // Beyond this the thinnest axis is far below one pixel and the volume renders as nothing.
   if (hi / lo > kMaxSpacingRatio)
-    return "spacing ratio largest/smallest is " + std::to_string(hi / lo) + ", must be <= 1e6";
+    return fmt::format("spacing ratio largest/smallest is {:.6g}, must be <= 1e6", hi / lo);
   return "";
 }
 

@@ -175,7 +175,7 @@ TEST(Scene, BadSizesAndValues) {
   EXPECT_ERROR(edit("image: [64, 48]", "image: [64, 16385]"), "image[1]: must be in 1..16384");
   EXPECT_ERROR("volume: {file: a.raw, dims: [4, 0, 4], type: uint8}\n", "volume.dims[1]: must be in 1..");
   EXPECT_ERROR("volume: {file: a.raw, dims: [4, -1, 4], type: uint8}\n", "volume.dims[1]");
-  EXPECT_ERROR(edit("size: 16}", "size: 16}, spacing: [1, 0, 1]"), "volume.spacing: spacing 0.000000 must be finite and in [1e-30, 1e30]");
+  EXPECT_ERROR(edit("size: 16}", "size: 16}, spacing: [1, 0, 1]"), "volume.spacing: spacing 0 must be finite and in [1e-30, 1e30]");
   EXPECT_ERROR(edit("eye: [0, 0, 2.5]", "eye: [0, 0, 0]"), "s.yaml: camera: eye equals target");
   EXPECT_ERROR(edit("up: [0, 1, 0]", "up: [0, 0, 3]"), "parallel");
   EXPECT_ERROR(edit("fov: 30", "fov: 180"), "camera.fov: 180 must be in [0.01, 179] degrees");
