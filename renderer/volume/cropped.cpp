@@ -3,6 +3,7 @@
 // whole volume render the same samples (on the same grid along each ray), and trilinear
 // neighbours and gradients at the cut are the volume's own voxels (the ghost layer).
 #include <algorithm>
+#include <cmath>
 
 #include "renderer/volume/backend.h"
 
@@ -16,6 +17,14 @@ class Cropped : public VolumeBackend {
     const VoxelBox whole = cropBox(crop, volume_->wholeDims());
     for (int a = 0; a < 3; ++a)  // in the held window's indices, as the bricks are given
       box_.lo[a] = whole.lo[a] - volume_->origin[a], box_.hi[a] = whole.hi[a] - volume_->origin[a];
+    // The step, at most half the crop box's thinnest side, as a thin volume's is at most half
+    // its box's (samplingQuality): a slab of one voxel is sampled across, not passed between
+    // two samples. The box is the whole volume's, so every brick keeps one grid.
+    const Vec3 h = volume_->halfExtent();
+    double thinnest = INFINITY;
+    for (int a = 0; a < 3; ++a)
+      thinnest = std::min(thinnest, (whole.hi[a] - whole.lo[a]) * 2 * h[a] / volume_->wholeDims()[a]);
+    max_step_ = std::max(kMinStep, thinnest / 2);
   }
 
   ImageF render(const Camera& cam, int width, int height, const Brick& brick, const RenderOptions& opt,
@@ -30,13 +39,16 @@ class Cropped : public VolumeBackend {
         return takeRecycled(width, height, std::move(recycled));
       }
     }
-    return inner_->render(cam, width, height, cut, opt, stats, active, std::move(recycled));
+    RenderOptions o = opt;
+    o.quality.step = std::min(o.quality.step, max_step_);
+    return inner_->render(cam, width, height, cut, o, stats, active, std::move(recycled));
   }
 
  private:
   std::unique_ptr<VolumeBackend> inner_;
   std::shared_ptr<const Volume> volume_;
   Brick box_;
+  double max_step_;
 };
 
 }  // namespace

@@ -74,6 +74,30 @@ TEST_P(CropBackends, TheCroppedVolumeIsTheCropBoxRendered) {
   EXPECT_EQ(*std::max_element(outside.px.begin(), outside.px.end()), 0.0f);
 }
 
+// A crop one voxel thin, seen face on: the step shrinks to half its thickness, so every ray
+// samples across it (at the scene's step most rays passed between two samples: empty image).
+TEST_P(CropBackends, ASlabOneVoxelThinIsSampledAcross) {
+  // 300 slices: one is 1/300 of the box thick, under the scene's step of 1/256; face on, every
+  // ray of a slab has the same phase, so a slab is drawn whole or not at all.
+  auto v = test::constant({16, 16, 300}, 0.6f);
+  const TransferFunction tf({{0, 0.9, 0.6, 0.5, 0}, {1, 1, 1, 1, 0.9}});
+  Camera cam = test::defaultCamera();
+  cam.eye = {0, 0, 3}, cam.target = {0, 0, 0}, cam.up = {0, 1, 0};
+  cam.orthographic = true, cam.height = 0.05;
+  for (int k = 140; k < 160; ++k) {
+    const Crop crop = cropOf({0, 1}, {0, 1}, {k / 300.0, (k + 1) / 300.0});
+    ASSERT_EQ(cropBox(crop, v->dims).lo[2], k);
+    ASSERT_EQ(cropBox(crop, v->dims).hi[2], k + 1);
+    const auto cropped = makeVolumeBackend(GetParam(), v, tf, {}, {0, 0, 0}, Blend::Composite, crop);
+    const ImageF fast = cropped->render(cam, 24, 24, wholeVolume(*v), test::options("default"));
+    const ImageF ref = makeVolumeBackend(BackendKind::Cpu, v, tf, {}, {0, 0, 0}, Blend::Composite, crop)
+                           ->render(cam, 24, 24, wholeVolume(*v), test::options("reference"));
+    EXPECT_EQ(activeRegion(toRGBA8(fast)).area(), 24 * 24) << "slice " << k << test::dumpImages("thin_crop", ref, fast);
+    EXPECT_GT(ref.at(12, 12)[3], 0.05f) << "the reference shows slice " << k;
+    EXPECT_LE(maxAbs(fast, ref), 0.05f) << "slice " << k << test::dumpImages("thin_crop", ref, fast);
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Both, CropBackends, ::testing::Values(BackendKind::Cpu, BackendKind::Osmesa),
                          [](const auto& p) { return std::string(backendName(p.param)); });
 
