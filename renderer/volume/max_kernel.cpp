@@ -47,6 +47,11 @@ template <bool kComplement>
 [[gnu::always_inline]] inline void castProjection(const FastContext& c, const RaySpan& span, float out[4],
                                                   SampleCounts& counts) {
   const MaxSkip& m = *c.maximum;
+  if (m.floor_q > 65535u) {  // no value has opacity (a window over none): nothing shows, as the reference says
+    out[0] = out[1] = out[2] = out[3] = 0;
+    counts.skipped += (uint64_t)(span.k_end - span.k_first);
+    return;
+  }
   const Volume& v = *c.volume;
   const uint16_t* vol = c.accel->bricked.data();
   const int nb_x = c.accel->nb[0], nb_xy = c.accel->nb[0] * c.accel->nb[1];

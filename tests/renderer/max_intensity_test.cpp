@@ -177,6 +177,14 @@ TEST(MaxIntensity, AColourMapWithoutOpacityShowsNothing) {
   const Raycaster rc(vol, clear, {}, {0, 0, 0}, Blend::Maximum);
   EXPECT_TRUE(activeRegion(rc.render(orbitCamera(0), 24, 24, wholeVolume(*vol), options("default"))).empty());
   EXPECT_TRUE(activeRegion(rc.render(orbitCamera(0), 24, 24, wholeVolume(*vol), options("reference"))).empty());
+  // Without skipping every ray is cast, and each must still show nothing (its floor is beyond
+  // every value: it once returned a value pixel of alpha 1, and a farm sent it as a whole piece).
+  RenderOptions all = options("default");
+  all.quality.skip_empty = false;
+  RenderStats stats;
+  EXPECT_TRUE(activeRegion(rc.render(orbitCamera(0), 24, 24, wholeVolume(*vol), all, &stats)).empty());
+  EXPECT_EQ(stats.samples, 0u);
+  EXPECT_GT(stats.samples_skipped, 0u);
 }
 
 TEST(MaxIntensity, ShadingIsRefused) {
