@@ -1,8 +1,7 @@
 // Volume samples in a file (x fastest; any of the voxel types, either byte order, after an
-// offset, plain or gzip-compressed): the whole volume or a window of it, read with
-// positioned reads (or a forward stream through compressed data) so a renderer's memory
-// follows its bricks, not the file. Raw files, NIfTI, NRRD and DICOM series (one file a
-// slice) all end here.
+// offset, plain or gzip-compressed): the whole volume or a window of it, read with positioned
+// reads (or a forward stream through compressed data) so a renderer's memory follows its
+// bricks, not the file. Raw files, NIfTI, NRRD and DICOM series (one file a slice) end here.
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -39,20 +38,23 @@ std::atomic<uint64_t> bytes_inflated{0};  // what zlib decompressed, skipped byt
 }
 
 void checkGeometry(const std::string& file, const std::array<int, 3>& dims, const std::array<double, 3>& sp) {
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < 3; ++i)
     if (dims[i] <= 0) fail(file, "dims must be positive, got " + std::to_string(dims[i]));
-  }
   if (std::string p = spacingProblem(sp); !p.empty()) fail(file, p);
 }
 
 }  // namespace
 
-// An open raw file of known dims and type. Not in the anonymous namespace: a
-// RawVolumeReader holds one.
+// An open raw file of known dims and type (not in the anonymous namespace: a RawVolumeReader holds one).
 class RawFile {
  public:
   explicit RawFile(const RawVolumeSpec& spec) : spec_(spec), ts_(voxelTypeSize(spec.type)) {
     const std::string& f = spec.file;
+    // Values float32 may round (wide types, a header's scaling) are held relative to a value (resetRef).
+    const auto scaled = [](double slope, double inter) { return slope != 1 || inter != 0; };
+    relative_ = spec.type == VoxelType::Int32 || spec.type == VoxelType::UInt32 || spec.type == VoxelType::Float64 ||
+                scaled(spec.slope, spec.inter) ||
+                std::any_of(spec.slices.begin(), spec.slices.end(), [&](const SliceFile& s) { return scaled(s.slope, s.inter); });
     checkGeometry(f, spec.dims, spec.spacing);
     if (spec.has_range && !(spec.range[0] < spec.range[1]))
       fail(f, "range must satisfy min < max, got [" + std::to_string(spec.range[0]) + ", " +
@@ -113,7 +115,11 @@ class RawFile {
     }
   }
 
-  // The data's min and max, streaming the file.
+  // What samples are held relative to (0 for those float32 holds exactly): r, or (NaN) the next read's first.
+  void resetRef(double r) { ref_ = relative_ ? r : 0.0; }
+  double ref() const { return std::isnan(ref_) ? 0.0 : ref_; }
+
+  // The data's min and max (in its own units), streaming the file.
   std::array<double, 2> scanRange() {
     const size_t total = (size_t)spec_.dims[0] * spec_.dims[1] * spec_.dims[2];
     const size_t chunk = kPieceBytes / ts_;
@@ -125,7 +131,7 @@ class RawFile {
       readPiece(first, n, vals.data());
       for (size_t i = 0; i < n; ++i) mn = std::min(mn, vals[i]), mx = std::max(mx, vals[i]);
     }
-    return {mn, mx};
+    return {mn + ref(), mx + ref()};
   }
 
  private:
@@ -141,7 +147,10 @@ class RawFile {
     else readPlain(at, dst, count * ts_);
     samples_read += count * ts_;
     if (direct) return checkFinite(first, count, out);
-    samples::convertAll(spec_.type, buf_.data(), count, samples::Scaling{spec_.slope, spec_.inter, spec_.big_endian}, out);
+    samples::Scaling sc{spec_.slope, spec_.inter, spec_.big_endian};
+    if (std::isnan(ref_)) ref_ = samples::firstValue(spec_.type, buf_.data(), sc);
+    sc.ref = ref_;
+    samples::convertAll(spec_.type, buf_.data(), count, sc, out);
     checkFinite(first, count, out);
   }
 
@@ -156,7 +165,10 @@ class RawFile {
       slices_->read(z, in, n, buf_.data());
       bytes_inflated += slices_->decoded_bytes - decoded;
       const SliceFile& s = spec_.slices[z];
-      samples::convertAll(spec_.type, buf_.data(), n, samples::Scaling{s.slope, s.inter, false}, out);
+      samples::Scaling sc{s.slope, s.inter, false};
+      if (std::isnan(ref_)) ref_ = samples::firstValue(spec_.type, buf_.data(), sc);
+      sc.ref = ref_;
+      samples::convertAll(spec_.type, buf_.data(), n, sc, out);
       samples_read += n * ts_;
       checkFinite(first, n, out);
       first += n, count -= n, out += n;
@@ -171,7 +183,7 @@ class RawFile {
     for (; i < count; ++i) bad[0] |= !std::isfinite(out[i]);
     if (!lanes::any(bad)) return;
     for (i = 0; i < count; ++i)
-      if (!std::isfinite(out[i])) nonFinite(first + i, out[i]);
+      if (!std::isfinite(out[i])) fail(spec_.samples(), samples::nonFiniteProblem(spec_, first + i, out[i]));
   }
 
   void readPlain(uint64_t at, unsigned char* dst, size_t bytes) {
@@ -256,23 +268,6 @@ class RawFile {
     }
   }
 
-  [[noreturn]] void nonFinite(size_t i, float x) const {
-    const size_t nx = spec_.dims[0], ny = spec_.dims[1];
-    const std::string at = " at voxel (" + std::to_string(i % nx) + ", " + std::to_string(i / nx % ny) + ", " +
-                           std::to_string(i / (nx * ny)) + "), linear index " + std::to_string(i);
-    // A float64 sample, or one the header scales, can be finite and still overflow float32.
-    const bool scaled = spec_.slope != 1 || spec_.inter != 0;
-    if (std::isinf(x) && (spec_.type == VoxelType::Float64 || scaled))
-      fail(spec_.samples(), std::string(x > 0 ? "+" : "-") + "infinite or beyond float32's range (3.4e38)" +
-                                (scaled ? " after the header's scaling (slope " + std::to_string(spec_.slope) +
-                                              ", intercept " + std::to_string(spec_.inter) + ")"
-                                        : "") +
-                                at + "; Tessera holds samples as float32: rescale the data into its range");
-    fail(spec_.samples(), "non-finite value " + std::to_string(x) + at +
-                              "; Tessera needs finite samples: replace NaN and infinities with a value "
-                              "outside the data's range (e.g. numpy.nan_to_num(v, nan=v_min)) and give range: to map it");
-  }
-
   static constexpr size_t kPieceBytes = 256u << 10;  // well inside a core's L2
   static constexpr size_t kAlign = 4096;             // O_DIRECT's offsets, sizes and memory
   static constexpr size_t kChunkBytes = 4u << 20;    // a direct read; > kPieceBytes + 2 kAlign
@@ -281,6 +276,8 @@ class RawFile {
   };
   const RawVolumeSpec& spec_;
   size_t ts_;
+  bool relative_ = false;
+  double ref_ = 0;  // see resetRef
   int fd_ = -1, direct_fd_ = -1;
   uint64_t run_end_ = 0, run_bytes_ = 0;  // file byte after the samples being read, and their size
   uint64_t chunk_lo_ = 0, chunk_hi_ = 0;  // file bytes in this thread's chunk, when this filled it last
@@ -299,6 +296,7 @@ struct RawVolumeReader::Open {
   uint64_t base;       // the offset the reader was opened with
   std::optional<std::array<double, 2>> scanned;
   uint64_t scanned_shift = 0;
+  std::optional<uint64_t> ref_shift;  // the shift the file's reference value is for
   explicit Open(RawVolumeSpec s) : spec(std::move(s)), file(spec), base(spec.offset) {}
 };
 
@@ -327,6 +325,8 @@ Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage, ui
   RawFile& file = open_->file;
   open_->spec.offset = open_->base + shift;
   if (open_->scanned && open_->scanned_shift != shift) open_->scanned.reset();
+  // Samples held relative to the declared range's low end, else to the step's first sample.
+  if (open_->ref_shift != shift) file.resetRef(spec.has_range ? spec.range[0] : NAN), open_->ref_shift = shift;
   const auto& n = spec.dims;
   if (std::string p = windowProblem(n, box); !p.empty()) fail(spec.file, p);
   Volume v;
@@ -350,9 +350,10 @@ Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage, ui
   double lo = spec.has_range ? spec.range[0] : data[0], hi = spec.has_range ? spec.range[1] : data[1];
   float mn = INFINITY, mx = -INFINITY;
   auto normalise = [&](float* x, size_t count) {  // in double; a constant volume (lo == hi) maps to 0
-    const double scale = hi > lo ? 1.0 / (hi - lo) : 0.0;
+    const double l = lo - file.ref(), h = hi - file.ref();  // x holds value - ref
+    const double scale = h > l ? 1.0 / (h - l) : 0.0;
     using lanes::D4, lanes::F4;
-    const D4 dlo = {lo, lo, lo, lo}, dscale = {scale, scale, scale, scale};
+    const D4 dlo = {l, l, l, l}, dscale = {scale, scale, scale, scale};
     const F4 zero = lanes::splat(0), one = lanes::splat(1);
     F4 vmn = lanes::splat(mn), vmx = lanes::splat(mx);
     size_t i = 0;
@@ -367,7 +368,7 @@ Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage, ui
     mn = lanes::hmin(vmn), mx = lanes::hmax(vmx);
     for (; i < count; ++i) {
       mn = std::min(mn, x[i]), mx = std::max(mx, x[i]);
-      x[i] = normaliseSample(x[i], lo, hi);
+      x[i] = normaliseSample(x[i], l, h);
     }
   };
   // Rows of the window; whole rows (and whole slices) are contiguous in the file and read at once.
@@ -383,12 +384,14 @@ Volume RawVolumeReader::read(const VoxelBox& box, std::vector<float> storage, ui
   }
   if (!known) {  // the whole volume without a declared range: its own values set it
     for (float x : v.values) data[0] = std::min(data[0], (double)x), data[1] = std::max(data[1], (double)x);
+    data = {data[0] + file.ref(), data[1] + file.ref()};
     lo = data[0], hi = data[1];
     if (map) normalise(v.values.data(), v.values.size());
   }
   // Mapped with a declared range: the window's own values, seen while normalising.
-  v.data_range = map && spec.has_range ? std::array<double, 2>{mn, mx} : data;
+  v.data_range = map && spec.has_range ? std::array<double, 2>{mn + file.ref(), mx + file.ref()} : data;
   v.mapped_range = {lo, hi};
+  if (!map) v.value_offset = file.ref();
   return v;
 }
 

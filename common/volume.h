@@ -26,6 +26,8 @@ struct Volume {
   // In the file's units: the smallest and largest value of the data, and the range that
   // was mapped to 0..1 (the scene's `range`, else the data's own).
   std::array<double, 2> data_range{0, 1}, mapped_range{0, 1};
+  // RawVolumeReader::readValues only: the values hold value - value_offset (in the file's units).
+  double value_offset = 0;
 
   size_t index(int x, int y, int z) const { return x + (size_t)dims[0] * (y + (size_t)dims[1] * z); }
   float at(int x, int y, int z) const { return values[index(x, y, z)]; }
@@ -155,7 +157,8 @@ class RawVolumeReader {
   // step t lies t steps of samples further on).
   Volume read(const VoxelBox& box, std::vector<float> storage = {}, uint64_t shift = 0);
   // The window's samples as the file holds them (after a header's scaling; non-finite ones
-  // refused), not normalised: data_range and mapped_range are their min..max. With no scan
+  // refused), not normalised, less value_offset (a value near the data's, so that float32 keeps
+  // their differences): data_range and mapped_range are their min..max in the file's units. With no scan
   // first, slabs read this way give a file's range and its blocks' in one pass (the master's
   // summary: normalising is monotonic, so a block's normalised bounds are its bounds normalised).
   Volume readValues(const VoxelBox& box);

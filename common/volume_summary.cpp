@@ -56,12 +56,14 @@ VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cance
   s.lo.assign(count, INFINITY);
   s.hi.assign(count, -INFINITY);
   std::array<double, 2> data{INFINITY, -INFINITY};
+  double offset = 0;  // the slabs' values hold value - offset (readValues)
   for (int z0 = 0; z0 < n[2]; z0 += s.edge) {
     if (cancel && *cancel) throw std::runtime_error("the volume's summary was cancelled");
     const VoxelBox box{{0, 0, z0}, {n[0], n[1], std::min(n[2], z0 + s.edge)}};
     const Volume slab = readSlab(box);
     s.shape.spacing = slab.spacing;
     s.shape.mapped_range = slab.mapped_range;  // every slab's: the range is the scene's
+    offset = slab.value_offset;  // every slab's: one reader
     data[0] = std::min(data[0], slab.data_range[0]);
     data[1] = std::max(data[1], slab.data_range[1]);
     const size_t row = (size_t)s.blocks[0] * s.blocks[1] * (z0 / s.edge);
@@ -76,7 +78,8 @@ VolumeSummary summarizeVolume(const Scene& scene, const std::atomic<bool>* cance
   }
   if (!mapped) {  // as fixVolumeRange fixes it
     const auto [lo, hi] = rangeOfValues(data[0], data[1]);
-    for (size_t b = 0; b < count; ++b) s.lo[b] = normaliseSample(s.lo[b], lo, hi), s.hi[b] = normaliseSample(s.hi[b], lo, hi);
+    for (size_t b = 0; b < count; ++b)
+      s.lo[b] = normaliseSample(s.lo[b], lo - offset, hi - offset), s.hi[b] = normaliseSample(s.hi[b], lo - offset, hi - offset);
     s.shape.mapped_range = {lo, hi};
   }
   s.shape.dims = n;

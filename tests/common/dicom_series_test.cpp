@@ -72,7 +72,7 @@ void expectValues(const Volume& v, const VoxelBox& box, double slope, double int
   for (int z = box.lo[2]; z < box.hi[2]; ++z)
     for (int y = box.lo[1]; y < box.hi[1]; ++y)
       for (int x = box.lo[0]; x < box.hi[0]; ++x)
-        ASSERT_EQ(v.at(x - box.lo[0], y - box.lo[1], z - box.lo[2]), (float)(slope * stored(x, y, z) + inter))
+        ASSERT_EQ(v.at(x - box.lo[0], y - box.lo[1], z - box.lo[2]) + v.value_offset, slope * stored(x, y, z) + inter)
             << x << "," << y << "," << z;
 }
 
@@ -211,7 +211,7 @@ TEST(DicomSeries, EachSliceKeepsItsScalingAndOnlyItsStoredBitsCount) {
     const Volume v = reader.readValues(VoxelBox{{0, 0, 0}, {4, 2, 3}});
     for (int k = 0; k < 3; ++k)
       for (int i = 0; i < 8; ++i)
-        ASSERT_EQ(v.at(i % 4, i / 4, k), (float)(0.5 * (k + 1) * ((i - 4) * 300 + k) + 10.0 * k))
+        ASSERT_EQ(v.at(i % 4, i / 4, k) + v.value_offset, 0.5 * (k + 1) * ((i - 4) * 300 + k) + 10.0 * k)
             << gdcm::TransferSyntax::GetTSString(syntax) << " slice " << k << " voxel " << i;
     EXPECT_FALSE(storesIntegers(std::get<RawVolumeSpec>(scene.volume))) << "slopes of 0.5 make halves";
   }

@@ -1,5 +1,6 @@
 // Raw volume loading (all three types, error messages) and the procedural generators.
 #include "common/volume.h"
+#include "common/volume_summary.h"
 
 #include "tests/common/raw_spec.h"
 #include "tests/common/temp_dir.h"
@@ -299,6 +300,36 @@ TEST(Volume, AFloat64SampleBeyondFloat32SaysSoRatherThanNaN) {
     EXPECT_NE(std::string(e.what()).find("big.raw: -infinite or beyond float32's range (3.4e38) at voxel (1, 0, 0)"),
               std::string::npos) << e.what();
     EXPECT_EQ(std::string(e.what()).find("NaN"), std::string::npos) << e.what();
+  }
+}
+
+// Values whose spread is small next to their size (a pressure of 101325 Pa varying by 1e-4, a
+// count near 1e8) keep every level: they are held relative to a value near the data's before
+// float32 rounds them, not rounded first (which left 2 of 64 levels). Whole, as a window, with
+// and without a declared range, and in the master's summary of the file's blocks.
+TEST(Volume, WideTypesWithALargeOffsetKeepEveryLevel) {
+  TempDir t("volume");
+  std::vector<double> d(4 * 4 * 4);
+  std::vector<int32_t> n(d.size());
+  for (size_t i = 0; i < d.size(); ++i) d[i] = 101325 + 1e-4 * (double)i, n[i] = 100000000 + (int32_t)i;
+  const std::string fd = t.write("p.raw", d.data(), d.size() * 8), fi = t.write("n.raw", n.data(), n.size() * 4);
+  for (const RawVolumeSpec& s : {test::rawSpec(fd, {4, 4, 4}, VoxelType::Float64, {1, 1, 1}, false, {0, 0}),
+                                 test::rawSpec(fd, {4, 4, 4}, VoxelType::Float64, {1, 1, 1}, true, {d.front(), d.back()}),
+                                 test::rawSpec(fi, {4, 4, 4}, VoxelType::Int32, {1, 1, 1}, false, {0, 0})}) {
+    const Volume v = loadRawVolume(s);
+    for (size_t i = 0; i < d.size(); ++i) ASSERT_NEAR(v.values[i], (double)i / 63, 1e-5) << s.file << " voxel " << i;
+    EXPECT_NEAR(v.data_range[1] - v.data_range[0], s.type == VoxelType::Int32 ? 63 : 63e-4, 1e-9) << s.file;
+    const Volume w = loadRawVolume(s, VoxelBox{{1, 2, 1}, {4, 4, 3}});
+    for (int z = 0; z < 2; ++z)
+      for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 3; ++x)
+          EXPECT_NEAR(w.at(x, y, z), v.at(x + 1, y + 2, z + 1), 1e-6) << s.file << " window";
+    Scene scene = defaultScene();
+    scene.volume = s;
+    const VolumeSummary sum = summarizeVolume(scene);
+    EXPECT_NEAR(sum.lo.front(), 0, 1e-5) << s.file;
+    EXPECT_NEAR(*std::max_element(sum.hi.begin(), sum.hi.end()), 1, 1e-5) << s.file;
+    EXPECT_LT(*std::min_element(sum.hi.begin(), sum.hi.end()), 0.5) << s.file << ": a block's bounds lost the levels";
   }
 }
 
