@@ -30,7 +30,11 @@ std::string headerProblem(const std::string& path) {
   gzFile f = gzopen(path.c_str(), "rb");
   if (!f) return "";
   const int n = gzread(f, h, sizeof h);
+  int err = Z_OK;
+  const std::string zmsg = n < 4 ? gzerror(f, &err) : "";
   gzclose(f);
+  // A compressed stream cut short or corrupt is said as such, not as a file of no bytes.
+  if (n < 4 && err != Z_OK) return "its gzip stream is corrupt or cut short (" + zmsg + ")";
   if (n < 4) return "only " + std::to_string(std::max(n, 0)) + " bytes: not a NIfTI file";
   auto i32 = [&](int at, bool swap) {
     uint32_t v = (uint32_t)h[at] | (uint32_t)h[at + 1] << 8 | (uint32_t)h[at + 2] << 16 | (uint32_t)h[at + 3] << 24;
@@ -80,7 +84,12 @@ RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps) {
     if (startsWithGzipMagic(path) && !nifti_is_gzfile(path.c_str()))
       return fail("gzip-compressed, but its name does not end in .gz (nifticlib goes by the name: rename it " +
                   std::filesystem::path(path).filename().string() + ".gz)");
-    if (std::string why = headerProblem(path); !why.empty()) return fail("not a readable NIfTI file: " + why);
+    // Given the .img of a pair, its header is the .hdr beside it.
+    char* hdr = nifti_findhdrname(path.c_str());
+    const std::string header = hdr ? hdr : path;
+    std::free(hdr);
+    if (std::string why = headerProblem(header); !why.empty())
+      return fail("not a readable NIfTI file: " + (header != path ? std::filesystem::path(header).filename().string() + ": " : "") + why);
     return fail("not a readable NIfTI-1 or NIfTI-2 file (missing, cut short, or a bad header)");
   }
   RawVolumeSpec s;

@@ -192,7 +192,10 @@ RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps) {
     std::error_code ec;
     const uintmax_t size = std::filesystem::file_size(s.samples(), ec);
     const uintmax_t bytes = (uintmax_t)s.dims[0] * s.dims[1] * s.dims[2] * voxelTypeSize(s.type) * steps;
-    if (ec || size < bytes) fail("byte skip -1 but the data file is shorter than the data");
+    if (ec) fail("byte skip -1: cannot read the size of the data file " + s.samples() + ": " + ec.message());
+    if (size < bytes)
+      fail("byte skip -1 but the data file " + s.samples() + " has " + std::to_string(size) + " bytes, fewer than the " +
+           std::to_string(bytes) + " of its samples");
     s.offset = size - bytes;
   } else if (skip < 0) {
     fail("byte skip " + f["byteskip"] + " is not supported with encoding " + enc);

@@ -35,8 +35,14 @@ VolumeFormat volumeFormatOf(const std::string& path) {
   std::string p = path;
   std::transform(p.begin(), p.end(), p.begin(), [](unsigned char c) { return (char)std::tolower(c); });
   auto ends = [&](const char* e) { const std::string s(e); return p.size() >= s.size() && p.compare(p.size() - s.size(), s.size(), s) == 0; };
-  if (ends(".nii") || ends(".nii.gz") || ends(".hdr") || ends(".img") || ends(".hdr.gz") || ends(".img.gz"))
-    return VolumeFormat::Nifti;
+  if (ends(".nii") || ends(".nii.gz") || ends(".hdr") || ends(".hdr.gz")) return VolumeFormat::Nifti;
+  // An .img is NIfTI's (or Analyze's) only beside its .hdr: alone it is a raw file by another name.
+  if (ends(".img") || ends(".img.gz")) {
+    const std::string stem = path.substr(0, path.size() - (ends(".img") ? 4 : 7));
+    for (const char* h : {".hdr", ".hdr.gz", ".HDR", ".HDR.GZ"})
+      if (std::filesystem::exists(stem + h, ec)) return VolumeFormat::Nifti;
+    return VolumeFormat::Raw;
+  }
   if (ends(".nrrd") || ends(".nhdr")) return VolumeFormat::Nrrd;
   if (ends(".dcm")) return VolumeFormat::Dicom;
   // DICOM files often have no extension (IM0001): their preamble's "DICM" at byte 128 says it.

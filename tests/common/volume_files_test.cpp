@@ -239,6 +239,14 @@ TEST(VolumeFiles, NrrdHeadersWithoutDataOrWithBadFieldsAreNamed) {
   EXPECT_NE(rgb.find("axis 0 is 'RGB-color'"), std::string::npos) << rgb;
   std::ofstream(t.file("ok.nhdr")) << head << "sizes: 2 2 2\nkinds: domain space ???\ndata file: d.raw\n";
   EXPECT_EQ(loadError("volume: {file: ok.nhdr}\n", t.path.string()), "<no error>");
+  // Byte skip -1 (the data ends the file): a missing or short data file is named, with its size.
+  for (const auto& [file, says] : {std::pair<std::string, std::string>{"gone.raw", "cannot read the size of the data file"},
+                                   {"d.raw", "d.raw has 8 bytes, fewer than the 27 of its samples"}}) {
+    std::ofstream(t.file("end.nhdr")) << head << "sizes: 3 3 3\ndata file: " << file << "\nbyte skip: -1\n";
+    const std::string e = loadError("volume: {file: end.nhdr}\n", t.path.string());
+    EXPECT_NE(e.find("end.nhdr: byte skip -1"), std::string::npos) << e;
+    EXPECT_NE(e.find(says), std::string::npos) << e;
+  }
 }
 
 // The scene's volume.spacing replaces a header's spacing, also one the header gets wrong; a
@@ -325,6 +333,37 @@ TEST(VolumeFiles, FilesOtherToolsWriteLoadAsTheRawFile) {
                                        "encoding: raw\nendian: little\ndata file: ref.raw\n";
   EXPECT_EQ(readVolumeHeader(t.file("nan.nhdr")).spacing, (std::array<double, 3>{0.75, 1.25, 1}));
   expectSameVolume(fromScene("volume: {file: nan.nhdr, spacing: [0.75, 1.25, 2.5]}\n", t.path.string()), ref);
+}
+
+// Found by review: an .img with no .hdr beside it (a raw dump named so) was taken for NIfTI's
+// and refused; the .img of a pair with a bad header was diagnosed from the .img's bytes; a
+// corrupt gzip header was "only 0 bytes".
+TEST(VolumeFiles, AnImgAloneIsRawAndAPairOrGzipIsDiagnosedFromItsHeader) {
+  TempDir t("img");
+  const Volume ref = rawReference(t);
+  std::filesystem::copy_file(t.file("ref.raw"), t.file("dump.img"));
+  expectSameVolume(fromScene("volume: {file: dump.img, dims: [13, 11, 7], type: int16, spacing: [0.75, 1.25, 2.5]}\n",
+                             t.path.string()),
+                   ref);
+  writeNifti(t.file("pair.hdr"));
+  expectSameVolume(fromScene("volume: {file: pair.img}\n", t.path.string()), ref);
+  {
+    std::fstream h(t.file("pair.hdr"), std::ios::in | std::ios::out | std::ios::binary);
+    h.seekp(40);  // dim[0]
+    const int16_t nine = 9;
+    h.write(reinterpret_cast<const char*>(&nine), 2);
+  }
+  const std::string pair = loadError("volume: {file: pair.img}\n", t.path.string());
+  EXPECT_NE(pair.find("pair.img: not a readable NIfTI file: pair.hdr: dim[0] = 9"), std::string::npos) << pair;
+  writeNifti(t.file("bad.nii.gz"));
+  {
+    std::fstream g(t.file("bad.nii.gz"), std::ios::in | std::ios::out | std::ios::binary);
+    g.seekp(3);  // the gzip header's flags: reserved bits set
+    g.put((char)0xe0);
+  }
+  const std::string gz = loadError("volume: {file: bad.nii.gz}\n", t.path.string());
+  EXPECT_NE(gz.find("bad.nii.gz: not a readable NIfTI file: its gzip stream is corrupt or cut short"), std::string::npos)
+      << gz;
 }
 
 TEST(VolumeFiles, TwoDimensionalNiftiIsOneSliceThick) {
