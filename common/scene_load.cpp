@@ -4,8 +4,6 @@
 #include <fstream>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
-
 #include "common/io/volume_files.h"
 #include "common/scene.h"
 
@@ -17,8 +15,10 @@ Scene loadScene(const std::string& path) {
   if (volumeFormatOf(path) != VolumeFormat::Raw) {
     std::filesystem::path abs = std::filesystem::absolute(path).lexically_normal();
     if (!abs.has_filename()) abs = abs.parent_path();  // a folder given as "ct/"
-    Scene s = parseScene("volume: {file: " + nlohmann::json(abs.filename().string()).dump() + "}\n",
-                         abs.parent_path().string(), path);
+    // Single-quoted YAML takes any bytes of a name ('' for '), also those that are not UTF-8.
+    std::string name = abs.filename().string();
+    for (size_t at = name.find('\''); at != std::string::npos; at = name.find('\'', at + 2)) name.insert(at, 1, '\'');
+    Scene s = parseScene("volume: {file: '" + name + "'}\n", abs.parent_path().string(), path);
     s.path = path;
     // The built-in scene's orbit, so that a farm shown a file alone turns it the same way,
     // about the data's up (a 4-D file stays still: `time: {play: true}` plays its steps).
@@ -29,6 +29,11 @@ Scene loadScene(const std::string& path) {
   if (!in) throw SceneError(path + ": cannot open scene file");
   std::stringstream ss;
   ss << in.rdbuf();
+  // A raw volume given alone: its bytes are no scene, and it has no header to say what it holds.
+  if (ss.str().find('\0') != std::string::npos)
+    throw SceneError(path + ": not a scene file but binary data; a raw volume has no header to say its size and type, "
+                            "so give them in a scene file: volume: {file: " +
+                     std::filesystem::path(path).filename().string() + ", dims: [x, y, z], type: uint16}");
   std::filesystem::path base = std::filesystem::path(path).parent_path();
   Scene s = parseScene(ss.str(), base.empty() ? "." : base.string(), path);
   s.path = path;

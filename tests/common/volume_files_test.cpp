@@ -366,6 +366,27 @@ TEST(VolumeFiles, AnImgAloneIsRawAndAPairOrGzipIsDiagnosedFromItsHeader) {
       << gz;
 }
 
+// A file given alone (tessera-info FILE, TESSERA_SCENE=FILE): any bytes of its name, a quote
+// or a Latin-1 'é' included; a raw volume alone is said to need a scene (it was a YAML error).
+TEST(VolumeFiles, AFileGivenAloneByAnyNameOrARawFileThatNeedsAScene) {
+  TempDir t("alone");
+  const Volume ref = rawReference(t);
+  for (const std::string name : {"it's.nii", "cr\xe9ne.nii"}) {
+    writeNifti(t.file(name));
+    expectSameVolume(loadVolume(loadScene(t.file(name))), ref);
+  }
+  try {
+    loadScene(t.file("ref.raw"));
+    ADD_FAILURE() << "a raw file alone loaded";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("ref.raw: not a scene file but binary data; a raw volume has no header"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("volume: {file: ref.raw, dims: [x, y, z], type: uint16}"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(VolumeFiles, TwoDimensionalNiftiIsOneSliceThick) {
   // dim[0] = 2 with dim[3] = 0, as some writers leave the axes beyond dim[0].
   TempDir t("nifti-2d");
