@@ -86,8 +86,16 @@ void Gather::dropWaiting(std::map<uint64_t, Frame>::iterator it, const std::stri
 
 size_t Gather::waitingBytes() const {
   size_t n = 0;
-  for (const auto& [frame, f] : frames_)
-    if (!f.params) n += partBytes(f);
+  for (const auto& [frame, f] : frames_) {
+    if (!f.params) {
+      n += partBytes(f);
+      continue;
+    }
+    // A newer epoch's part beside older FrameParams waits for its own, within the same budget
+    // (else a part of an epoch that never comes, repeated per brick, held memory unbounded).
+    for (const auto& [key, piece] : f.pieces) n += piece.epoch != f.params->epoch ? piece.pixels.size() : 0;
+    for (const auto& [key, fb] : f.framebuffers) n += fb.epoch != f.params->epoch ? fb.pixels.size() : 0;
+  }
   return n;
 }
 
@@ -184,7 +192,15 @@ std::string Gather::addFramebuffer(proto::Framebuffer fb) {
 
 std::optional<std::pair<uint64_t, uint32_t>> Gather::awaited() const {
   for (const auto& [frame, f] : frames_) {
-    if (!f.params || !allOfEpoch(f, f.params->epoch)) continue;
+    if (!f.params) continue;
+    // A part of a newer epoch holds the frame until that epoch's FrameParams come, at once when
+    // it raced them: if they never come, its sender is the one to name (not this compositor).
+    if (!allOfEpoch(f, f.params->epoch)) {
+      for (const auto& [brick, piece] : f.pieces)
+        if (piece.epoch != f.params->epoch) return std::make_pair(frame, piece.renderer);
+      for (const auto& [renderer, fb] : f.framebuffers)
+        if (fb.epoch != f.params->epoch) return std::make_pair(frame, fb.renderer);
+    }
     if (const proto::SortLastWork* work = f.params->sortLast()) {
       const bool mine = std::any_of(f.params->regions.begin(), f.params->regions.end(),
                                     [&](const auto& reg) { return reg.compositor == rank_; });

@@ -261,5 +261,27 @@ TEST(Gather, PartsWithoutParamsAreBoundedByMembershipAndBytes) {
   EXPECT_EQ(g.addPiece(piece(2, 5, 1)), "");
 }
 
+// Found by review: a part of an epoch whose FrameParams never come, sent for a frame that has
+// older FrameParams, was held outside the budget (one per brick number, unbounded), and the
+// frame it held back named nobody, so the master dropped this compositor.
+TEST(Gather, NewerEpochPartsBesideOlderParamsAreBudgetedAndTheirSenderNamed) {
+  const size_t one = piece(0, 0).pixels.size();
+  Gather g(0, 3 * one);
+  ASSERT_EQ(g.addParams(params(0, 2)), "");
+  ASSERT_EQ(g.addPiece(piece(0, 0)), "");
+  ASSERT_EQ(g.addPiece(piece(0, 1)), "");
+  Piece stray = piece(0, 1, 5);
+  stray.renderer = 1;
+  EXPECT_EQ(g.addPiece(stray), "") << "it may have raced its FrameParams";
+  EXPECT_EQ(g.waitingBytes(), one);
+  EXPECT_FALSE(g.pop());
+  ASSERT_TRUE(g.awaited());
+  EXPECT_EQ(*g.awaited(), std::make_pair(uint64_t{0}, uint32_t{1})) << "the stray part's sender is named";
+  int refused = 0;
+  for (uint32_t b = 2; b < 50; ++b) refused += !g.addPiece(piece(0, b, 5)).empty();
+  EXPECT_EQ(g.waitingBytes(), 3 * one) << "held within the budget";
+  EXPECT_EQ(refused, 48 - 2);
+}
+
 }  // namespace
 }  // namespace tessera::compositor
