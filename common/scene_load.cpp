@@ -29,13 +29,17 @@ Scene loadScene(const std::string& path) {
   if (!in) throw SceneError(path + ": cannot open scene file");
   std::stringstream ss;
   ss << in.rdbuf();
-  // A raw volume given alone: its bytes are no scene, and it has no header to say what it holds.
-  if (ss.str().find('\0') != std::string::npos)
+  std::filesystem::path base = std::filesystem::path(path).parent_path();
+  Scene s;
+  try {
+    s = parseScene(ss.str(), base.empty() ? "." : base.string(), path);
+  } catch (const SceneError&) {
+    // A raw volume given alone: its bytes are no scene (a UTF-16 scene, NULs and all, parses).
+    if (ss.str().find('\0') == std::string::npos) throw;
     throw SceneError(path + ": not a scene file but binary data; a raw volume has no header to say its size and type, "
                             "so give them in a scene file: volume: {file: " +
                      std::filesystem::path(path).filename().string() + ", dims: [x, y, z], type: uint16}");
-  std::filesystem::path base = std::filesystem::path(path).parent_path();
-  Scene s = parseScene(ss.str(), base.empty() ? "." : base.string(), path);
+  }
   s.path = path;
   return s;
 }

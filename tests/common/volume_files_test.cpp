@@ -375,6 +375,14 @@ TEST(VolumeFiles, AFileGivenAloneByAnyNameOrARawFileThatNeedsAScene) {
     writeNifti(t.file(name));
     expectSameVolume(loadVolume(loadScene(t.file(name))), ref);
   }
+  // A scene saved as UTF-16 (Windows' "Unicode"): NULs in every character, and still a scene.
+  {
+    const std::string text = "volume: {generator: {name: hollow-shell, size: 16}}\nimage: [32, 24]\n";
+    std::string utf16 = "\xff\xfe";
+    for (char c : text) utf16 += c, utf16 += '\0';
+    std::ofstream(t.file("wide.yaml"), std::ios::binary) << utf16;
+    EXPECT_EQ(loadScene(t.file("wide.yaml")).width, 32);
+  }
   try {
     loadScene(t.file("ref.raw"));
     ADD_FAILURE() << "a raw file alone loaded";
