@@ -147,10 +147,7 @@ class RawFile {
     else readPlain(at, dst, count * ts_);
     samples_read += count * ts_;
     if (direct) return checkFinite(first, count, out);
-    samples::Scaling sc{spec_.slope, spec_.inter, spec_.big_endian};
-    if (std::isnan(ref_)) ref_ = samples::firstValue(spec_.type, buf_.data(), sc);
-    sc.ref = ref_;
-    samples::convertAll(spec_.type, buf_.data(), count, sc, out);
+    convertRelative({spec_.slope, spec_.inter, spec_.big_endian}, count, out);
     checkFinite(first, count, out);
   }
 
@@ -165,14 +162,18 @@ class RawFile {
       slices_->read(z, in, n, buf_.data());
       bytes_inflated += slices_->decoded_bytes - decoded;
       const SliceFile& s = spec_.slices[z];
-      samples::Scaling sc{s.slope, s.inter, false};
-      if (std::isnan(ref_)) ref_ = samples::firstValue(spec_.type, buf_.data(), sc);
-      sc.ref = ref_;
-      samples::convertAll(spec_.type, buf_.data(), n, sc, out);
+      convertRelative({s.slope, s.inter, false}, n, out);
       samples_read += n * ts_;
       checkFinite(first, n, out);
       first += n, count -= n, out += n;
     }
+  }
+
+  // n samples of buf_ to floats, relative to the reference value (the first sets an unset one).
+  void convertRelative(samples::Scaling sc, size_t n, float* out) {
+    if (std::isnan(ref_)) ref_ = samples::firstValue(spec_.type, buf_.data(), sc);
+    sc.ref = ref_;
+    samples::convertAll(spec_.type, buf_.data(), n, sc, out);
   }
 
   // One vector test over the piece; the voxel is looked for only when there is one.

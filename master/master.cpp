@@ -120,9 +120,7 @@ class Master {
 
   void onHello(const std::string& identity, const proto::Hello& h) {
     // A stage of another farm, or of another scene: no rank, no work, and it is told why.
-    std::string why = helloRefusal(h, opt_.run, scene_);
-    if (why.empty()) why = advertiseRefusal(h, opt_.endpoints.base);
-    if (!why.empty()) {
+    if (const std::string why = helloRefusal(h, opt_.run, scene_, opt_.endpoints.base); !why.empty()) {
       refuse(why);
       return sendTo(identity, proto::encode(proto::Shutdown{why, opt_.run}, kMasterRank));
     }

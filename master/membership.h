@@ -85,9 +85,11 @@ class Membership {
 // The alive renderers and compositors, as the plans take them.
 struct Workers;
 Workers aliveWorkers(const Membership& members);
-// Why a stage's Hello may not join this farm: another run (TESSERA_RUN), or another scene (its
-// sceneIdentity against the master's, naming the first line that differs); "" when it may.
-std::string helloRefusal(const proto::Hello& h, const std::string& run, const std::string& scene);
+// Why a stage's Hello may not join this farm: another run (TESSERA_RUN), another scene (its
+// sceneIdentity against the master's, naming the first line that differs), or an address its
+// peers cannot reach (advertiseRefusal, on the farm's `endpoint_base`); "" when it may.
+std::string helloRefusal(const proto::Hello& h, const std::string& run, const std::string& scene,
+                         const std::string& endpoint_base);
 // Why the address a stage advertises is one its peers cannot connect to (a compositor's host
 // on a tcp farm, a renderer's swap socket), naming it: such a stage would make its healthy
 // peers fail every frame. "" when it is fine.

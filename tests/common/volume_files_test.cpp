@@ -18,59 +18,14 @@
 #include "tests/common/load_error.h"
 #include "tests/common/raw_spec.h"
 #include "tests/common/temp_dir.h"
+#include "tests/common/volume_files_util.h"
 
 namespace tessera {
 namespace {
 
 using test::TempDir;
+using namespace test::files;
 
-constexpr int kNx = 13, kNy = 11, kNz = 7;
-const std::array<double, 3> kSpacing{0.75, 1.25, 2.5};
-
-// Signed samples with a different value at every voxel, so any axis mix-up shows.
-std::vector<int16_t> samples() {
-  std::vector<int16_t> v((size_t)kNx * kNy * kNz);
-  for (int z = 0; z < kNz; ++z)
-    for (int y = 0; y < kNy; ++y)
-      for (int x = 0; x < kNx; ++x) v[x + kNx * (y + kNy * z)] = (int16_t)(x * 3 - y * 40 + z * 500 - 900);
-  return v;
-}
-
-Volume fromScene(const std::string& yaml, const std::string& dir, const VoxelBox* box = nullptr) {
-  const Scene s = parseScene(yaml, dir, "s.yaml");
-  return box ? loadVolume(s, *box) : loadVolume(s);
-}
-
-// The same samples as a raw int16 file: the reference every format must reproduce.
-Volume rawReference(const TempDir& t) {
-  const auto v = samples();
-  const auto spec = test::rawSpec(t.write("ref.raw", v.data(), v.size() * 2), {kNx, kNy, kNz}, VoxelType::Int16,
-                                  kSpacing, false, {0, 0});
-  return loadRawVolume(spec);
-}
-
-void expectSameVolume(const Volume& a, const Volume& ref) {
-  EXPECT_EQ(a.dims, ref.dims);
-  EXPECT_EQ(a.spacing, ref.spacing);
-  EXPECT_EQ(a.data_range, ref.data_range);
-  EXPECT_EQ(a.values, ref.values);
-}
-
-void writeNifti(const std::string& path, double slope = 0, double inter = 0) {
-  const int64_t dims[8] = {3, kNx, kNy, kNz, 1, 1, 1, 1};
-  nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 1);
-  ASSERT_NE(nim, nullptr);
-  nim->dx = nim->pixdim[1] = kSpacing[0];
-  nim->dy = nim->pixdim[2] = kSpacing[1];
-  nim->dz = nim->pixdim[3] = kSpacing[2];
-  nim->scl_slope = slope;
-  nim->scl_inter = inter;
-  const auto v = samples();
-  std::memcpy(nim->data, v.data(), v.size() * 2);
-  ASSERT_EQ(nifti_set_filenames(nim, path.c_str(), 0, 1), 0);
-  nifti_image_write(nim);
-  nifti_image_free(nim);
-}
 
 TEST(VolumeFiles, NiftiPlainAndGzippedLoadAsTheRawFileOfTheSameSamples) {
   TempDir t("nifti");
@@ -333,66 +288,6 @@ TEST(VolumeFiles, FilesOtherToolsWriteLoadAsTheRawFile) {
                                        "encoding: raw\nendian: little\ndata file: ref.raw\n";
   EXPECT_EQ(readVolumeHeader(t.file("nan.nhdr")).spacing, (std::array<double, 3>{0.75, 1.25, 1}));
   expectSameVolume(fromScene("volume: {file: nan.nhdr, spacing: [0.75, 1.25, 2.5]}\n", t.path.string()), ref);
-}
-
-// Found by review: an .img with no .hdr beside it (a raw dump named so) was taken for NIfTI's
-// and refused; the .img of a pair with a bad header was diagnosed from the .img's bytes; a
-// corrupt gzip header was "only 0 bytes".
-TEST(VolumeFiles, AnImgAloneIsRawAndAPairOrGzipIsDiagnosedFromItsHeader) {
-  TempDir t("img");
-  const Volume ref = rawReference(t);
-  std::filesystem::copy_file(t.file("ref.raw"), t.file("dump.img"));
-  expectSameVolume(fromScene("volume: {file: dump.img, dims: [13, 11, 7], type: int16, spacing: [0.75, 1.25, 2.5]}\n",
-                             t.path.string()),
-                   ref);
-  writeNifti(t.file("pair.hdr"));
-  expectSameVolume(fromScene("volume: {file: pair.img}\n", t.path.string()), ref);
-  {
-    std::fstream h(t.file("pair.hdr"), std::ios::in | std::ios::out | std::ios::binary);
-    h.seekp(40);  // dim[0]
-    const int16_t nine = 9;
-    h.write(reinterpret_cast<const char*>(&nine), 2);
-  }
-  const std::string pair = loadError("volume: {file: pair.img}\n", t.path.string());
-  EXPECT_NE(pair.find("pair.img: not a readable NIfTI file: pair.hdr: dim[0] = 9"), std::string::npos) << pair;
-  writeNifti(t.file("bad.nii.gz"));
-  {
-    std::fstream g(t.file("bad.nii.gz"), std::ios::in | std::ios::out | std::ios::binary);
-    g.seekp(3);  // the gzip header's flags: reserved bits set
-    g.put((char)0xe0);
-  }
-  const std::string gz = loadError("volume: {file: bad.nii.gz}\n", t.path.string());
-  EXPECT_NE(gz.find("bad.nii.gz: not a readable NIfTI file: its gzip stream is corrupt or cut short"), std::string::npos)
-      << gz;
-}
-
-// A file given alone (tessera-info FILE, TESSERA_SCENE=FILE): any bytes of its name, a quote
-// or a Latin-1 'é' included; a raw volume alone is said to need a scene (it was a YAML error).
-TEST(VolumeFiles, AFileGivenAloneByAnyNameOrARawFileThatNeedsAScene) {
-  TempDir t("alone");
-  const Volume ref = rawReference(t);
-  for (const std::string name : {"it's.nii", "cr\xe9ne.nii"}) {
-    writeNifti(t.file(name));
-    expectSameVolume(loadVolume(loadScene(t.file(name))), ref);
-  }
-  // A scene saved as UTF-16 (Windows' "Unicode"): NULs in every character, and still a scene.
-  {
-    const std::string text = "volume: {generator: {name: hollow-shell, size: 16}}\nimage: [32, 24]\n";
-    std::string utf16 = "\xff\xfe";
-    for (char c : text) utf16 += c, utf16 += '\0';
-    std::ofstream(t.file("wide.yaml"), std::ios::binary) << utf16;
-    EXPECT_EQ(loadScene(t.file("wide.yaml")).width, 32);
-  }
-  try {
-    loadScene(t.file("ref.raw"));
-    ADD_FAILURE() << "a raw file alone loaded";
-  } catch (const SceneError& e) {
-    EXPECT_NE(std::string(e.what()).find("ref.raw: not a scene file but binary data; a raw volume has no header"),
-              std::string::npos)
-        << e.what();
-    EXPECT_NE(std::string(e.what()).find("volume: {file: ref.raw, dims: [x, y, z], type: uint16}"), std::string::npos)
-        << e.what();
-  }
 }
 
 TEST(VolumeFiles, TwoDimensionalNiftiIsOneSliceThick) {

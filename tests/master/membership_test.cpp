@@ -190,11 +190,11 @@ TEST(HelloRefusal, AnotherSceneIsNamedByItsFirstDifferingLine) {
   const Scene master = parseScene(text, a);
   const std::string ours = sceneIdentity(master);
   proto::Hello h{Role::Renderer, 77, "", "run", ours};
-  EXPECT_EQ(helloRefusal(h, "run", ours), "");
+  EXPECT_EQ(helloRefusal(h, "run", ours, "ipc:///tmp/farm"), "");
   Scene elsewhere = parseScene(text + "camera: {eye: [0, 0, 5], target: [0, 0, 0], up: [0, 1, 0], fov: 20}\nquality: fast\norbit: {frames: 3}\n",
                                b);
   h.scene = sceneIdentity(elsewhere);
-  EXPECT_EQ(helloRefusal(h, "run", ours), "") << h.scene;
+  EXPECT_EQ(helloRefusal(h, "run", ours, "ipc:///tmp/farm"), "") << h.scene;
   auto replaced = [&](const std::string& from, const std::string& to) {
     std::string t = text;
     return t.replace(t.find(from), from.size(), to);
@@ -202,16 +202,16 @@ TEST(HelloRefusal, AnotherSceneIsNamedByItsFirstDifferingLine) {
   for (const std::string& other : {replaced("viridis", "grayscale"), replaced("head.raw", "other.raw"),
                                    text + "image: [256, 128]\n", text + "blend: maximum\n", text + "shading: true\n"}) {
     h.scene = sceneIdentity(parseScene(other, a));
-    const std::string why = helloRefusal(h, "run", ours);
+    const std::string why = helloRefusal(h, "run", ours, "ipc:///tmp/farm");
     EXPECT_NE(why.find("the renderer (pid 77) read another scene than the master: line "), std::string::npos)
         << other << ": " << why;
   }
   h.scene = sceneIdentity(parseScene(text + "image: [256, 128]\n", a));
-  EXPECT_NE(helloRefusal(h, "run", ours).find("'image: [256, 128]' there and 'image: [512, 512]' here"),
+  EXPECT_NE(helloRefusal(h, "run", ours, "ipc:///tmp/farm").find("'image: [256, 128]' there and 'image: [512, 512]' here"),
             std::string::npos)
-      << helloRefusal(h, "run", ours);
+      << helloRefusal(h, "run", ours, "ipc:///tmp/farm");
   h.run = "other";
-  EXPECT_NE(helloRefusal(h, "run", ours).find("this farm is run 'run', the renderer (pid 77) is of run 'other'"),
+  EXPECT_NE(helloRefusal(h, "run", ours, "ipc:///tmp/farm").find("this farm is run 'run', the renderer (pid 77) is of run 'other'"),
             std::string::npos);
   fs::remove_all(root);
 }
@@ -263,9 +263,9 @@ TEST(HelloRefusal, FilesByNameAndHeaderAndLongLinesWhereTheyDiffer) {
   raw.dims[2] = 33;
   s.volume = raw;
   proto::Hello h{Role::Compositor, 5, "", "", sceneIdentity(s)};
-  EXPECT_NE(helloRefusal(h, "", ours).find("'header: {dims: [64, 64, 33], type: int16, spacing: [1, 1, 1]}' there"),
+  EXPECT_NE(helloRefusal(h, "", ours, "ipc:///tmp/farm").find("'header: {dims: [64, 64, 33], type: int16, spacing: [1, 1, 1]}' there"),
             std::string::npos)
-      << helloRefusal(h, "", ours);
+      << helloRefusal(h, "", ours, "ipc:///tmp/farm");
   raw.format = VolumeFormat::Dicom, raw.file = "/data/ct/";
   s.volume = raw;
   const std::string folder = sceneIdentity(s);
@@ -273,11 +273,11 @@ TEST(HelloRefusal, FilesByNameAndHeaderAndLongLinesWhereTheyDiffer) {
   s.volume = raw;
   EXPECT_EQ(sceneIdentity(s), folder);
   h.scene = ours + "extra: 1\n";  // one text longer than the other
-  EXPECT_NE(helloRefusal(h, "", ours).find("is 'extra: 1' there and (none) here"), std::string::npos)
-      << helloRefusal(h, "", ours);
+  EXPECT_NE(helloRefusal(h, "", ours, "ipc:///tmp/farm").find("is 'extra: 1' there and (none) here"), std::string::npos)
+      << helloRefusal(h, "", ours, "ipc:///tmp/farm");
   const std::string a(150, 'a');
   h.scene = "x: 1\n" + a + "Y\n";
-  const std::string why = helloRefusal(h, "", "x: 1\n" + a + "X\n");
+  const std::string why = helloRefusal(h, "", "x: 1\n" + a + "X\n", "ipc:///tmp/farm");
   EXPECT_NE(why.find("line 2 "), std::string::npos) << why;
   EXPECT_NE(why.find("'..." + std::string(40, 'a') + "Y' there and '..." + std::string(40, 'a') + "X' here"),
             std::string::npos)
@@ -305,6 +305,7 @@ TEST(AdvertiseRefusal, AnAddressPeersCannotReachIsRefusedAndNamed) {
   }
   h.endpoint = "tcp://10.0.0.5:40123";
   EXPECT_NE(advertiseRefusal(h, ipc).find("is not a ipc:// endpoint"), std::string::npos) << advertiseRefusal(h, ipc);
+  EXPECT_EQ(helloRefusal(h, "run", "", ipc), advertiseRefusal(h, ipc)) << "the master's one check of a Hello says it";
   h.endpoint = "ipc:///tmp/farm/renderer-1";
   EXPECT_EQ(advertiseRefusal(h, ipc), "");
   // A compositor says its host; on an ipc farm its host is not used.
