@@ -41,7 +41,7 @@ struct RangeAdvice {
 // apart (beyond an empty eighth of the span: under 0.1% of the voxels, or one value under
 // half of them, at either end) and the outermost 0.01% of either tail are left out; nullopt
 // unless it leaves out values apart or is under half the span. Nothing for data of 16
-// values or fewer (labels).
+// values or fewer (labels: integers whose bins are one value wide).
 std::optional<RangeAdvice> suggestedRange(const ValueHistogram& fine);
 
 }  // namespace tessera

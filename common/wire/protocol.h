@@ -175,8 +175,8 @@ struct Shutdown {                                                          // ma
 //   bricks.lo, bricks.hi       3x i32   24    per axis 0 <= lo < hi <= 65536
 //   order                      u32      4     count == bricks count, then:
 //   order[i]                   i32      4     together a permutation of 0..count-1
-//   swap                       u32      4     count 0 (direct send) or == bricks count, a power
-//                                             of two >= 2, then per renderer (>= 9 bytes):
+//   swap                       u32      4     count 0 (direct send) or == bricks count (any count:
+//                                             radix-k, swap_plan.h), then per renderer (>= 9 bytes):
 //   swap.renderer              u32      4     each renderer of `bricks` exactly once
 //   swap.endpoint              str      4+n   n >= 1: where that renderer takes swap pieces
 // sort-first (mode 2):

@@ -84,6 +84,23 @@ TEST(SuggestedRange, OutliersAndThinTailsAreLeftOut) {
   EXPECT_EQ(t->why, "the rest are a thin tail");
 }
 
+// Hot voxels so far above the rest that the data fills only a few of the bins: not labels
+// (found by review: 5 voxels at 60000 over data in 0..100 got no advice, in 0..300 they did).
+TEST(SuggestedRange, HotVoxelsFarAboveAFewBinsOfDataAreLeftOut) {
+  for (bool integral : {false, true}) {
+    ValueHistogram h(0, 60000, 4096, integral);
+    for (int v = 0; v < 100; ++v)
+      for (int k = 0; k < 300; ++k) h.add(v + (integral ? 0 : k / 300.0));
+    for (int k = 0; k < 5; ++k) h.add(60000);
+    const auto a = suggestedRange(h);
+    ASSERT_TRUE(a) << "integral " << integral;
+    EXPECT_EQ(a->range[0], 0);
+    EXPECT_GE(a->range[1], 100) << "the data's bins: 60000/4096 wide";
+    EXPECT_LE(a->range[1], 115);
+    EXPECT_NE(a->why.find("above the rest, at 599"), std::string::npos) << a->why;  // the top bin, 59985.35 .. 60000
+  }
+}
+
 // Gaps in real data (bone far above soft tissue), data that fills its span, and labels.
 TEST(SuggestedRange, DataOfItsOwnIsLeftAlone) {
   ValueHistogram gap = fine(-1000, 1500);
