@@ -182,9 +182,12 @@ int main(int argc, char** argv) {
     if (const int old = tessera::launcher::removeOldFrames(out_folder); old > 0)
       log->info("removed {} frame files of an earlier run from {}", old, out_folder.string());
     if (!folder.empty()) log->info("run {}: sockets in {}", run, folder.string());
-    const int rc = tessera::launcher::launch(project, launch_options);
+    // Removed at the end only if this launch made it: a folder already there may be a live
+    // farm's of the same TESSERA_RUN (refused at its endpoints), whose sockets must stay.
     std::error_code ignored;
-    if (!folder.empty()) std::filesystem::remove_all(folder, ignored);  // this run's own: nobody else's
+    const bool own_folder = !folder.empty() && std::filesystem::create_directories(folder, ignored);
+    const int rc = tessera::launcher::launch(project, launch_options);
+    if (own_folder) std::filesystem::remove_all(folder, ignored);
     return rc;
   } catch (const std::exception& e) {
     log->error("{}", e.what());

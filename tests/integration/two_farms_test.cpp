@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <unistd.h>
 #include <future>
 #include <regex>
 #include <thread>
@@ -18,7 +19,7 @@ using namespace std::chrono_literals;
 // The folder tessera-up said it put this run's sockets in ("" if it said none).
 std::string socketFolder(const std::string& output) {
   std::smatch m;
-  return std::regex_search(output, m, std::regex("run [0-9a-f]+: sockets in (\\S+)")) ? m[1].str() : "";
+  return std::regex_search(output, m, std::regex("run \\S+: sockets in (\\S+)")) ? m[1].str() : "";
 }
 
 // Whether `output` has a line "<endpoints>/<socket> is in use by a live farm (run '...".
@@ -83,6 +84,32 @@ TEST(TwoFarms, AFarmOnTheEndpointsOfALiveFarmRefusesToStartAndTheLiveOneGoesOn) 
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(a.path() / "sockets")) left.push_back(e.path().filename().string());
   EXPECT_TRUE(left.empty()) << "left in the socket folder: " << left.size() << " entries, first " << left.front();
+}
+
+// A second farm given the live one's TESSERA_RUN (so the same default socket folder) is
+// refused, and its failed start must not take that folder away: it did, and a third farm of
+// the run then started on the live farm's endpoints and took its restarted stages (found by
+// review).
+TEST(TwoFarms, AFailedStartOfTheSameRunLeavesTheLiveFarmsSockets) {
+  FarmDir a("run-a"), b("run-b");
+  const int frames = 400;
+  const auto scene = a.writeScene(frames, 40, 96, 80);
+  const std::string run = "--env TESSERA_RUN=shared" + std::to_string(::getpid());
+  auto run_a = std::async(std::launch::async, [&] { return a.runFarm(scene, 1, 1, frames, 180, run, "default"); });
+  bool seen = false;
+  for (int i = 0; i < 1500 && !(seen = fs::exists(a.frame(1))); ++i) std::this_thread::sleep_for(20ms);
+  ASSERT_TRUE(seen) << "farm A produced no frame\n" << a.farmLog();
+  const std::string folder = socketFolder(a.farmLog());
+  ASSERT_FALSE(folder.empty()) << a.farmLog();
+  const auto rb = b.runFarm(b.writeScene(5, 24, 64, 48), 1, 1, 5, 60, run, "default");
+  const bool a_still_running = !fs::exists(a.frame(frames - 1));
+  EXPECT_NE(rb.exit_code, 0) << rb.output;
+  EXPECT_TRUE(saysInUse(rb.output, "ipc://" + folder)) << rb.output;
+  EXPECT_TRUE(fs::exists(folder)) << "the refused farm removed the live farm's socket folder " << folder;
+  const auto ra = run_a.get();
+  ASSERT_EQ(ra.exit_code, 0) << ra.output;
+  ASSERT_TRUE(a_still_running) << "farm A was done before B tried: the test proves nothing";
+  EXPECT_FALSE(fs::exists(folder)) << "farm A left its socket folder";
 }
 
 // Two farms writing one output folder would overwrite each other's frames and splice their
