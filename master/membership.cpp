@@ -182,8 +182,9 @@ std::string lineAt(const std::string& text, size_t at, size_t col) {
 std::string helloRefusal(const proto::Hello& h, const std::string& run, const std::string& scene,
                          const std::string& endpoint_base) {
   if (h.run != run)
-    return fmt::format("this farm is run '{}', the {} (pid {}) is of run '{}'; check TESSERA_ENDPOINTS", run,
-                       roleName(h.role), h.pid, h.run);
+    return fmt::format("this farm is run '{}', the {} (pid {}) is of run '{}'; give every stage of the farm the same "
+                       "TESSERA_RUN, or check TESSERA_ENDPOINTS if it is another farm's stage",
+                       run, roleName(h.role), h.pid, h.run);
   if (h.scene == scene) return advertiseRefusal(h, endpoint_base);
   size_t line = 1, at = 0, i = 0;  // the first line that differs, where it starts, the first differing byte
   for (; i < std::min(h.scene.size(), scene.size()) && h.scene[i] == scene[i]; ++i)

@@ -54,8 +54,7 @@ class Stage {
                                                      opt_.advertise_host);
       link_.setAdvertised(swap_endpoint_);
     } catch (const std::exception& e) {
-      spdlog::warn("binary swap unavailable: cannot bind {} ({}); this renderer takes direct-send frames only "
-                   "(set TESSERA_BIND_HOST to an address of this host)", where, e.what());
+      spdlog::warn("binary swap unavailable: {}; this renderer takes direct-send frames only", e.what());
       swap_.reset();
     }
   }

@@ -15,6 +15,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "common/net/endpoints.h"
 #include "common/net/transport.h"
 
 namespace tessera {
@@ -186,10 +187,21 @@ bool setupCurve(zmq::context_t& ctx, const std::string& base_endpoint) {
 std::mutex g_bound_mu;
 std::vector<std::pair<std::string, ino_t>> g_bound;
 
-void bindTo(zmq::socket_t& s, const std::string& endpoint) {
+void bindTo(zmq::socket_t& s, const std::string& wanted) {
+  const std::string endpoint = bindableEndpoint(wanted);
   claimIpcEndpoint(endpoint);
   if (g_curve && endpoint.rfind("tcp://", 0) == 0) g_curve->makeServer(s);
-  s.bind(endpoint);
+  try {
+    s.bind(endpoint);
+  } catch (const zmq::error_t& e) {
+    // ZeroMQ's own words name neither the address nor what to change.
+    const std::string as = endpoint == wanted ? wanted : wanted + " (" + endpoint + ")";
+    std::string hint;
+    if (e.num() == EADDRINUSE) hint = ": the port is taken, by another farm or program (TESSERA_ENDPOINTS chooses the ports)";
+    else if (e.num() == EADDRNOTAVAIL || e.num() == ENODEV)
+      hint = ": not an address of this host (TESSERA_BIND_HOST: this host's address, or 0.0.0.0 for all)";
+    throw std::runtime_error("cannot bind " + as + ": " + e.what() + hint);
+  }
   struct stat st {};
   if (endpoint.rfind("ipc://", 0) == 0 && stat(endpoint.c_str() + 6, &st) == 0) {
     std::lock_guard lock(g_bound_mu);

@@ -1,6 +1,7 @@
 #include "common/net/endpoints.h"
 
 #include <arpa/inet.h>
+#include <net/if.h>
 #include <netdb.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -144,6 +145,28 @@ std::string Endpoints::bind(const std::string& connect_form) const {
   if (!startsWith(connect_form, "tcp://")) return connect_form;
   auto t = parseTcp(connect_form);
   return "tcp://" + envOr("TESSERA_BIND_HOST", t.host) + ":" + std::to_string(t.port);
+}
+
+std::string bindableEndpoint(const std::string& endpoint) {
+  if (!startsWith(endpoint, "tcp://")) return endpoint;
+  const size_t colon = endpoint.rfind(':');
+  const std::string host = endpoint.substr(6, colon - 6);
+  if (host == "*" || host.empty() || host.front() == '[' || if_nametoindex(host.c_str()) != 0) return endpoint;
+  in_addr numeric{};
+  if (inet_pton(AF_INET, host.c_str(), &numeric) == 1) return endpoint;
+  addrinfo hints{};
+  hints.ai_family = AF_INET;
+  hints.ai_socktype = SOCK_STREAM;
+  addrinfo* found = nullptr;
+  const int rc = getaddrinfo(host.c_str(), nullptr, &hints, &found);
+  if (rc != 0 || !found)
+    throw std::runtime_error("cannot bind " + endpoint + ": '" + host + "' is neither an address nor an interface, and " +
+                             "as a host name it does not resolve here (" + gai_strerror(rc) + "); set TESSERA_BIND_HOST " +
+                             "to this host's address or 0.0.0.0");
+  char text[INET_ADDRSTRLEN] = {};
+  inet_ntop(AF_INET, &reinterpret_cast<sockaddr_in*>(found->ai_addr)->sin_addr, text, sizeof text);
+  freeaddrinfo(found);
+  return "tcp://" + std::string(text) + endpoint.substr(colon);
 }
 
 std::string Endpoints::localAddressTowardMaster() const {

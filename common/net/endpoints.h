@@ -49,6 +49,11 @@ std::string farmRun();
 // IPv6 address in brackets); `endpoint` on the transport of the farm's `base`.
 std::string hostProblem(const std::string& host);
 std::string peerEndpointProblem(const std::string& endpoint, const std::string& base);
+// A tcp bind endpoint as ZeroMQ can bind it: ZeroMQ binds addresses and interface names
+// only, so a host name (Slurm's NodeAddr, `tcp://master:5550` on the master's own host) is
+// resolved to its IPv4 address here; anything else is returned unchanged. Throws naming the
+// endpoint when the name does not resolve.
+std::string bindableEndpoint(const std::string& endpoint);
 // The environment variable `name`, or `fallback` when it is unset or empty.
 std::string envOr(const char* name, const std::string& fallback);
 

@@ -125,6 +125,29 @@ TEST(Curve, KeysBeingCreatedAreNeverReadHalfWritten) {
   fs::remove_all(root);
 }
 
+// ZeroMQ's "Address already in use" named neither the address nor what to change (found by
+// review: two farms on one port block).
+TEST(Curve, ABindThatFailsNamesItsEndpoint) {
+  zmq::context_t ctx;
+  zmq::socket_t first(ctx, zmq::socket_type::pull), second(ctx, zmq::socket_type::pull);
+  first.set(zmq::sockopt::linger, 0), second.set(zmq::sockopt::linger, 0);
+  const std::string taken = loopbackEndpoint(first);
+  try {
+    bindTo(second, taken);
+    ADD_FAILURE() << "bound a taken port";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot bind " + taken + ": "), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("the port is taken"), std::string::npos) << e.what();
+  }
+  const std::string named = "tcp://localhost:" + taken.substr(taken.rfind(':') + 1);
+  try {
+    bindTo(second, named);
+    ADD_FAILURE() << "bound a taken port by name";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot bind " + named + " (" + taken + ")"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Curve, OnlyEndpointsThatLeaveTheHostNeedIt) {
   EXPECT_FALSE(endpointLeavesHost("ipc:///tmp/farm/master-pub"));
   EXPECT_FALSE(endpointLeavesHost("inproc://farm-display"));

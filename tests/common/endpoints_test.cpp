@@ -47,5 +47,22 @@ TEST(Endpoints, LocalAddressTowardTheMaster) {
   EXPECT_THROW(makeEndpoints("inproc://x").localAddressTowardMaster(), std::invalid_argument);
 }
 
+// ZeroMQ binds addresses and interface names only: a host name (Slurm's NodeAddr is the
+// node's name unless set) failed with a bare "No such device" (found by review).
+TEST(Endpoints, AHostNameIsResolvedBeforeItIsBound) {
+  EXPECT_EQ(bindableEndpoint("tcp://localhost:5550"), "tcp://127.0.0.1:5550");
+  EXPECT_EQ(bindableEndpoint("tcp://localhost:*"), "tcp://127.0.0.1:*");
+  for (const char* kept : {"tcp://10.1.2.3:5550", "tcp://0.0.0.0:*", "tcp://*:5550", "tcp://lo:5550", "tcp://[::1]:5550",
+                           "ipc:///tmp/x/master-pub", "inproc://farm"})
+    EXPECT_EQ(bindableEndpoint(kept), kept);
+  try {
+    bindableEndpoint("tcp://no-such-host.invalid:5550");
+    ADD_FAILURE() << "an unknown host was bound";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot bind tcp://no-such-host.invalid:5550"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("TESSERA_BIND_HOST"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace tessera
