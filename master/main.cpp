@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   setupLogging("master");
   CLI::App app{"Tessera master: drives frames through the render farm"};
   StageArgs args;
+  args.makes_keys = true;  // the farm key is the master's: the other stages wait for it
   std::string codec = "lzo";
   master::MasterOptions opt;
   addStageArgs(app, args, "scene file (default: the built-in scene)");

@@ -7,6 +7,8 @@
 #include <array>
 #include <cerrno>
 #include <cstdlib>
+#include <cstring>
+#include <chrono>
 #include <memory>
 #include <mutex>
 #include <filesystem>
@@ -94,6 +96,63 @@ FarmKeys loadOrCreateFarmKeys(const std::string& dir) {
   return readFarmKeys(dir);
 }
 
+FarmKeys awaitFarmKeys(const std::string& dir, double wait_s) {
+  const std::filesystem::path key = std::filesystem::path(dir) / "farm.key";
+  const auto start = std::chrono::steady_clock::now();
+  for (bool said = false; !std::filesystem::exists(key); said = true) {
+    if (!said)
+      spdlog::info("no farm key in {}/ yet: waiting up to {:.0f} s for the master to create it (on another host than "
+                   "the master's, copy its keys/ folder here and point TESSERA_KEYS at it)", dir, wait_s);
+    if (std::chrono::steady_clock::now() - start > std::chrono::duration<double>(wait_s))
+      throw std::runtime_error("no farm key in " + key.string() + " after " + std::to_string((int)wait_s) +
+                               " s: copy the master's keys/ folder to this host (tessera-keys DIR makes one) and " +
+                               "point TESSERA_KEYS at it");
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return readFarmKeys(dir);
+}
+
+HandshakeWatch::HandshakeWatch(zmq::context_t& ctx, zmq::socket_t& client)
+    : client_(client), pair_(ctx, zmq::socket_type::pair) {
+  static std::atomic<int> next{0};
+  const std::string at = "inproc://tessera-handshake-" + std::to_string(next++);
+  const int events = ZMQ_EVENT_HANDSHAKE_SUCCEEDED | ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL |
+                     ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL | ZMQ_EVENT_HANDSHAKE_FAILED_AUTH;
+  if (zmq_socket_monitor(client_.handle(), at.c_str(), events) != 0) throw zmq::error_t();
+  pair_.set(zmq::sockopt::linger, 0);
+  pair_.connect(at);
+}
+
+HandshakeWatch::~HandshakeWatch() { zmq_socket_monitor(client_.handle(), nullptr, 0); }
+
+std::string HandshakeWatch::failing(int failures) {
+  zmq::message_t event, address;
+  while (pair_.recv(event, zmq::recv_flags::dontwait)) {
+    if (event.more()) (void)pair_.recv(address);
+    if (event.size() < 6) continue;
+    uint16_t what = 0;
+    uint32_t value = 0;
+    std::memcpy(&what, event.data(), 2);
+    std::memcpy(&value, static_cast<const char*>(event.data()) + 2, 4);
+    if (what == ZMQ_EVENT_HANDSHAKE_SUCCEEDED) failed_ = 0, mechanism_ = false;
+    else ++failed_, mechanism_ = mechanism_ || (what == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL &&
+                                                value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH);
+  }
+  // A mechanism mismatch is said once: ZeroMQ does not try that connection again.
+  if (!mechanism_ && failed_ < failures) return "";
+  int mechanism = ZMQ_NULL;
+  size_t size = sizeof mechanism;
+  zmq_getsockopt(client_.handle(), ZMQ_MECHANISM, &mechanism, &size);
+  const bool curve = mechanism == ZMQ_CURVE;
+  if (mechanism_)
+    return std::string("the master speaks another security mechanism: CURVE is on at one end only (TESSERA_CURVE here ") +
+           (curve ? "on" : "off") + "; it is on where endpoints leave the host, or with TESSERA_CURVE=on)";
+  return std::to_string(failed_) + " handshakes failed: the master closed them" +
+         (curve ? ", so this stage's farm key is not the master's (give every host a copy of the master's keys/ "
+                    "folder, TESSERA_KEYS)"
+                  : "");
+}
+
 bool endpointLeavesHost(const std::string& endpoint) {
   if (endpoint.rfind("tcp://", 0) != 0) return false;
   std::string host = endpoint.substr(6, endpoint.rfind(':') - 6);
@@ -164,7 +223,7 @@ void CurveAuth::makeClient(zmq::socket_t& s) const {
   s.set(zmq::sockopt::curve_secretkey, keys_.secret_z85);
 }
 
-bool setupCurve(zmq::context_t& ctx, const std::string& base_endpoint) {
+bool setupCurve(zmq::context_t& ctx, const std::string& base_endpoint, bool makes_keys) {
   const char* mode_env = std::getenv("TESSERA_CURVE");
   const std::string mode = mode_env && *mode_env ? mode_env : "auto";
   if (mode != "auto" && mode != "on" && mode != "off")
@@ -178,7 +237,7 @@ bool setupCurve(zmq::context_t& ctx, const std::string& base_endpoint) {
   }
   const char* keys_env = std::getenv("TESSERA_KEYS");
   const std::string dir = keys_env && *keys_env ? keys_env : "keys";
-  g_curve = std::make_unique<CurveAuth>(ctx, loadOrCreateFarmKeys(dir));
+  g_curve = std::make_unique<CurveAuth>(ctx, makes_keys ? loadOrCreateFarmKeys(dir) : awaitFarmKeys(dir, 120));
   spdlog::info("CURVE on: peers must hold the farm key in {}/", dir);
   return true;
 }

@@ -30,6 +30,32 @@ bool writeFarmKeys(const std::string& dir, const FarmKeys& keys);
 FarmKeys readFarmKeys(const std::string& dir);
 // The folder's keys, created on first use (the first process to start writes them).
 FarmKeys loadOrCreateFarmKeys(const std::string& dir);
+// The folder's keys once they are there: a stage on a host without them must not make a key
+// of its own (no peer would admit it), so it waits up to `wait_s` for the master to create
+// them, saying so, then throws naming the folder.
+FarmKeys awaitFarmKeys(const std::string& dir, double wait_s);
+
+// Why a CURVE client's handshakes fail, read from a ZeroMQ socket monitor. A server that holds
+// another farm key cannot open the client's first message and closes the connection before
+// any key check (so before it could log a refusal), and a server without CURVE speaks another
+// mechanism: either way the client only sees its handshakes fail, and says why.
+class HandshakeWatch {
+ public:
+  HandshakeWatch(zmq::context_t& ctx, zmq::socket_t& client);
+  ~HandshakeWatch();
+  HandshakeWatch(const HandshakeWatch&) = delete;
+  HandshakeWatch& operator=(const HandshakeWatch&) = delete;
+  // Reads the events so far (non-blocking): "" unless at least `failures` handshakes failed
+  // since the last that succeeded, or one failed for a mechanism mismatch; then what the
+  // user should check.
+  std::string failing(int failures);
+
+ private:
+  zmq::socket_t& client_;
+  zmq::socket_t pair_;
+  int failed_ = 0;
+  bool mechanism_ = false;  // a failure said the peer speaks another mechanism
+};
 
 // True when traffic to or from this endpoint may leave the machine: tcp to any host that is
 // not a loopback address or "localhost" (ipc:// and inproc:// never leave it).
@@ -58,8 +84,9 @@ class CurveAuth {
 // Process-wide CURVE, decided once by a process's main: on when TESSERA_CURVE=on, or when it
 // is unset/auto and `base_endpoint` or TESSERA_BIND_HOST leaves the host; off with
 // TESSERA_CURVE=off (logged as a warning if traffic leaves the host). Keys come from the
-// folder TESSERA_KEYS (default ./keys), created there on first use. Returns whether it is on.
-bool setupCurve(zmq::context_t& ctx, const std::string& base_endpoint);
+// folder TESSERA_KEYS (default ./keys): created there by a process that `makes_keys` (the
+// master), awaited by the others (awaitFarmKeys). Returns whether it is on.
+bool setupCurve(zmq::context_t& ctx, const std::string& base_endpoint, bool makes_keys = false);
 // Bind / connect a socket, as a CURVE server / client when CURVE is on for this process.
 void bindTo(zmq::socket_t& s, const std::string& endpoint);
 void connectTo(zmq::socket_t& s, const std::string& endpoint);

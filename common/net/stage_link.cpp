@@ -87,8 +87,15 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   };
   // 1. The master's probe proves our subscription is live before we announce ourselves.
   zmq::pollitem_t sub_item[] = {{sub_.handle(), 0, ZMQ_POLLIN, 0}};
+  // A master with another farm key, or without CURVE, fails every handshake at once: said
+  // instead of waiting out the timeout (found by review: 120 s of "is tessera-master running?").
+  HandshakeWatch handshakes(ctx_, sub_);
   while (true) {
     if ((stop && *stop) || expired()) return false;
+    if (const std::string why = handshakes.failing(5); !why.empty()) {
+      spdlog::error("{} cannot join the master at {}: {}", proto::roleName(role_), ep_.masterPub(), why);
+      return false;
+    }
     notice("the master at " + ep_.masterPub());
     pollFor(sub_item, 1, std::chrono::milliseconds(100));
     if (sub_item[0].revents & ZMQ_POLLIN) {

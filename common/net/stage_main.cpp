@@ -32,7 +32,7 @@ int stageMain(CLI::App& app, int argc, char** argv, const StageArgs& args, const
   try {
     const Endpoints endpoints = args.endpoints();
     zmq::context_t ctx(1);
-    setupCurve(ctx, endpoints.base);  // on when endpoints leave this host
+    setupCurve(ctx, endpoints.base, args.makes_keys);  // on when endpoints leave this host
     rc = body(endpoints, ctx, &installStopSignals());
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

@@ -19,6 +19,7 @@ struct StageArgs {
   std::string endpoint_base;  // "" = the default local folder
   Scene scene() const;        // loads (and validates) the scene file, or the built-in scene
   Endpoints endpoints() const;
+  bool makes_keys = false;    // the master: creates the farm key when CURVE needs one (setupCurve)
 };
 
 // Adds the positional scene (TESSERA_SCENE) and --endpoints (TESSERA_ENDPOINTS); call it

@@ -148,6 +148,65 @@ TEST(Curve, ABindThatFailsNamesItsEndpoint) {
   }
 }
 
+// A client whose server holds another farm key, or has no CURVE, only sees its handshakes
+// fail; it waited out the join timeout asking whether the master runs (found by review).
+TEST(Curve, AClientTellsAnotherFarmKeyAndAMissingMechanismFromItsHandshakes) {
+  zmq::context_t ctx;
+  const FarmKeys farm = generateFarmKeys();
+  CurveAuth auth(ctx, farm);  // one per context: a second would bind the same ZAP endpoint
+  const FarmKeys another = generateFarmKeys();
+  zmq::socket_t server(ctx, zmq::socket_type::pub), plain(ctx, zmq::socket_type::pub);
+  server.set(zmq::sockopt::linger, 0), plain.set(zmq::sockopt::linger, 0);
+  auth.makeServer(server);
+  const std::string curve_at = loopbackEndpoint(server), plain_at = loopbackEndpoint(plain);
+  auto watch = [&](const FarmKeys* as, const std::string& at) {
+    zmq::socket_t client(ctx, zmq::socket_type::sub);
+    client.set(zmq::sockopt::linger, 0);
+    if (as) {  // as CurveAuth::makeClient does with these keys
+      client.set(zmq::sockopt::curve_serverkey, as->public_z85);
+      client.set(zmq::sockopt::curve_publickey, as->public_z85);
+      client.set(zmq::sockopt::curve_secretkey, as->secret_z85);
+    }
+    HandshakeWatch w(ctx, client);
+    client.connect(at);
+    std::string why;
+    for (int i = 0; i < 150 && why.empty(); ++i) {  // bounded: 3 s
+      std::this_thread::sleep_for(20ms);
+      why = w.failing(5);
+    }
+    return why;
+  };
+  const std::string stranger = watch(&another, curve_at);
+  EXPECT_NE(stranger.find("farm key is not the master's"), std::string::npos) << stranger;
+  const std::string no_curve = watch(nullptr, curve_at);
+  EXPECT_NE(no_curve.find("CURVE is on at one end only (TESSERA_CURVE here off"), std::string::npos) << no_curve;
+  const std::string only_here = watch(&farm, plain_at);
+  EXPECT_NE(only_here.find("CURVE is on at one end only (TESSERA_CURVE here on"), std::string::npos) << only_here;
+  EXPECT_EQ(watch(&farm, curve_at), "") << "the farm's own key failed its handshakes";
+}
+
+// A stage never makes a farm key of its own (no peer would admit it): it waits for the
+// master's, then names the folder.
+TEST(Curve, AStageWaitsForTheMastersKeyAndNamesTheFolderWhenItNeverComes) {
+  const fs::path dir = fs::temp_directory_path() / ("tessera-await-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  try {
+    (void)awaitFarmKeys(dir.string(), 0.3);
+    ADD_FAILURE() << "keys from nowhere";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no farm key in " + (dir / "farm.key").string()), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir / "farm.key")) << "the stage made a key of its own";
+  std::thread master([&] {
+    std::this_thread::sleep_for(200ms);
+    (void)loadOrCreateFarmKeys(dir.string());
+  });
+  const FarmKeys got = awaitFarmKeys(dir.string(), 10);
+  master.join();
+  EXPECT_EQ(got.public_z85, readFarmKeys(dir.string()).public_z85);
+  fs::remove_all(dir);
+}
+
 TEST(Curve, OnlyEndpointsThatLeaveTheHostNeedIt) {
   EXPECT_FALSE(endpointLeavesHost("ipc:///tmp/farm/master-pub"));
   EXPECT_FALSE(endpointLeavesHost("inproc://farm-display"));
