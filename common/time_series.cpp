@@ -95,7 +95,8 @@ std::variant<RawVolumeSpec, GeneratorSpec> stepVolume(const Scene& scene, int st
   }
   if (std::string why = notRegularFile(file); !why.empty()) throw std::runtime_error(file + ": " + why);
   RawVolumeSpec h = readVolumeHeader(file);
-  checkSameShape(h, readVolumeHeader(t.files[0]), t.files[0], s.spacing_given);
+  // Against the scene's own spec, step 0's header as read at load: that file may be gone since.
+  checkSameShape(h, s, t.files[0], s.spacing_given);
   // The scene's keys hold for every step.
   h.spacing = s.spacing;
   h.has_range = s.has_range;

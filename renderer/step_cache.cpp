@@ -44,9 +44,14 @@ uint64_t StepCache::bytesFor(int nx, int ny, int nz) const {
          (backend_ == BackendKind::Cpu ? bricks * VolumeAccel::kBrickSize * sizeof(uint16_t) : 0);
 }
 
-uint64_t StepCache::heldBytes() const {  // the shown step is not the budget's: it is held whatever the budget
+// The shown step and the last good one (what a bad step shows instead) are not the budget's:
+// they are held whatever the budget (a budget under one step evicted the last good step as
+// the next was asked for, and a bad step then left nothing to show: found by review).
+bool StepCache::pinned(int step) const { return step == current_ || step == last_good_; }
+
+uint64_t StepCache::heldBytes() const {
   uint64_t b = 0;
-  for (const auto& [s, e] : held_) b += s == current_ ? 0 : e.bytes;
+  for (const auto& [s, e] : held_) b += pinned(s) ? 0 : e.bytes;
   return b;
 }
 
@@ -69,7 +74,7 @@ bool StepCache::makeRoom(uint64_t need, uint64_t keep_within) {
   while (heldBytes() + need > budget_) {
     auto far = held_.end();
     for (auto it = held_.begin(); it != held_.end(); ++it)
-      if (it->first != current_ && distance(it->first) > keep_within &&
+      if (!pinned(it->first) && distance(it->first) > keep_within &&
           (far == held_.end() || distance(it->first) > distance(far->first)))
         far = it;
     if (far == held_.end()) return false;
@@ -159,8 +164,11 @@ HeldStep StepCache::get(const VoxelBox& box, int step, const ColorWindow& window
       loading_ = -1;
       changed_.notify_all();
       ++stats_.bad_steps;
-      spdlog::error("step {}: {}; showing step {} instead (bad steps: {})", step, ex.what(), last_good_,
-                    stats_.bad_steps);
+      // Said once per bad step (a playing series asks for it again on every pass), again
+      // after it has once loaded.
+      if (reported_.insert(step).second)
+        spdlog::error("step {}: {}; showing step {} instead (bad steps: {}; this step is not said again until it "
+                      "loads)", step, ex.what(), last_good_, stats_.bad_steps);
       auto good = held_.find(last_good_);
       if (good == held_.end()) return {};
       return shown(last_good_, good->second, window);
@@ -172,6 +180,7 @@ HeldStep StepCache::get(const VoxelBox& box, int step, const ColorWindow& window
     it = keep(step, std::move(e));
   }
   last_good_ = step;
+  reported_.erase(step);
   return shown(step, it->second, window);
 }
 

@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <thread>
 #include <variant>
 #include <vector>
@@ -85,6 +86,7 @@ class StepCache {
   uint64_t distance(int step) const;  // steps from the playhead to `step` in the direction of play
   uint64_t entryBytes() const;
   uint64_t bytesFor(int nx, int ny, int nz) const;
+  bool pinned(int step) const;                                   // under mu_
   uint64_t heldBytes() const;                                    // under mu_
   std::map<int, Entry>::iterator keep(int step, Entry&& e);  // under mu_
 
@@ -98,6 +100,7 @@ class StepCache {
   uint64_t generation_ = 0;  // bumped with box_: a load of an old box is dropped
   std::map<int, Entry> held_;
   int current_ = -1, direction_ = 1, last_good_ = -1;
+  std::set<int> reported_;  // bad steps said since they last loaded
   int loading_ = -1, prefetching_ = -1;  // the step being read by get() and by the prefetch thread
   uint64_t prefetch_generation_ = 0;      // of the box the prefetch thread reads prefetching_ of
   std::vector<int> wanted_;

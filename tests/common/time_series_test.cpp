@@ -273,6 +273,26 @@ TEST(TimeSeries, AStepThatDiffersOrIsMissingIsNamedWhenRead) {
   }
 }
 
+// Every step was checked against step 0's header read again from its file, so with that file
+// gone (moved, or cleaned up by a simulation) no other step loaded (found by review).
+TEST(TimeSeries, AStepLoadsWhenStepZerosFileIsGone) {
+  TempDir t("series-step0-gone");
+  writeNifti3d(t.file("a0.nii"), 0);
+  writeNifti3d(t.file("a1.nii"), 1);
+  writeNifti3d(t.file("a2.nii"), 2, kSz - 1);
+  const Scene s = scene(t, "  series: [a0.nii, a1.nii, a2.nii]\n");
+  std::filesystem::remove(t.file("a0.nii"));
+  const VoxelBox box{{0, 0, 0}, {kSx, kSy, kSz}};
+  EXPECT_EQ(loadVolume(s, box, 1).values, loadVolume(scene(t, "  series: [a1.nii]\n"), box, 0).values);
+  try {
+    loadVolume(s, box, 2);
+    ADD_FAILURE() << "a step of other dims loaded";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("a2.nii: dims [9, 7, 4] differs from step 0's [9, 7, 5]"), std::string::npos)
+        << e.what();
+  }
+}
+
 // Steps whose headers differ in spacing are refused, unless the scene's volume.spacing
 // replaces every step's (found by review: it was refused then too).
 TEST(TimeSeries, TheScenesSpacingReplacesStepsHeadersThatDifferInIt) {

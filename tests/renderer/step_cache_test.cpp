@@ -84,6 +84,30 @@ TEST(StepCache, AFrameThatWaitsForThePrefetchOfItsStepCountsAMissAndItsWait) {
   EXPECT_EQ(small.volume->dims, (std::array<int, 3>{8, 8, 8}));
 }
 
+// A budget under one step (TESSERA_CACHE_MB=0, or a step bigger than the cache) evicted the
+// last good step when the next was asked for, so a bad step had nothing to show and the
+// renderer failed every frame (found by review). It is held whatever the budget.
+TEST(StepCache, ABadStepShowsTheLastGoodOneWhateverTheBudget) {
+  tessera::test::TempDir dir("step_cache_budget");
+  std::vector<uint8_t> voxels(16 * 16 * 16, 7);
+  dir.write("t0.raw", voxels.data(), voxels.size());
+  dir.write("t1.raw", voxels.data(), voxels.size());
+  dir.write("t2.raw", voxels.data(), 100);  // short
+  const Scene scene = parseScene("volume: {series: [t0.raw, t1.raw, t2.raw], dims: [16, 16, 16], type: uint8, "
+                                 "range: [0, 255]}\n", dir.path.string(), "s.yaml");
+  StepCache cache(scene, BackendKind::Cpu, 0);
+  const VoxelBox box{{0, 0, 0}, {16, 16, 16}};
+  ASSERT_TRUE(cache.get(box, 0).volume);
+  ASSERT_EQ(cache.get(box, 1).step, 1);
+  for (int pass = 0; pass < 3; ++pass) {  // asked again, as a playing series does
+    const HeldStep shown = cache.get(box, 2);
+    ASSERT_TRUE(shown.volume) << "nothing to show for the bad step, pass " << pass;
+    EXPECT_EQ(shown.step, 1);
+  }
+  EXPECT_EQ(cache.get(box, 0).step, 0);
+  EXPECT_EQ(cache.take().bad_steps, 3u);
+}
+
 }  // namespace
 }  // namespace tessera::renderer
 
