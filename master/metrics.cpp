@@ -1,6 +1,7 @@
 #include "master/metrics.h"
 
 #include <algorithm>
+#include <set>
 #include <filesystem>
 #include <stdexcept>
 
@@ -174,7 +175,13 @@ void Metrics::write(uint64_t frame, Frame& f) {
   auto j = summarize(f.r, f.c, f.d, f.latency_ms);
   j["frame"] = frame;
   j["epoch"] = f.epoch;
-  j["step"] = f.spec.step;
+  // The step the renderers showed: a step that could not be read shows the last good one in
+  // its place (it was reported as the step asked for: found by review).
+  std::set<uint32_t> shown;
+  for (const auto& s : f.r) shown.insert(s.step);
+  j["step"] = shown.size() == 1 ? *shown.begin() : f.spec.step;
+  if (shown.size() > 1 || (shown.size() == 1 && (int)*shown.begin() != f.spec.step)) j["step_asked"] = f.spec.step;
+  if (shown.size() > 1) j["steps_shown"] = shown;  // renderers showed different steps: a mixed frame
   j["master_dropped"] = f.master_dropped;
   j["reassignments"] = reassignments_;
   j["reissued_frames"] = reissued_;

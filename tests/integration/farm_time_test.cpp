@@ -109,6 +109,15 @@ TEST(FarmTime, AMissingOrShortStepIsNamedCountedAndSkipped) {
   EXPECT_TRUE(dir.matches(dir.farmFrame(3), dir.farmFrame(2), 0, "bad_3"));
   EXPECT_TRUE(dir.matches(dir.farmFrame(5), dir.farmFrame(4), 0, "bad_5"));
   EXPECT_TRUE(dir.matches(dir.farmFrame(6), dir.reference(scene, 0, "--step 6"), 1, "after_bad"));
+  // The metrics say the step shown, and the one asked for (they said 3 and 5: found by review).
+  const auto m = metrics(dir);
+  ASSERT_EQ(m.size(), 8u);
+  for (int k : {3, 5}) {
+    EXPECT_EQ(m[k]["step"], k - 1) << "frame " << k;
+    EXPECT_EQ(m[k]["step_asked"], k) << "frame " << k;
+  }
+  EXPECT_EQ(m[6]["step"], 6);
+  EXPECT_FALSE(m[6].contains("step_asked"));
 }
 
 // A gzip 4-D file's steps are read through one stream per renderer (forwards: one step's
