@@ -73,16 +73,24 @@ void Refinement::issued(const FrameSpec& s) {
 void Refinement::timeKey(proto::TimeKey key) {
   using proto::TimeKey;
   if (key == TimeKey::None || steps_ <= 1) return;
-  if (key == TimeKey::PlayPause && !play_.play) {
-    const int first = play_.stride > 0 ? 0 : steps_ - 1, last = steps_ - 1 - first;
-    const bool finished = play_.mode == Playback::Mode::Once && step_ == last;
+  const int first = play_.stride > 0 ? 0 : steps_ - 1, last = steps_ - 1 - first;
+  // A `once` that reached its last step plays no more frames: Space plays it again at once
+  // (it took a press to "pause" it first: found by review).
+  const bool finished = play_.mode == Playback::Mode::Once && step_ == last;
+  if (key == TimeKey::PlayPause && (!play_.play || finished)) {
     play_.play = true;
     play_.step = finished ? first : step_;
+    // A swing goes on the way it went: its phase there and back (a resumed swing always
+    // headed forwards: found by review).
+    Playback ahead = play_;
+    if (play_.mode == Playback::Mode::Swing && !finished && heading_ != 0 && (ahead.stepAt(1, steps_) - step_) * heading_ < 0)
+      play_.step = 2 * (steps_ - 1) - step_;
     played_ = 0;
-    step_ = play_.step;
+    step_ = play_.stepAt(0, steps_);
     if (last_ && last_->step == step_) step_ = play_.stepAt(++played_, steps_);  // shown: go on from it
     return;
   }
+  if (play_.play) heading_ = play_.stepAt(played_ + 1, steps_) - step_;
   play_.play = false;
   if (key == TimeKey::Forward) step_ = (step_ + 1) % steps_;
   if (key == TimeKey::Back) step_ = (step_ + steps_ - 1) % steps_;

@@ -115,6 +115,7 @@ class Refinement {
   void timeKey(proto::TimeKey key);
   Playback play_;        // play_.step: where the playing started
   int steps_ = 1, step_ = 0;
+  int heading_ = 0;      // where playing went when it paused: > 0 up the steps, < 0 down
   uint64_t played_ = 0;  // frames issued since
 };
 

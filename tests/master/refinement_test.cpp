@@ -331,9 +331,29 @@ TEST(Refinement, AFinishedOncePlaysAgainFromTheStart) {
   p.mode = Playback::Mode::Once;
   Refinement r(Camera{}, namedQuality(QualityName::Default), 64, 64, p, 3);
   EXPECT_EQ(play(r, 9), (std::vector<int>{0, 1, 2})) << "once: no frame after the last step";
-  r.input(key(1, proto::TimeKey::PlayPause), Clock::now());  // pause at the end
-  r.input(key(2, proto::TimeKey::PlayPause), Clock::now());  // play: from the start again
-  EXPECT_EQ(play(r, 9), (std::vector<int>{0, 1, 2}));
+  r.input(key(1, proto::TimeKey::PlayPause), Clock::now());  // one press: from the start again
+  EXPECT_EQ(play(r, 9), (std::vector<int>{0, 1, 2})) << "a press after the end played nothing (found by review)";
+  r.input(key(2, proto::TimeKey::Back), Clock::now());  // paused on step 1
+  EXPECT_EQ(play(r, 9), (std::vector<int>{1}));
+  r.input(key(3, proto::TimeKey::PlayPause), Clock::now());
+  EXPECT_EQ(play(r, 9), (std::vector<int>{2})) << "a paused once plays on from where it is";
+}
+
+// A swing paused on its way back resumed forwards (found by review).
+TEST(Refinement, APausedSwingGoesOnTheWayItWent) {
+  Playback p;
+  p.play = true;
+  p.mode = Playback::Mode::Swing;
+  Refinement r(Camera{}, namedQuality(QualityName::Default), 64, 64, p, 5);
+  EXPECT_EQ(play(r, 7), (std::vector<int>{0, 1, 2, 3, 4, 3, 2}));
+  r.input(key(1, proto::TimeKey::PlayPause), Clock::now());
+  EXPECT_EQ(play(r, 7), (std::vector<int>{1}));  // the step the next frame would show
+  r.input(key(2, proto::TimeKey::PlayPause), Clock::now());
+  EXPECT_EQ(play(r, 4), (std::vector<int>{0, 1, 2, 3})) << "down to the first step, then up";
+  r.input(key(3, proto::TimeKey::PlayPause), Clock::now());
+  EXPECT_EQ(play(r, 7), (std::vector<int>{4}));
+  r.input(key(4, proto::TimeKey::PlayPause), Clock::now());
+  EXPECT_EQ(play(r, 3), (std::vector<int>{3, 2, 1})) << "paused at the top: on down";
 }
 
 TEST(Refinement, TimeKeysDoNothingWithoutASeries) {
