@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <set>
 #include <stdexcept>
 
 #include <spdlog/spdlog.h>
@@ -72,6 +73,11 @@ std::string badInput(const nlohmann::json& msg, const std::string& type) {
     return "a " + type + " drag without numbers dx, dy within 10000";
   if (type == "wheel" && !number("notches", 100)) return "a wheel without a number of notches within 100";
   if (type == "key" && !(msg.contains("key") && msg["key"].is_string())) return "a key without a key";
+  // The keys the view steers with (viewer.js sends no others): any other is refused, not
+  // dropped unseen (found by review).
+  static const std::set<std::string> keys{"1", "2", "3", " ", "ArrowRight", "ArrowLeft", "Home", "End", "r"};
+  if (type == "key" && !keys.count(msg["key"].get<std::string>()))
+    return "an unknown key (1, 2, 3, r, Space, ArrowLeft, ArrowRight, Home, End)";
   if (msg.contains("n") && !msg["n"].is_number_unsigned()) return "an input number n that is not a whole number";
   return "";
 }

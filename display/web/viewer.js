@@ -186,6 +186,9 @@
     if (e.key === 'h') helpEl.style.display = helpEl.style.display === 'block' ? 'none' : 'block';
     else if (['1', '2', '3', 'r', ' ', 'ArrowRight', 'ArrowLeft', 'Home', 'End'].includes(e.key)) {
       e.preventDefault();  // Space and the arrows would scroll the page
+      // A held key repeats: only the arrows step on (as in the window); a held Space
+      // toggled play and pause on every repeat (found by review).
+      if (e.repeat && e.key !== 'ArrowRight' && e.key !== 'ArrowLeft') return;
       send({ t: 'key', key: e.key });
     }
   });

@@ -281,10 +281,11 @@ TEST_F(WebView, BadInputIsRefusedCountedAndEveryOtherViewerKeepsItsFrames) {
   farm_ = {};
   std::smatch m;
   ASSERT_TRUE(std::regex_search(log_, m, std::regex("([0-9]+) bad messages, ([0-9]+) bad requests"))) << log_;
-  EXPECT_GE(std::stoi(m[1]), 5) << "not JSON, unknown type, bad values, binary, oversized";
+  EXPECT_GE(std::stoi(m[1]), 6) << "not JSON, unknown type, bad values, unknown key, binary, oversized";
   EXPECT_GE(std::stoi(m[2]), 5) << "four paths, a POST (random bytes may count as well)";
   EXPECT_NE(log_.find("refused a viewer message: a message that is not JSON"), std::string::npos) << log_;
   EXPECT_NE(log_.find("refused a viewer message: an unknown message type"), std::string::npos) << log_;
+  EXPECT_NE(log_.find("refused a viewer message: an unknown key"), std::string::npos) << log_;  // found by review
 }
 
 }  // namespace

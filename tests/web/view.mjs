@@ -80,6 +80,7 @@ try {
           ws.send('not json {');
           ws.send(JSON.stringify({ t: 'launch-missiles' }));
           ws.send(JSON.stringify({ t: 'drag', dx: 'far', dy: 1e300 }));
+          ws.send(JSON.stringify({ t: 'key', key: 'x' }));  // a key the view does not steer with
           ws.send(new Uint8Array([1, 2, 3]));
           ws.send('x'.repeat(5000));  // oversized: the display closes this connection
         };
