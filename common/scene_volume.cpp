@@ -73,9 +73,11 @@ std::variant<RawVolumeSpec, GeneratorSpec> Parser::volume(const YAML::Node& n, T
 
 // `series:` a printf pattern with first and last, a list of files, or a ParaView .series
 // file. Only names are made here: no file but the first is opened (the last is looked for,
-// so a pattern with the wrong range fails now), whatever the number of steps.
+// so a pattern with the wrong range, or a list with a typo at its end, fails now), whatever
+// the number of steps.
 TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
   TimeSeries t;
+  std::string last_key, last_at;  // a list's or a .series file's last step, stat'ed below
   if (n.IsMap()) {
     checkKeys(n, "volume.series", {"pattern", "first", "last"});
     // Checked and formatted as written, then joined to the scene's folder: a '%' in the
@@ -90,6 +92,7 @@ TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
   } else if (n.IsSequence()) {
     if (n.size() == 0) fail("volume.series", "an empty list: give at least one file");
     for (size_t i = 0; i < n.size(); ++i) t.files.push_back(resolve(string(n[i], "volume.series[" + std::to_string(i) + "]")));
+    last_key = "volume.series[" + std::to_string(n.size() - 1) + "]";
   } else {
     // ParaView's file series: {"file-series-version": "1.0", "files": [{"name": ..., "time": ...}, ...]}
     const std::string file = resolve(string(n, "volume.series"));
@@ -111,6 +114,7 @@ TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
       t.times.push_back(time);
     }
     if (t.files.empty()) fail("volume.series", file + ": the files list is empty");
+    last_key = "volume.series", last_at = file + ": files[" + std::to_string(t.files.size() - 1) + "]: ";
   }
   if (t.files.size() > (size_t)kMaxSteps) fail("volume.series", "more than " + std::to_string(kMaxSteps) + " steps");
   for (const std::string& f : t.files) {  // a folder a step would be scanned by every process at every step
@@ -120,6 +124,9 @@ TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
       fail("volume.series", f + ": a " + (fmt == VolumeFormat::Dicom ? "DICOM series" : "folder of TIFF slices") +
                                 " cannot be a time step; make each step one file (a multi-page TIFF, NIfTI or NRRD)");
   }
+  // The last step's file is stat'ed now too, as a pattern's is (the others when read).
+  if (!last_key.empty())
+    if (std::string m = fileProblem(t.files.back()); !m.empty()) fail(last_key, last_at + m);
   t.steps = (int)t.files.size();
   return t;
 }

@@ -233,6 +233,10 @@ TEST(TimeSeries, BadSeriesAreNamedBeforeTheFirstFrame) {
   has("  series: back.series\n" + kRaw, "", "is not after the previous step's");
   std::ofstream(t.file("none.series")) << R"({"files": []})";
   has("  series: none.series\n" + kRaw, "", "the files list is empty");
+  // A missing last step of a list or a .series, as of a pattern (found by review: it loaded).
+  has("  series: [t0.raw, t1.raw, nothere.raw]\n" + kRaw, "", "volume.series[2]: file not found");
+  std::ofstream(t.file("short.series")) << R"({"files": [{"name": "t0.raw", "time": 1}, {"name": "gone.raw", "time": 2}]})";
+  has("  series: short.series\n" + kRaw, "", "short.series: files[1]: file not found");
   has("  generator: {name: hollow-shell, steps: 4}\n", "", "'hollow-shell' does not change over time");
   has("  series: [t0.raw, t1.raw]\n" + kRaw, "time: {step: 2}\n", "time.step: must be in 0..1");
   has("  series: [t0.raw, t1.raw]\n" + kRaw, "time: {stride: 0}\n", "time.stride: must not be 0");
@@ -246,7 +250,8 @@ TEST(TimeSeries, AStepThatDiffersOrIsMissingIsNamedWhenRead) {
   TempDir t("series-step-bad");
   writeNifti3d(t.file("a0.nii"), 0);
   writeNifti3d(t.file("a1.nii"), 1, kSz - 1);  // one slice short
-  const Scene s = scene(t, "  series: [a0.nii, a1.nii, a2.nii]\n");
+  writeNifti3d(t.file("a3.nii"), 3);  // a2.nii is missing
+  const Scene s = scene(t, "  series: [a0.nii, a1.nii, a2.nii, a3.nii]\n");
   EXPECT_NO_THROW(loadVolume(s, {{0, 0, 0}, {kSx, kSy, kSz}}, 0));
   try {
     loadVolume(s, {{0, 0, 0}, {kSx, kSy, kSz}}, 1);
