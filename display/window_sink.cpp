@@ -23,8 +23,9 @@ constexpr uint8_t kStripDim = 96;  // strip pixels keep 96/256 of their colour b
 constexpr std::array<uint8_t, 4> kTextColor = {230, 230, 230, 255};
 constexpr const char* kHelp[] = {
     "drag: orbit    wheel: zoom    resize: re-render at the window's size",
-    "right drag: colour window (right/left: wider/narrower, up/down: higher/lower level)",
-    "while the mouse moves the farm shows reduced frames, then the full one",
+    // Double spaces are where a narrow window breaks a line (wrap).
+    "right drag: colour window  (right/left: wider/narrower,  up/down: higher/lower level)",
+    "while the mouse moves the farm shows reduced frames,  then the full one",
     "1 / 2 / 3: reference / default / fast quality    r: the scene's view and colours again",
     "a time series: Space play/pause   <- -> step back/forward   Home/End first/last step",
     "h: this help    Esc, q or closing the window: stop the farm",
@@ -136,7 +137,12 @@ class WindowSink final : public Sink {
     composite(same ? frame_ : scaled, (ww - dw) / 2, (wh - dh) / 2);
     const int scale = ww >= 800 ? 2 : 1;
     drawLines(wrap(status_, ww, scale), scale, false);
-    if (help_) drawLines({std::begin(kHelp), std::end(kHelp)}, scale, true);
+    if (help_) {  // wrapped as the status line is (it was cut at the window's edge: found by review)
+      std::vector<std::string> help;
+      for (const char* line : kHelp)
+        for (std::string& part : wrap(line, ww, scale)) help.push_back(std::move(part));
+      drawLines(help, scale, true);
+    }
     if (SDL_UpdateTexture(texture_, nullptr, buffer_.px.data(), buffer_.width * 4) != 0)
       throw sdlError("SDL_UpdateTexture failed");
     SDL_RenderClear(renderer_);
@@ -173,7 +179,8 @@ class WindowSink final : public Sink {
     }
   }
 
-  // The status line broken at its double spaces into lines that fit the window's width.
+  // A line of the status or the help broken at its double spaces into lines that fit the
+  // window's width.
   static std::vector<std::string> wrap(const std::string& text, int width, int scale) {
     std::vector<std::string> lines{""};
     for (size_t pos = 0; pos < text.size();) {
