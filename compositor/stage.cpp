@@ -42,6 +42,11 @@ class Stage {
     std::string bind = opt_.endpoints.compositorBind(rank);
     inbox_.bind(bind);
     spdlog::info("compositor rank={} joined, pieces at {}", rank, bind);
+    // Without TESSERA_ADVERTISE_HOST peers reach a compositor at the master's host (found by
+    // review: a compositor on another host then got nothing, and renderers were blamed).
+    if (opt_.advertise_host.empty() && !endpointIsHere(opt_.endpoints.compositor(rank)))
+      spdlog::warn("renderers will send pieces to {}, which is not an address of this host: set "
+                   "TESSERA_ADVERTISE_HOST (ip, hostname, or this host's address)", opt_.endpoints.compositor(rank));
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0},
                                {link_.control().handle(), 0, ZMQ_POLLIN, 0},
                                {inbox_.socket().handle(), 0, ZMQ_POLLIN, 0}};

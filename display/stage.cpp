@@ -41,6 +41,12 @@ class Stage {
       return 1;
     }
     spdlog::info("display joined, strips at {}", opt_.endpoints.display());
+    // Stages send strips where the display's address says, found from the master's host unless
+    // TESSERA_DISPLAY_HOST names another: a display on a host of its own without it got
+    // nothing, and the master blamed healthy renderers (found by review).
+    if (!endpointIsHere(opt_.endpoints.display()))
+      spdlog::warn("stages will send strips to {}, which is not an address of this host: set TESSERA_DISPLAY_HOST to "
+                   "this host's name or address (the display's host, for every stage)", opt_.endpoints.display());
     zmq::pollitem_t items[] = {{link_.sub().handle(), 0, ZMQ_POLLIN, 0},
                                {link_.control().handle(), 0, ZMQ_POLLIN, 0},
                                {inbox_.socket().handle(), 0, ZMQ_POLLIN, 0}};

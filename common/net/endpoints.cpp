@@ -1,6 +1,7 @@
 #include "common/net/endpoints.h"
 
 #include <arpa/inet.h>
+#include <ifaddrs.h>
 #include <net/if.h>
 #include <netdb.h>
 #include <sys/socket.h>
@@ -167,6 +168,34 @@ std::string bindableEndpoint(const std::string& endpoint) {
   inet_ntop(AF_INET, &reinterpret_cast<sockaddr_in*>(found->ai_addr)->sin_addr, text, sizeof text);
   freeaddrinfo(found);
   return "tcp://" + std::string(text) + endpoint.substr(colon);
+}
+
+bool endpointIsHere(const std::string& endpoint) {
+  if (!startsWith(endpoint, "tcp://")) return true;
+  std::string host = endpoint.substr(6, endpoint.rfind(':') - 6);
+  if (host.size() > 1 && host.front() == '[') host = host.substr(1, host.size() - 2);
+  if (host == "*" || host == "0.0.0.0" || host == "::") return true;
+  addrinfo hints{};
+  hints.ai_socktype = SOCK_STREAM;
+  addrinfo* found = nullptr;
+  if (getaddrinfo(host.c_str(), nullptr, &hints, &found) != 0 || !found) return true;
+  ifaddrs* ifs = nullptr;
+  if (getifaddrs(&ifs) != 0) return freeaddrinfo(found), true;
+  bool here = false;
+  for (addrinfo* a = found; a && !here; a = a->ai_next)
+    for (ifaddrs* i = ifs; i && !here; i = i->ifa_next) {
+      if (!i->ifa_addr || i->ifa_addr->sa_family != a->ai_family) continue;
+      if (a->ai_family == AF_INET)
+        here = reinterpret_cast<sockaddr_in*>(a->ai_addr)->sin_addr.s_addr ==
+               reinterpret_cast<sockaddr_in*>(i->ifa_addr)->sin_addr.s_addr;
+      else if (a->ai_family == AF_INET6)
+        here = std::equal(std::begin(reinterpret_cast<sockaddr_in6*>(a->ai_addr)->sin6_addr.s6_addr),
+                          std::end(reinterpret_cast<sockaddr_in6*>(a->ai_addr)->sin6_addr.s6_addr),
+                          std::begin(reinterpret_cast<sockaddr_in6*>(i->ifa_addr)->sin6_addr.s6_addr));
+    }
+  freeifaddrs(ifs);
+  freeaddrinfo(found);
+  return here;
 }
 
 std::string Endpoints::localAddressTowardMaster() const {

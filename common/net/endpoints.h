@@ -54,6 +54,10 @@ std::string peerEndpointProblem(const std::string& endpoint, const std::string& 
 // resolved to its IPv4 address here; anything else is returned unchanged. Throws naming the
 // endpoint when the name does not resolve.
 std::string bindableEndpoint(const std::string& endpoint);
+// Whether a tcp endpoint's host (a name or address) is an address of this machine; true also
+// for ipc/inproc, for 0.0.0.0 and when it cannot tell (a name that does not resolve here).
+// What a stage checks before it tells peers to send to that address.
+bool endpointIsHere(const std::string& endpoint);
 // The environment variable `name`, or `fallback` when it is unset or empty.
 std::string envOr(const char* name, const std::string& fallback);
 

@@ -64,5 +64,16 @@ TEST(Endpoints, AHostNameIsResolvedBeforeItIsBound) {
   }
 }
 
+// A stage checks that the address it has peers send to is its own (a display or compositor
+// on a host of its own without TESSERA_DISPLAY_HOST / ADVERTISE_HOST got nothing).
+TEST(Endpoints, AnEndpointIsHereWhenItsHostIsAnAddressOfThisMachine) {
+  for (const char* here : {"tcp://127.0.0.1:5552", "tcp://localhost:5552", "tcp://0.0.0.0:5552", "tcp://[::1]:5552",
+                           "ipc:///tmp/x/display", "tcp://no-such-host.invalid:5552"})
+    EXPECT_TRUE(endpointIsHere(here)) << here;
+  EXPECT_TRUE(endpointIsHere("tcp://" + makeEndpoints("tcp://127.0.0.1:5550").localAddressTowardMaster() + ":1"));
+  for (const char* away : {"tcp://192.0.2.1:5552", "tcp://198.51.100.7:5552"})  // documentation addresses
+    EXPECT_FALSE(endpointIsHere(away)) << away;
+}
+
 }  // namespace
 }  // namespace tessera
