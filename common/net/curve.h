@@ -28,7 +28,7 @@ bool writeFarmKeys(const std::string& dir, const FarmKeys& keys);
 // The keys from farm.key (the public key derives from it; farm.pub, if present, must match).
 // Throws std::runtime_error naming the file and what is wrong with it.
 FarmKeys readFarmKeys(const std::string& dir);
-// The folder's keys, created on first use (the first process to start writes them).
+// The folder's keys, created on first use (by the master, or tessera-keys; concurrent starts agree).
 FarmKeys loadOrCreateFarmKeys(const std::string& dir);
 // The folder's keys once they are there: a stage on a host without them must not make a key
 // of its own (no peer would admit it), so it waits up to `wait_s` for the master to create
