@@ -16,6 +16,7 @@ void ValueHistogram::add(double v) {
   const long long bins = (long long)counts.size();
   const long long b = hi > lo ? (long long)std::floor((v - lo) * (double)bins / (hi - lo)) : 0;
   ++counts[std::clamp(b, 0LL, bins - 1)];
+  if (values.size() <= 16 && std::find(values.begin(), values.end(), v) == values.end()) values.push_back(v);
 }
 
 bool storesIntegers(const RawVolumeSpec& s) {
@@ -68,10 +69,9 @@ std::optional<RangeAdvice> suggestedRange(const ValueHistogram& h) {
   const uint64_t total = h.total();
   const size_t n = c.size();
   if (total == 0 || !(h.hi > h.lo)) return std::nullopt;
-  // Labels: 16 values or fewer. Only integers in bins one value wide can be counted so; data
-  // squeezed into a few wide bins by hot voxels far above it is what the advice is for.
-  const bool one_value_a_bin = h.integral && h.hi - h.lo + 1 <= (double)n;
-  if (one_value_a_bin && std::count_if(c.begin(), c.end(), [](uint64_t x) { return x > 0; }) <= 16) return std::nullopt;
+  // Labels: 16 values or fewer, counted as added (not as occupied bins: data squeezed into a
+  // few wide bins by hot voxels far above it is what the advice is for).
+  if (!h.values.empty() && h.values.size() <= 16) return std::nullopt;
   size_t first = 0, last = n - 1;
   while (c[first] == 0) ++first;
   while (c[last] == 0) --last;

@@ -16,6 +16,7 @@ struct ValueHistogram {
   double lo = 0, hi = 0;         // the data's min and max
   bool integral = false;         // integer values: each is rounded before it is binned
   std::vector<uint64_t> counts;  // equal-width bins over [lo, hi]; the last includes hi
+  std::vector<double> values;    // the first 17 distinct values added: 16 or fewer are labels
 
   ValueHistogram(double lo_, double hi_, int bins, bool integral_);
   // Values read back from normalised floats are a rounding away from the file's: integers are
@@ -41,7 +42,8 @@ struct RangeAdvice {
 // apart (beyond an empty eighth of the span: under 0.1% of the voxels, or one value under
 // half of them, at either end) and the outermost 0.01% of either tail are left out; nullopt
 // unless it leaves out values apart or is under half the span. Nothing for data of 16
-// values or fewer (labels: integers whose bins are one value wide).
+// values or fewer (labels, counted by add(): a float mask and labels spread wider than the bins
+// are labels too).
 std::optional<RangeAdvice> suggestedRange(const ValueHistogram& fine);
 
 }  // namespace tessera

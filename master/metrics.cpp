@@ -178,7 +178,8 @@ void Metrics::write(uint64_t frame, Frame& f) {
   // The step the renderers showed: a step that could not be read shows the last good one in
   // its place (it was reported as the step asked for: found by review).
   std::set<uint32_t> shown;
-  for (const auto& s : f.r) shown.insert(s.step);
+  for (const auto& s : f.r)
+    if (s.images_made + s.images_reused > 0) shown.insert(s.step);  // a renderer without a brick shows none
   j["step"] = shown.size() == 1 ? *shown.begin() : f.spec.step;
   if (shown.size() > 1 || (shown.size() == 1 && (int)*shown.begin() != f.spec.step)) j["step_asked"] = f.spec.step;
   if (shown.size() > 1) j["steps_shown"] = shown;  // renderers showed different steps: a mixed frame

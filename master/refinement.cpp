@@ -76,7 +76,8 @@ void Refinement::timeKey(proto::TimeKey key) {
   const int first = play_.stride > 0 ? 0 : steps_ - 1, last = steps_ - 1 - first;
   // A `once` that reached its last step plays no more frames: Space plays it again at once
   // (it took a press to "pause" it first: found by review).
-  const bool finished = play_.mode == Playback::Mode::Once && step_ == last;
+  const bool finished = play_.mode == Playback::Mode::Once && step_ == last &&
+                        (!play_.play || (last_ && last_->step == last));  // playing: the last step issued
   if (key == TimeKey::PlayPause && (!play_.play || finished)) {
     play_.play = true;
     play_.step = finished ? first : step_;

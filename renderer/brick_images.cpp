@@ -13,7 +13,6 @@ BrickImages::BrickImages(const Scene& scene, BackendKind backend, int cache_mb, 
 
 void BrickImages::hold(const proto::FrameParams& p, const proto::SortLastWork& work, uint32_t rank, proto::StageStats& st) {
   const auto whole = volumeDims(scene_);
-  if (scene_.series.steps > 1) st.step = p.step;  // what a renderer with no brick this frame says
   // Trilinear sampling near a brick face reads one voxel beyond it; its gradient, one more.
   const int ghost = scene_.shading.on ? 2 : 1;
   VoxelBox need{whole, {0, 0, 0}};

@@ -1,5 +1,7 @@
 #include "renderer/step_cache.h"
 
+#include <optional>
+
 #include <algorithm>
 #include <utility>
 
@@ -44,14 +46,9 @@ uint64_t StepCache::bytesFor(int nx, int ny, int nz) const {
          (backend_ == BackendKind::Cpu ? bricks * VolumeAccel::kBrickSize * sizeof(uint16_t) : 0);
 }
 
-// The shown step and the last good one (what a bad step shows instead) are not the budget's:
-// they are held whatever the budget (a budget under one step evicted the last good step as
-// the next was asked for, and a bad step then left nothing to show: found by review).
-bool StepCache::pinned(int step) const { return step == current_ || step == last_good_; }
-
-uint64_t StepCache::heldBytes() const {
+uint64_t StepCache::heldBytes() const {  // the shown step is not the budget's: it is held whatever the budget
   uint64_t b = 0;
-  for (const auto& [s, e] : held_) b += pinned(s) ? 0 : e.bytes;
+  for (const auto& [s, e] : held_) b += s == current_ ? 0 : e.bytes;
   return b;
 }
 
@@ -74,7 +71,7 @@ bool StepCache::makeRoom(uint64_t need, uint64_t keep_within) {
   while (heldBytes() + need > budget_) {
     auto far = held_.end();
     for (auto it = held_.begin(); it != held_.end(); ++it)
-      if (!pinned(it->first) && distance(it->first) > keep_within &&
+      if (it->first != current_ && distance(it->first) > keep_within &&
           (far == held_.end() || distance(it->first) > distance(far->first)))
         far = it;
     if (far == held_.end()) return false;
@@ -169,8 +166,24 @@ HeldStep StepCache::get(const VoxelBox& box, int step, const ColorWindow& window
       if (reported_.insert(step).second)
         spdlog::error("step {}: {}; showing step {} instead (bad steps: {}; this step is not said again until it "
                       "loads)", step, ex.what(), last_good_, stats_.bad_steps);
+      if (last_good_ < 0) return {};
+      current_ = last_good_;  // what is shown in its place
       auto good = held_.find(last_good_);
-      if (good == held_.end()) return {};
+      if (good == held_.end()) {
+        // A budget under one step let it go as this step was asked for (a bad step then had
+        // nothing to show and the renderer failed every frame: found by review): read again.
+        lock.unlock();
+        std::optional<Entry> again;
+        double again_ms = 0;
+        try {
+          again = load(last_good_, box, window, again_ms, {});
+        } catch (const std::exception&) {
+        }
+        lock.lock();
+        if (!again) return {};
+        stats_.load_ms += again_ms;
+        good = keep(last_good_, std::move(*again));
+      }
       return shown(last_good_, good->second, window);
     }
     lock.lock();

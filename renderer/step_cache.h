@@ -86,7 +86,6 @@ class StepCache {
   uint64_t distance(int step) const;  // steps from the playhead to `step` in the direction of play
   uint64_t entryBytes() const;
   uint64_t bytesFor(int nx, int ny, int nz) const;
-  bool pinned(int step) const;                                   // under mu_
   uint64_t heldBytes() const;                                    // under mu_
   std::map<int, Entry>::iterator keep(int step, Entry&& e);  // under mu_
 

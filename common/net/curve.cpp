@@ -147,10 +147,13 @@ std::string HandshakeWatch::failing(int failures) {
   if (mechanism_)
     return std::string("the master speaks another security mechanism: CURVE is on at one end only (TESSERA_CURVE here ") +
            (curve ? "on" : "off") + "; it is on where endpoints leave the host, or with TESSERA_CURVE=on)";
-  return std::to_string(failed_) + " handshakes failed: the master closed them" +
-         (curve ? ", so this stage's farm key is not the master's (give every host a copy of the master's keys/ "
-                    "folder, TESSERA_KEYS)"
-                  : "");
+  // The master closed them: it could not open this stage's first message (another farm key)
+  // or it expected another mechanism and said so first (CURVE on there only).
+  return std::to_string(failed_) + " handshakes failed: the master closed them; " +
+         (curve ? "this stage's farm key is not the master's (give every host a copy of the master's keys/ folder, "
+                  "TESSERA_KEYS), or CURVE is off at the master (TESSERA_CURVE)"
+                : "CURVE is off here, and the master probably has it on (TESSERA_CURVE=on, or endpoints that leave "
+                  "the host)");
 }
 
 bool endpointLeavesHost(const std::string& endpoint) {

@@ -13,6 +13,8 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include <spdlog/spdlog.h>
+
 namespace tessera {
 namespace {
 
@@ -165,8 +167,14 @@ std::string bindableEndpoint(const std::string& endpoint) {
                              "as a host name it does not resolve here (" + gai_strerror(rc) + "); set TESSERA_BIND_HOST " +
                              "to this host's address or 0.0.0.0");
   char text[INET_ADDRSTRLEN] = {};
-  inet_ntop(AF_INET, &reinterpret_cast<sockaddr_in*>(found->ai_addr)->sin_addr, text, sizeof text);
+  const in_addr address = reinterpret_cast<sockaddr_in*>(found->ai_addr)->sin_addr;
+  inet_ntop(AF_INET, &address, text, sizeof text);
   freeaddrinfo(found);
+  // /etc/hosts often maps the machine's own name to loopback (Debian: 127.0.1.1): bound
+  // there, no other host reaches it.
+  if ((ntohl(address.s_addr) >> 24) == 127 && host != "localhost")
+    spdlog::warn("binding {}: '{}' resolves to {} here, a loopback address no other host can reach; for a farm across "
+                 "hosts set TESSERA_BIND_HOST to this host's address or 0.0.0.0", endpoint, host, text);
   return "tcp://" + std::string(text) + endpoint.substr(colon);
 }
 
@@ -182,6 +190,9 @@ bool endpointIsHere(const std::string& endpoint) {
   ifaddrs* ifs = nullptr;
   if (getifaddrs(&ifs) != 0) return freeaddrinfo(found), true;
   bool here = false;
+  for (addrinfo* a = found; a && !here; a = a->ai_next)  // loopback is here: 127/8 (Debian names its host 127.0.1.1), ::1
+    here = (a->ai_family == AF_INET && (ntohl(reinterpret_cast<sockaddr_in*>(a->ai_addr)->sin_addr.s_addr) >> 24) == 127) ||
+           (a->ai_family == AF_INET6 && IN6_IS_ADDR_LOOPBACK(&reinterpret_cast<sockaddr_in6*>(a->ai_addr)->sin6_addr));
   for (addrinfo* a = found; a && !here; a = a->ai_next)
     for (ifaddrs* i = ifs; i && !here; i = i->ifa_next) {
       if (!i->ifa_addr || i->ifa_addr->sa_family != a->ai_family) continue;

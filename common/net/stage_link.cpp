@@ -41,6 +41,7 @@ StageLink::StageLink(zmq::context_t& ctx, const Endpoints& ep, proto::Role role,
       identity_(randomIdentity()), run_(farmRun()), sub_(makeSocket(ctx, zmq::socket_type::sub)), ctl_(makeSocket(ctx, zmq::socket_type::dealer)) {
   sub_.set(zmq::sockopt::subscribe, "");
   sub_.set(zmq::sockopt::rcvhwm, 0);  // FrameParams must never be dropped by the queue
+  handshakes_ = std::make_unique<HandshakeWatch>(ctx, sub_);
   connectTo(sub_, ep_.masterPub());
   ctl_.set(zmq::sockopt::routing_id, identity_);
   connectTo(ctl_, ep_.masterControl());
@@ -89,10 +90,9 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
   zmq::pollitem_t sub_item[] = {{sub_.handle(), 0, ZMQ_POLLIN, 0}};
   // A master with another farm key, or without CURVE, fails every handshake at once: said
   // instead of waiting out the timeout (found by review: 120 s of "is tessera-master running?").
-  HandshakeWatch handshakes(ctx_, sub_);
   while (true) {
     if ((stop && *stop) || expired()) return false;
-    if (const std::string why = handshakes.failing(5); !why.empty()) {
+    if (const std::string why = handshakes_ ? handshakes_->failing(5) : ""; !why.empty()) {
       spdlog::error("{} cannot join the master at {}: {}", proto::roleName(role_), ep_.masterPub(), why);
       return false;
     }
@@ -106,6 +106,7 @@ bool StageLink::join(const std::atomic<bool>* stop, double timeout_s) {
       if (!other.empty()) continue;  // not from this farm's master
       if (down) return shutDown(*down);
       heard = Clock::now();
+      handshakes_.reset();  // the subscription is live: its handshake succeeded
       break;
     }
   }

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -17,6 +18,7 @@
 
 #include <zmq.hpp>
 
+#include "common/net/curve.h"
 #include "common/net/endpoints.h"
 #include "common/net/log.h"
 #include "common/wire/protocol.h"
@@ -98,6 +100,9 @@ class StageLink {
   const std::string run_;  // TESSERA_RUN
   bool run_ended_ = false;
   zmq::socket_t sub_, ctl_;
+  // Watches sub_'s handshakes from before it connects (a mechanism mismatch is one event,
+  // never retried) until the stage has joined.
+  std::unique_ptr<HandshakeWatch> handshakes_;
   uint32_t rank_ = 0;
   std::array<double, 2> volume_range_{0, 0};
   std::atomic<bool> quit_{false};

@@ -188,6 +188,7 @@ int main(int argc, char** argv) {
     const bool own_folder = !folder.empty() && std::filesystem::create_directories(folder, ignored);
     const int rc = tessera::launcher::launch(project, launch_options);
     if (own_folder) std::filesystem::remove_all(folder, ignored);
+    else if (!folder.empty()) std::filesystem::remove(folder, ignored);  // only if empty: a killed run's, not a live farm's
     return rc;
   } catch (const std::exception& e) {
     log->error("{}", e.what());

@@ -71,6 +71,7 @@ TEST(Endpoints, AnEndpointIsHereWhenItsHostIsAnAddressOfThisMachine) {
                            "ipc:///tmp/x/display", "tcp://no-such-host.invalid:5552"})
     EXPECT_TRUE(endpointIsHere(here)) << here;
   EXPECT_TRUE(endpointIsHere("tcp://" + makeEndpoints("tcp://127.0.0.1:5550").localAddressTowardMaster() + ":1"));
+  EXPECT_TRUE(endpointIsHere("tcp://127.0.1.1:5552")) << "Debian's address for the host's own name";
   for (const char* away : {"tcp://192.0.2.1:5552", "tcp://198.51.100.7:5552"})  // documentation addresses
     EXPECT_FALSE(endpointIsHere(away)) << away;
 }

@@ -114,6 +114,13 @@ TEST(SuggestedRange, DataOfItsOwnIsLeftAlone) {
   ValueHistogram labels = fine(0, 3000);
   for (int v : {0, 0, 0, 0, 0, 0, 0, 0, 0, 1000, 3000}) addRun(labels, v, v, 1000);
   EXPECT_FALSE(suggestedRange(labels));
+  // Labels spread wider than the bins, and a float mask with a rare label (a lesion).
+  ValueHistogram wide = fine(0, 5000);
+  for (int v : {0, 17, 5000}) addRun(wide, v, v, v == 0 ? 100000 : 10);
+  EXPECT_FALSE(suggestedRange(wide));
+  ValueHistogram mask(0, 1, 4096, false);
+  for (int k = 0; k < 200000; ++k) mask.add(k % 2000 == 0 ? 1.0 : 0.0);
+  EXPECT_FALSE(suggestedRange(mask)) << "a mask's rare ones were advised out of the range";
 }
 
 }  // namespace

@@ -337,6 +337,11 @@ TEST(Refinement, AFinishedOncePlaysAgainFromTheStart) {
   EXPECT_EQ(play(r, 9), (std::vector<int>{1}));
   r.input(key(3, proto::TimeKey::PlayPause), Clock::now());
   EXPECT_EQ(play(r, 9), (std::vector<int>{2})) << "a paused once plays on from where it is";
+  // Space one frame before the end pauses: it does not start again (found by review).
+  Refinement q(Camera{}, namedQuality(QualityName::Default), 64, 64, p, 5);
+  EXPECT_EQ(play(q, 4), (std::vector<int>{0, 1, 2, 3}));
+  q.input(key(1, proto::TimeKey::PlayPause), Clock::now());
+  EXPECT_EQ(play(q, 9), (std::vector<int>{4})) << "paused: the step the next frame would show";
 }
 
 // A swing paused on its way back resumed forwards (found by review).
