@@ -32,6 +32,10 @@ struct TimeSeries {
   std::vector<std::string> files;  // one file per step, resolved; empty: one file (or a generator)
   std::vector<double> times;       // each step's time (a .series file's), else empty: the index
   uint64_t step_bytes = 0;         // steps in one file: bytes from one step's samples to the next
+  // A pattern series: its pattern, absolute ('%' of the folder doubled), and first number,
+  // so the effective scene says it in three lines, not a line per step.
+  std::string pattern;
+  long long first = 0;
   bool operator==(const TimeSeries&) const = default;
 };
 

@@ -87,6 +87,11 @@ TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
     const long long first = integer(require(n, "volume.series", "first"), "volume.series.first", 0, 999999999);
     const long long last = integer(require(n, "volume.series", "last"), "volume.series.last", first, first + kMaxSteps - 1);
     for (long long i = first; i <= last; ++i) t.files.push_back(resolve(formatted(pattern, i)));
+    std::string folder = std::filesystem::absolute(base_).lexically_normal().string();
+    for (size_t at = folder.find('%'); at != std::string::npos; at = folder.find('%', at + 2)) folder.insert(at, "%");
+    t.pattern = std::filesystem::path(pattern).is_relative() ? (std::filesystem::path(folder) / pattern).lexically_normal().string()
+                                                             : pattern;
+    t.first = first;
     for (const std::string* f : {&t.files.front(), &t.files.back()})
       if (std::string m = fileProblem(*f); !m.empty()) fail("volume.series.pattern", m + " (pattern " + pattern + ")");
   } else if (n.IsSequence()) {
@@ -117,7 +122,10 @@ TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
     last_key = "volume.series", last_at = file + ": files[" + std::to_string(t.files.size() - 1) + "]: ";
   }
   if (t.files.size() > (size_t)kMaxSteps) fail("volume.series", "more than " + std::to_string(kMaxSteps) + " steps");
-  for (const std::string& f : t.files) {  // a folder a step would be scanned by every process at every step
+  // A folder a step would be scanned by every process at every step. A pattern's steps are
+  // one form: its ends tell (a stat per step made a 1,000,000-step pattern start in seconds).
+  std::vector<std::string> ends = t.pattern.empty() ? t.files : std::vector<std::string>{t.files.front(), t.files.back()};
+  for (const std::string& f : ends) {
     std::error_code no_throw;
     const VolumeFormat fmt = volumeFormatOf(f);
     if (fmt == VolumeFormat::Dicom || (fmt == VolumeFormat::Tiff && std::filesystem::is_directory(f, no_throw)))

@@ -40,7 +40,11 @@ void volume(YAML::Emitter& e, const Scene& s) {
   if (const auto* raw = std::get_if<RawVolumeSpec>(&s.volume)) {
     if (s.series.files.empty()) {
       e << YAML::Key << "file" << YAML::Value << absolutePath(raw->file);
-    } else {  // as a list: a pattern or a .series file lists the same names
+    } else if (!s.series.pattern.empty()) {
+      e << YAML::Key << "series" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "pattern" << YAML::Value
+        << s.series.pattern << YAML::Key << "first" << YAML::Value << s.series.first << YAML::Key << "last"
+        << YAML::Value << s.series.first + s.series.steps - 1 << YAML::EndMap;
+    } else {  // as a list: a .series file lists the same names
       e << YAML::Key << "series" << YAML::Value << YAML::BeginSeq;
       for (const auto& f : s.series.files) e << absolutePath(f);
       e << YAML::EndSeq;
@@ -191,6 +195,7 @@ std::string sceneIdentity(const Scene& scene) {
   auto* raw = std::get_if<RawVolumeSpec>(&s.volume);
   if (raw) byName(raw->file);
   for (std::string& f : s.series.files) byName(f);
+  s.series.pattern.clear();  // its folder is this host's: the names, as a list's, are compared
   if (s.mesh && !s.mesh->file.empty()) byName(s.mesh->file);
   if (const size_t n = s.series.files.size(); n > kListedSteps) {
     uint64_t h = fnv1a("");

@@ -196,6 +196,13 @@ TEST(TimeSeries, APercentInTheScenesFolderIsNotPartOfThePattern) {
     const Scene ref = scene(t, "  series: [t0.raw, t1.raw, t2.raw, t3.raw]\n" + kRaw);
     EXPECT_EQ(loadVolume(s, VoxelBox{{0, 0, 0}, {kSx, kSy, kSz}}, 2).values,
               loadVolume(ref, VoxelBox{{0, 0, 0}, {kSx, kSy, kSz}}, 2).values);
+    // The effective scene says the pattern, not a line per step (tessera-info printed
+    // 1,000,000 lines for a pattern of as many steps), and names the same files parsed again.
+    const std::string yaml = sceneYaml(s);
+    EXPECT_NE(yaml.find("series: {pattern: "), std::string::npos) << yaml;
+    EXPECT_EQ(yaml.find("t1.raw"), std::string::npos) << yaml;
+    const Scene again = parseScene(yaml, "/elsewhere", "again.yaml");
+    EXPECT_EQ(again.series.files, s.series.files) << yaml;
   }
 }
 
