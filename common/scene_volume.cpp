@@ -124,8 +124,8 @@ TimeSeries Parser::seriesFiles(const YAML::Node& n) const {
   if (t.files.size() > (size_t)kMaxSteps) fail("volume.series", "more than " + std::to_string(kMaxSteps) + " steps");
   // A folder a step would be scanned by every process at every step. A pattern's steps are
   // one form: its ends tell (a stat per step made a 1,000,000-step pattern start in seconds).
-  std::vector<std::string> ends = t.pattern.empty() ? t.files : std::vector<std::string>{t.files.front(), t.files.back()};
-  for (const std::string& f : ends) {
+  const std::vector<std::string> ends{t.files.front(), t.files.back()};
+  for (const std::string& f : t.pattern.empty() ? t.files : ends) {
     std::error_code no_throw;
     const VolumeFormat fmt = volumeFormatOf(f);
     if (fmt == VolumeFormat::Dicom || (fmt == VolumeFormat::Tiff && std::filesystem::is_directory(f, no_throw)))

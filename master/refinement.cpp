@@ -83,8 +83,7 @@ void Refinement::timeKey(proto::TimeKey key) {
     play_.step = finished ? first : step_;
     // A swing goes on the way it went: its phase there and back (a resumed swing always
     // headed forwards: found by review).
-    Playback ahead = play_;
-    if (play_.mode == Playback::Mode::Swing && !finished && heading_ != 0 && (ahead.stepAt(1, steps_) - step_) * heading_ < 0)
+    if (play_.mode == Playback::Mode::Swing && !finished && heading_ != 0 && (play_.stepAt(1, steps_) - step_) * heading_ < 0)
       play_.step = 2 * (steps_ - 1) - step_;
     played_ = 0;
     step_ = play_.stepAt(0, steps_);

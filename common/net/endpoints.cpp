@@ -39,6 +39,27 @@ TcpBase parseTcp(const std::string& base) {
   return {rest.substr(0, colon), port};
 }
 
+// A tcp endpoint's host, without an IPv6 address's brackets.
+std::string tcpHost(const std::string& endpoint) {
+  std::string host = endpoint.substr(6, endpoint.rfind(':') - 6);
+  if (host.size() > 1 && host.front() == '[') host = host.substr(1, host.size() - 2);
+  return host;
+}
+
+// 127/8 (Debian names its host 127.0.1.1) or ::1.
+bool isLoopback(const sockaddr* a) {
+  if (a->sa_family == AF_INET) return (ntohl(reinterpret_cast<const sockaddr_in*>(a)->sin_addr.s_addr) >> 24) == 127;
+  return a->sa_family == AF_INET6 && IN6_IS_ADDR_LOOPBACK(&reinterpret_cast<const sockaddr_in6*>(a)->sin6_addr);
+}
+
+bool sameAddress(const sockaddr* a, const sockaddr* b) {
+  if (a->sa_family != b->sa_family) return false;
+  if (a->sa_family == AF_INET)
+    return reinterpret_cast<const sockaddr_in*>(a)->sin_addr.s_addr == reinterpret_cast<const sockaddr_in*>(b)->sin_addr.s_addr;
+  const auto& x = reinterpret_cast<const sockaddr_in6*>(a)->sin6_addr.s6_addr;
+  return a->sa_family == AF_INET6 && std::equal(std::begin(x), std::end(x), reinterpret_cast<const sockaddr_in6*>(b)->sin6_addr.s6_addr);
+}
+
 }  // namespace
 
 std::string envOr(const char* name, const std::string& fallback) {
@@ -153,7 +174,7 @@ std::string Endpoints::bind(const std::string& connect_form) const {
 std::string bindableEndpoint(const std::string& endpoint) {
   if (!startsWith(endpoint, "tcp://")) return endpoint;
   const size_t colon = endpoint.rfind(':');
-  const std::string host = endpoint.substr(6, colon - 6);
+  const std::string host = endpoint.substr(6, colon - 6);  // brackets kept: an IPv6 address binds as it is
   if (host == "*" || host.empty() || host.front() == '[' || if_nametoindex(host.c_str()) != 0) return endpoint;
   in_addr numeric{};
   if (inet_pton(AF_INET, host.c_str(), &numeric) == 1) return endpoint;
@@ -167,12 +188,12 @@ std::string bindableEndpoint(const std::string& endpoint) {
                              "as a host name it does not resolve here (" + gai_strerror(rc) + "); set TESSERA_BIND_HOST " +
                              "to this host's address or 0.0.0.0");
   char text[INET_ADDRSTRLEN] = {};
-  const in_addr address = reinterpret_cast<sockaddr_in*>(found->ai_addr)->sin_addr;
-  inet_ntop(AF_INET, &address, text, sizeof text);
+  inet_ntop(AF_INET, &reinterpret_cast<sockaddr_in*>(found->ai_addr)->sin_addr, text, sizeof text);
+  const bool loopback = isLoopback(found->ai_addr);
   freeaddrinfo(found);
   // /etc/hosts often maps the machine's own name to loopback (Debian: 127.0.1.1): bound
   // there, no other host reaches it.
-  if ((ntohl(address.s_addr) >> 24) == 127 && host != "localhost")
+  if (loopback && host != "localhost")
     spdlog::warn("binding {}: '{}' resolves to {} here, a loopback address no other host can reach; for a farm across "
                  "hosts set TESSERA_BIND_HOST to this host's address or 0.0.0.0", endpoint, host, text);
   return "tcp://" + std::string(text) + endpoint.substr(colon);
@@ -180,8 +201,7 @@ std::string bindableEndpoint(const std::string& endpoint) {
 
 bool endpointIsHere(const std::string& endpoint) {
   if (!startsWith(endpoint, "tcp://")) return true;
-  std::string host = endpoint.substr(6, endpoint.rfind(':') - 6);
-  if (host.size() > 1 && host.front() == '[') host = host.substr(1, host.size() - 2);
+  const std::string host = tcpHost(endpoint);
   if (host == "*" || host == "0.0.0.0" || host == "::") return true;
   addrinfo hints{};
   hints.ai_socktype = SOCK_STREAM;
@@ -189,21 +209,11 @@ bool endpointIsHere(const std::string& endpoint) {
   if (getaddrinfo(host.c_str(), nullptr, &hints, &found) != 0 || !found) return true;
   ifaddrs* ifs = nullptr;
   if (getifaddrs(&ifs) != 0) return freeaddrinfo(found), true;
-  bool here = false;
-  for (addrinfo* a = found; a && !here; a = a->ai_next)  // loopback is here: 127/8 (Debian names its host 127.0.1.1), ::1
-    here = (a->ai_family == AF_INET && (ntohl(reinterpret_cast<sockaddr_in*>(a->ai_addr)->sin_addr.s_addr) >> 24) == 127) ||
-           (a->ai_family == AF_INET6 && IN6_IS_ADDR_LOOPBACK(&reinterpret_cast<sockaddr_in6*>(a->ai_addr)->sin6_addr));
-  for (addrinfo* a = found; a && !here; a = a->ai_next)
-    for (ifaddrs* i = ifs; i && !here; i = i->ifa_next) {
-      if (!i->ifa_addr || i->ifa_addr->sa_family != a->ai_family) continue;
-      if (a->ai_family == AF_INET)
-        here = reinterpret_cast<sockaddr_in*>(a->ai_addr)->sin_addr.s_addr ==
-               reinterpret_cast<sockaddr_in*>(i->ifa_addr)->sin_addr.s_addr;
-      else if (a->ai_family == AF_INET6)
-        here = std::equal(std::begin(reinterpret_cast<sockaddr_in6*>(a->ai_addr)->sin6_addr.s6_addr),
-                          std::end(reinterpret_cast<sockaddr_in6*>(a->ai_addr)->sin6_addr.s6_addr),
-                          std::begin(reinterpret_cast<sockaddr_in6*>(i->ifa_addr)->sin6_addr.s6_addr));
-    }
+  bool here = false;  // loopback, or an interface's address (getifaddrs lists only 127.0.0.1 of 127/8)
+  for (addrinfo* a = found; a && !here; a = a->ai_next) {
+    here = isLoopback(a->ai_addr);
+    for (ifaddrs* i = ifs; i && !here; i = i->ifa_next) here = i->ifa_addr && sameAddress(a->ai_addr, i->ifa_addr);
+  }
   freeifaddrs(ifs);
   freeaddrinfo(found);
   return here;
