@@ -2,6 +2,7 @@
 #include <nifti2_io.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -73,6 +74,22 @@ std::string headerProblem(const std::string& path) {
   return "";
 }
 
+// Which of the header's spacings (pixdim[1..3]) are given: nifticlib turns 0 and NaN into 1
+// when it reads, so the header is read once more as stored.
+std::array<bool, 3> spacingsGiven(const std::string& path) {
+  std::array<bool, 3> given{true, true, true};
+  std::unique_ptr<char, void (*)(void*)> hdr(nifti_findhdrname(path.c_str()), std::free);
+  int version = 0;
+  std::unique_ptr<void, void (*)(void*)> h(nifti_read_header(hdr ? hdr.get() : path.c_str(), &version, 0), std::free);
+  if (!h) return given;
+  for (int a = 0; a < 3; ++a) {
+    const double p = version == 2 ? static_cast<nifti_2_header*>(h.get())->pixdim[a + 1]
+                                  : static_cast<nifti_1_header*>(h.get())->pixdim[a + 1];
+    given[a] = p != 0 && std::isfinite(p);
+  }
+  return given;
+}
+
 }  // namespace
 
 RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps) {
@@ -130,10 +147,14 @@ RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps) {
            ") is not a scalar type Tessera renders (uint8, int8, uint16, int16, uint32, int32, float32, float64)");
   }
   const double d[3] = {used(1) ? nim->dx : 1, used(2) ? nim->dy : 1, used(3) ? nim->dz : 1};
+  const std::array<bool, 3> given = spacingsGiven(path);
   for (int a = 0; a < 3; ++a) {
-    // A spacing of 0 is common in hand-made headers; pixdim's sign belongs to orientation.
-    // Checked by the scene parser, after the scene's volume.spacing (which may replace a bad one).
-    s.spacing[a] = d[a] == 0 ? 1.0 : std::fabs(d[a]);
+    // A spacing of 0 (or NaN) is common in hand-made headers: 1, and a warning says so (as a
+    // TIFF's missing one). pixdim's sign belongs to orientation. Checked by the scene parser,
+    // after the scene's volume.spacing (which may replace a bad one).
+    const bool known = d[a] != 0 && std::isfinite(d[a]) && (!used(a + 1) || given[a]);
+    s.spacing[a] = known ? std::fabs(d[a]) : 1.0;
+    s.spacing_known[a] = known || !used(a + 1);
   }
   if (nim->scl_slope != 0 && std::isfinite(nim->scl_slope) && std::isfinite(nim->scl_inter)) {
     s.slope = nim->scl_slope;

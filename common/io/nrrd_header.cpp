@@ -44,31 +44,37 @@ std::string lower(std::string v) {
   return v;
 }
 
-// A spacing NRRD leaves unknown (nan, none, 0) is 1, as NIfTI's 0; the scene may replace it.
-double knownOrOne(double x) { return std::isfinite(x) && x != 0 ? std::fabs(x) : 1.0; }
+// A spacing NRRD leaves unknown (nan, none, 0, or no field) is 1 and marked unknown (a
+// warning says so), as NIfTI's 0; the scene may replace it.
+bool isKnown(double x) { return std::isfinite(x) && x != 0; }
 
 // "spacings: a b c", or "space directions: (x,y,z) (x,y,z) (x,y,z)" whose lengths are the
 // spacing (the rotation is not applied; a vector has "space dimension" components, and an
 // axis that is not space is "none"); neither: 1. False if present but unreadable.
-bool readSpacing(std::map<std::string, std::string>& f, std::array<double, 3>& spacing) {
+bool readSpacing(std::map<std::string, std::string>& f, std::array<double, 3>& spacing, std::array<bool, 3>& known) {
+  auto set = [&](int a, double v) {
+    known[a] = isKnown(v);
+    spacing[a] = known[a] ? std::fabs(v) : 1.0;
+  };
+  known = {false, false, false};
   if (f.count("spacings")) {
     std::istringstream sp(f["spacings"]);
-    for (double& x : spacing) {
+    for (int a = 0; a < 3; ++a) {
       std::string t;
       if (!(sp >> t)) return false;
       char* end = nullptr;
       const double v = std::strtod(t.c_str(), &end);  // reads nan too
       if (end != t.c_str() + t.size()) return false;
-      x = knownOrOne(v);
+      set(a, v);
     }
   } else if (f.count("spacedirections")) {
     const std::string& d = f["spacedirections"];
     size_t i = 0;
-    for (double& x : spacing) {
+    for (int a = 0; a < 3; ++a) {
       i = d.find_first_not_of(" \t", i);
       if (i == std::string::npos) return false;
       if (lower(d.substr(i, 4)) == "none") {
-        x = 1, i += 4;
+        set(a, 0), i += 4;
         continue;
       }
       const size_t close = d.find(')', i);
@@ -80,7 +86,7 @@ bool readSpacing(std::map<std::string, std::string>& f, std::array<double, 3>& s
       int n = 0;
       while (v >> c) sum += c * c, ++n;
       if (n == 0 || !v.eof()) return false;
-      x = knownOrOne(std::sqrt(sum));
+      set(a, std::sqrt(sum));
       i = close + 1;
     }
   }
@@ -156,7 +162,7 @@ RawVolumeSpec readNrrdHeader(const std::string& path, int* time_steps) {
            (axes == 4 ? "a 4-D volume needs 3 space axes then time" : "a volume's 3 axes must be space (domain)"));
     }
   }
-  if (!readSpacing(f, s.spacing)) fail("spacing '" + f["spacings"] + f["spacedirections"] + "'");
+  if (!readSpacing(f, s.spacing, s.spacing_known)) fail("spacing '" + f["spacings"] + f["spacedirections"] + "'");
   // Its range is checked by the scene parser, after the scene's volume.spacing (which may replace it).
   const std::string enc = lower(need("encoding"));
   if (enc == "gzip" || enc == "gz") s.gzip = true;

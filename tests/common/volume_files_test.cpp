@@ -7,14 +7,17 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <tuple>
 #include <vector>
 
 #include "common/io/volume_files.h"
 #include "common/scene.h"
+#include "common/scene_warnings.h"
 #include "tests/common/load_error.h"
 #include "tests/common/raw_spec.h"
 #include "tests/common/temp_dir.h"
@@ -227,6 +230,48 @@ TEST(VolumeFiles, TheSceneReplacesABadHeaderSpacingAndShortFourDFilesAreSaidAtOn
                                          "data file: d4.raw\n";
   const std::string e = loadError("volume: {file: short.nhdr}\n", t.path.string());
   EXPECT_NE(e.find("d4.raw has 8 bytes but 1000 time steps of 8 bytes need 8000"), std::string::npos) << e;
+}
+
+// A spacing the header leaves unknown (NIfTI's pixdim 0 or NaN; NRRD's nan, 0, "none" or no
+// spacing field) is 1, and the warning names the axes, as for a TIFF; the scene's spacing
+// silences it. It used to become 1 silently.
+bool warnsNoSpacing(const TempDir& t, const std::string& volume, const std::string& axes) {
+  const Scene s = parseScene("volume: " + volume + "\n", t.path.string(), "s.yaml");
+  const std::vector<std::string> w = volumeWarnings(s, loadVolume(s));
+  const std::string what = axes.empty() ? "gives no voxel spacing" : "gives no voxel spacing along " + axes + ": 1 assumed";
+  return std::any_of(w.begin(), w.end(), [&](const std::string& x) { return x.find(what) != std::string::npos; });
+}
+
+TEST(VolumeFiles, ASpacingTheHeaderLeavesUnknownIsOneAndSaid) {
+  TempDir t("unknown-spacing");
+  const int64_t dims[8] = {3, 2, 2, 2, 1, 1, 1, 1};
+  for (const auto& [name, dx, dz] : {std::tuple{"z0.nii", 2.0, 0.0}, std::tuple{"xnan.nii", std::nan(""), 3.0}}) {
+    nifti_image* nim = nifti_make_new_nim(dims, DT_UINT8, 1);
+    nim->dx = nim->pixdim[1] = dx;
+    nim->dy = nim->pixdim[2] = 1;
+    nim->dz = nim->pixdim[3] = dz;
+    nifti_set_filenames(nim, t.file(name).c_str(), 0, 1);
+    nifti_image_write(nim);
+    nifti_image_free(nim);
+  }
+  EXPECT_EQ(fromScene("volume: {file: z0.nii}\n", t.path.string()).spacing, (std::array<double, 3>{2, 1, 1}));
+  EXPECT_TRUE(warnsNoSpacing(t, "{file: z0.nii}", "z"));
+  EXPECT_EQ(fromScene("volume: {file: xnan.nii}\n", t.path.string()).spacing, (std::array<double, 3>{1, 1, 3}));
+  EXPECT_TRUE(warnsNoSpacing(t, "{file: xnan.nii}", "x"));
+  const char bytes[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+  t.write("v.raw", bytes, sizeof bytes);
+  const std::string head = "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\ndata file: v.raw\n";
+  std::ofstream(t.file("nan.nhdr")) << head << "spacings: 0.5 nan 2\n";
+  std::ofstream(t.file("none.nhdr")) << head;
+  std::ofstream(t.file("dirs.nhdr")) << head << "space dimension: 3\nspace directions: (0,0,3) none (0,0.5,0)\n";
+  EXPECT_EQ(fromScene("volume: {file: nan.nhdr}\n", t.path.string()).spacing, (std::array<double, 3>{0.5, 1, 2}));
+  EXPECT_TRUE(warnsNoSpacing(t, "{file: nan.nhdr}", "y"));
+  EXPECT_TRUE(warnsNoSpacing(t, "{file: none.nhdr}", "x, y, z"));
+  EXPECT_EQ(fromScene("volume: {file: dirs.nhdr}\n", t.path.string()).spacing, (std::array<double, 3>{3, 1, 0.5}));
+  EXPECT_TRUE(warnsNoSpacing(t, "{file: dirs.nhdr}", "y"));
+  writeNifti(t.file("known.nii"));  // every spacing given: no warning
+  EXPECT_FALSE(warnsNoSpacing(t, "{file: known.nii}", ""));
+  EXPECT_FALSE(warnsNoSpacing(t, "{file: none.nhdr, spacing: [1, 1, 1]}", ""));
 }
 
 // Found by a review against nifticlib's and teem's sources: files other tools write, which
