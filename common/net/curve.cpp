@@ -158,8 +158,7 @@ std::string HandshakeWatch::failing(int failures) {
 
 bool endpointLeavesHost(const std::string& endpoint) {
   if (endpoint.rfind("tcp://", 0) != 0) return false;
-  std::string host = endpoint.substr(6, endpoint.rfind(':') - 6);
-  if (host.size() > 1 && host.front() == '[') host = host.substr(1, host.size() - 2);  // [::1]
+  const std::string host = tcpHost(endpoint);
   return !(host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0);
 }
 

@@ -39,13 +39,6 @@ TcpBase parseTcp(const std::string& base) {
   return {rest.substr(0, colon), port};
 }
 
-// A tcp endpoint's host, without an IPv6 address's brackets.
-std::string tcpHost(const std::string& endpoint) {
-  std::string host = endpoint.substr(6, endpoint.rfind(':') - 6);
-  if (host.size() > 1 && host.front() == '[') host = host.substr(1, host.size() - 2);
-  return host;
-}
-
 // 127/8 (Debian names its host 127.0.1.1) or ::1.
 bool isLoopback(const sockaddr* a) {
   if (a->sa_family == AF_INET) return (ntohl(reinterpret_cast<const sockaddr_in*>(a)->sin_addr.s_addr) >> 24) == 127;
@@ -61,6 +54,12 @@ bool sameAddress(const sockaddr* a, const sockaddr* b) {
 }
 
 }  // namespace
+
+std::string tcpHost(const std::string& endpoint) {
+  std::string host = endpoint.substr(6, endpoint.rfind(':') - 6);
+  if (host.size() > 1 && host.front() == '[') host = host.substr(1, host.size() - 2);
+  return host;
+}
 
 std::string envOr(const char* name, const std::string& fallback) {
   const char* v = std::getenv(name);

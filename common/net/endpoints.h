@@ -58,6 +58,8 @@ std::string bindableEndpoint(const std::string& endpoint);
 // for ipc/inproc, for 0.0.0.0 and when it cannot tell (a name that does not resolve here).
 // What a stage checks before it tells peers to send to that address.
 bool endpointIsHere(const std::string& endpoint);
+// A tcp endpoint's host ("tcp://[::1]:5550" -> "::1"): without an IPv6 address's brackets.
+std::string tcpHost(const std::string& endpoint);
 // The environment variable `name`, or `fallback` when it is unset or empty.
 std::string envOr(const char* name, const std::string& fallback);
 
