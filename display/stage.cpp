@@ -35,8 +35,14 @@ class Stage {
 
   int run(const std::atomic<bool>* stop) {
     if (!link_.join(stop)) {
-      // Stopped (Ctrl-C) while it waited, or the run ended first: not a failure to join.
-      if ((stop && *stop) || link_.runEnded()) return 0;
+      if (stop && *stop) return 0;  // stopped (Ctrl-C) while it waited
+      // The master cannot finish a run without the display: one that ended first failed (a
+      // bad volume, say), and the display's exit is the farm's verdict (tessera-up's, and
+      // `docker compose --exit-code-from display`'s). It exited 0: found by review.
+      if (link_.runEnded()) {
+        spdlog::error("the run ended before this display showed a frame (the master's reason is above)");
+        return 1;
+      }
       spdlog::error("display could not join the master at {}", opt_.endpoints.masterControl());
       return 1;
     }

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <functional>
 #include <future>
+#include <limits>
 #include <numeric>
 #include <thread>
 
@@ -357,6 +358,22 @@ void expectFatalLoss(const std::string& name, const std::string& program) {
       << run.output;
   EXPECT_EQ(run.output.find("restarting"), std::string::npos) << "nothing is restarted while stopping: " << run.output;
   EXPECT_TRUE(waitFor([&] { return farmPids(sockets).empty(); }, 10s)) << "farm processes left behind";
+}
+
+// A scene the master cannot read ends the run before any frame: tessera-up exits non-zero, as
+// tessera-render does, naming the voxel (it exited 0: the display finished cleanly first).
+TEST(FarmFaults, AVolumeTheMasterCannotReadFailsTheRun) {
+  FarmDir dir("unreadable");
+  std::vector<float> v(8 * 8 * 8, 0.5f);
+  v[3 + 8 * (2 + 8 * 1)] = std::numeric_limits<float>::quiet_NaN();
+  std::ofstream(dir.path() / "nan.raw", std::ios::binary).write(reinterpret_cast<const char*>(v.data()), v.size() * 4);
+  const fs::path scene = dir.path() / "nan.yaml";
+  std::ofstream(scene) << "volume: {file: nan.raw, dims: [8, 8, 8], type: float32}\nimage: [40, 30]\n";
+  const auto run = dir.runFarm(scene, 2, 1, 1, 60);
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("non-finite value nan at voxel (3, 2, 1)"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("the run ended before this display showed a frame"), std::string::npos) << run.output;
+  EXPECT_EQ(run.output.find("restarting"), std::string::npos) << "nothing is restarted: " << run.output;
 }
 
 TEST(FarmFaults, KilledMasterStopsTheFarmCleanly) { expectFatalLoss("master", "tessera-master"); }
