@@ -5,12 +5,14 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
+#include <fmt/format.h>
 #include <zlib.h>
 
 #include "common/io/volume_files.h"
@@ -71,6 +73,16 @@ std::string headerProblem(const std::string& path) {
   }
   const int datatype = version == 1 ? i16(70, swap) : i16(12, swap);
   if (!nifti_is_valid_datatype(datatype)) return "datatype " + std::to_string(datatype) + " is not a NIfTI type code";
+  // A single file's voxels follow its header and 4 extension bytes; nifticlib reads a smaller
+  // vox_offset (0, negative) as the header's end, 4 bytes early: every voxel shifted.
+  const bool single = std::memcmp(version == 1 ? h + 344 : h + 4, version == 1 ? "n+1" : "n+2", 4) == 0;
+  uint32_t bits = (uint32_t)i32(108, swap);
+  float offset1 = 0;
+  std::memcpy(&offset1, &bits, 4);
+  const double offset = version == 1 ? (double)offset1 : (double)i64(168, swap);
+  if (single && !(offset >= size + 4))
+    return "vox_offset = " + fmt::format("{}", offset) + ": the voxels of a single-file NIfTI-" + std::to_string(version) +
+           " start at byte " + std::to_string(size + 4) + " or later";
   return "";
 }
 
@@ -96,6 +108,14 @@ RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps) {
   auto fail = [&](const std::string& what) -> RawVolumeSpec { throw std::runtime_error(path + ": " + what); };
   nifti_set_debug_level(0);  // its messages go to stderr; ours name the file and field
   std::unique_ptr<nifti_image, void (*)(nifti_image*)> nim(nifti_image_read(path.c_str(), 0), nifti_image_free);
+  // nifticlib also repairs what it reads: a dim of 0 or below becomes 1 (the rest of the file
+  // ignored), a .nii's vox_offset below 352 the header's end. Either renders the wrong voxels
+  // without a word, so the header's own bytes are checked too (found by review).
+  if (nim) {
+    std::unique_ptr<char, void (*)(void*)> hdr(nifti_findhdrname(path.c_str()), std::free);
+    if (std::string why = headerProblem(hdr ? hdr.get() : path); !why.empty())
+      return fail("not a readable NIfTI file: " + why);
+  }
   if (!nim) {
     // nifticlib decompresses by the name only: a gzipped file named .nii reads as a bad header.
     if (startsWithGzipMagic(path) && !nifti_is_gzfile(path.c_str()))

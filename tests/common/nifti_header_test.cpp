@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 #include <nifti2_io.h>
 
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <string>
+
+#include <fmt/format.h>
 
 #include "tests/common/load_error.h"
 #include "tests/common/temp_dir.h"
@@ -39,6 +42,20 @@ TEST(NiftiHeader, ABadHeaderIsSaidByWhatIsWrong) {
   std::string dim0 = good;
   dim0[40] = 9, dim0[41] = 0;  // little-endian int16, as nifticlib wrote it here
   expectSays(write("dim0.nii", dim0), "dim0.nii: not a readable NIfTI file: dim[0] = 9, must be in 1..7");
+  // What nifticlib repairs without a word (found by review): a dim of 0 or below (a NIfTI-1
+  // writer's 16-bit dim wrapped), and a single file's vox_offset below 352.
+  std::string dim3 = good;
+  dim3[46] = 0, dim3[47] = 0;
+  expectSays(write("dim3.nii", dim3), "dim3.nii: not a readable NIfTI file: dim[3] = 0, must be at least 1");
+  std::string wrapped = good;
+  wrapped[44] = (char)0xf0, wrapped[45] = (char)0xff;  // -16
+  expectSays(write("wrapped.nii", wrapped), "dim[2] = -16, must be at least 1");
+  for (float offset : {0.0f, 100.0f, -5.0f}) {
+    std::string moved = good;
+    std::memcpy(moved.data() + 108, &offset, 4);
+    expectSays(write("moved.nii", moved), "moved.nii: not a readable NIfTI file: vox_offset = " + fmt::format("{}", offset) +
+                                              ": the voxels of a single-file NIfTI-1 start at byte 352 or later");
+  }
   expectSays(write("text.nii", "a text file, not a volume, named .nii by mistake\n"),
              "text.nii: not a readable NIfTI file: its first 4 bytes give a header size of");
 }
