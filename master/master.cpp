@@ -7,7 +7,6 @@
 #include <thread>
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 
 #include "common/net/curve.h"
 #include "common/net/log.h"
@@ -17,6 +16,7 @@
 #include "master/metrics.h"
 #include "master/plan.h"
 #include "master/preparation.h"
+#include "master/step_stand_ins.h"
 
 namespace tessera::master {
 namespace {
@@ -26,17 +26,15 @@ namespace {
 constexpr int64_t kMaxControlMessage = 1 << 20;
 using proto::Role;
 
-// The thin loop: wires the PUB and ROUTER sockets to membership, the credit window, the
-// plan of the scene's mode and the metrics.
+// The thin loop: the PUB and ROUTER sockets wired to membership, credit window, plan and metrics.
 class Master {
  public:
   Master(const MasterOptions& opt, zmq::context_t& ctx)
       : opt_(opt), pub_(makeSocket(ctx, zmq::socket_type::pub)), ctl_(makeSocket(ctx, zmq::socket_type::router, kMaxControlMessage)),
         window_(opt.in_flight, opt.deadline), total_frames_(opt.frames < 0 ? opt.scene.orbit.frames : opt.frames),
         refinement_(opt.scene), metrics_(opt.metrics_path, total_frames_) {
-    // No receive bound on the control socket: with makeSocket's 64, libzmq lost messages of a
-    // peer that sent faster than the master read (a third of 300 junk messages, never counted;
-    // Stats could be lost too). It is drained every loop (<= 50 ms); FarmFuzz bounds its memory.
+    // No receive bound: with makeSocket's 64, libzmq lost a third of 300 messages of a peer sending
+    // faster than it was read, uncounted (Stats too). Drained every loop (<= 50 ms); FarmFuzz bounds it.
     ctl_.set(zmq::sockopt::rcvhwm, 0);
     bindTo(pub_, opt_.endpoints.bind(opt_.endpoints.masterPub()));
     bindTo(ctl_, opt_.endpoints.bind(opt_.endpoints.masterControl()));
@@ -251,7 +249,8 @@ class Master {
     proto::FrameParams p;
     p.frame = frame;
     p.epoch = members_.epoch();
-    setView(p, spec);
+    stand_ins_.learn(metrics_.takeMixedSteps());
+    setView(p, stand_ins_.sent(spec));  // the renderers get the stand-in; the metrics keep the step asked
     p.codec = opt_.codec;
     // Projections' values travel exact: rgba16f rounds by up to 1/2048, > 1/255 on steep maps.
     p.format = isProjection(opt_.scene.blend) ? proto::PixelFormat::RGBA32F : opt_.format;
@@ -387,6 +386,7 @@ class Master {
   Refinement refinement_;
   DropCounter drops_;
   Metrics metrics_;
+  StepStandIns stand_ins_;
   std::unique_ptr<FarmNote> note_;
 };
 

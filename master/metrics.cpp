@@ -182,7 +182,10 @@ void Metrics::write(uint64_t frame, Frame& f) {
     if (s.images_made + s.images_reused > 0) shown.insert(s.step);  // a renderer without a brick shows none
   j["step"] = shown.size() == 1 ? *shown.begin() : f.spec.step;
   if (shown.size() > 1 || (shown.size() == 1 && (int)*shown.begin() != f.spec.step)) j["step_asked"] = f.spec.step;
-  if (shown.size() > 1) j["steps_shown"] = shown;  // renderers showed different steps: a mixed frame
+  if (shown.size() > 1) {  // renderers showed different steps: a mixed frame
+    j["steps_shown"] = shown;
+    mixed_.push_back({frame, f.spec.step, shown});
+  }
   j["master_dropped"] = f.master_dropped;
   j["reassignments"] = reassignments_;
   j["reissued_frames"] = reissued_;

@@ -8,7 +8,9 @@
 #include <cstdint>
 #include <fstream>
 #include <map>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -47,6 +49,15 @@ class Metrics {
   uint64_t reissuedFrames() const { return reissued_; }
   uint64_t refusedPeers() const { return refused_; }
 
+  // Frames whose renderers showed different steps (some could not read the step asked for),
+  // since the last call.
+  struct MixedSteps {
+    uint64_t frame = 0;
+    int asked = 0;
+    std::set<uint32_t> shown;
+  };
+  std::vector<MixedSteps> takeMixedSteps() { return std::exchange(mixed_, {}); }
+
   // The JSON object of one frame (exposed for tests).
   static nlohmann::json summarize(const std::vector<proto::StageStats>& renderers,
                                   const std::vector<proto::StageStats>& compositors, const proto::FrameDone& done,
@@ -72,6 +83,7 @@ class Metrics {
   std::map<uint64_t, Frame> frames_;
   uint64_t frames_done_ = 0;
   uint64_t reassignments_ = 0, reissued_ = 0, refused_ = 0, cancelled_ = 0;
+  std::vector<MixedSteps> mixed_;
   bool interactive_run_ = false;  // lines say what each frame showed (camera, size, level of detail)
   std::chrono::steady_clock::time_point start_;
   RunSummary run_;

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <fstream>
+#include <limits>
 #include <map>
 #include <regex>
 
@@ -118,6 +119,37 @@ TEST(FarmTime, AMissingOrShortStepIsNamedCountedAndSkipped) {
   }
   EXPECT_EQ(m[6]["step"], 6);
   EXPECT_FALSE(m[6].contains("step_asked"));
+}
+
+// A step bad in one renderer's bricks only (a NaN there): that renderer shows its last good
+// step while the other shows the step, so the frame mixes two steps (metrics: steps_shown).
+// From then on every renderer is asked for the stand-in, so the next pass shows one step
+// (it mixed on every pass: found by review).
+TEST(FarmTime, AStepBadInOneRenderersBricksMixesOneFrameOnly) {
+  FarmDir dir("time-bad-brick");
+  auto w = runCommand(bin("tessera-write-series") + " " + (dir.path() / "data").string() +
+                          " --size 24 --steps 8 --formats raw", 60);
+  ASSERT_EQ(w.exit_code, 0) << w.output;
+  {
+    std::fstream f(dir.path() / "data" / "step_00003.raw", std::ios::in | std::ios::out | std::ios::binary);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    f.write(reinterpret_cast<const char*>(&nan), 4);  // voxel (0, 0, 0): in one renderer's bricks
+  }
+  const fs::path scene = dir.path() / "data" / "series-raw.yaml";
+  std::ofstream(scene, std::ios::app) << "image: [64, 48]\ncamera: {eye: [0.4, 0.6, 2.0], target: [0, 0, 0], up: [0, 1, 0], fov: 30}\n";
+  const auto r = dir.runFarm(scene, 2, 1, 16);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("non-finite value nan at voxel (0, 0, 0)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("frame 3 showed steps 2 and 3 together"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("from now on every renderer shows step 2 in its place"), std::string::npos) << r.output;
+  const auto m = metrics(dir);
+  ASSERT_EQ(m.size(), 16u);
+  EXPECT_EQ(m[3]["steps_shown"], nlohmann::json::array({2, 3})) << m[3];
+  EXPECT_FALSE(m[11].contains("steps_shown")) << m[11];
+  EXPECT_EQ(m[11]["step"], 2) << m[11];
+  EXPECT_EQ(m[11]["step_asked"], 3) << m[11];
+  EXPECT_TRUE(dir.matches(dir.farmFrame(11), dir.reference(scene, 0, "--step 2"), 1, "stand_in"));
+  EXPECT_TRUE(dir.matches(dir.farmFrame(12), dir.reference(scene, 0, "--step 4"), 1, "after_stand_in"));
 }
 
 // A gzip 4-D file's steps are read through one stream per renderer (forwards: one step's
