@@ -71,7 +71,7 @@ std::optional<RangeAdvice> backgroundHaze(const ValueHistogram& h, const Transfe
 
 // A `window` beside every value the voxels keep (the mapped range clamps them before any
 // window) shows each voxel in one end colour; one narrower than 1/256 of the mapped range
-// shows in coarse steps (the casters' tables and 16-bit voxels resolve the range, not the window).
+// shows in coarse steps (the casters' 16-bit voxels resolve the range, not the window).
 std::string windowProblem(const Scene& scene, const Volume& shape) {
   if (!scene.window) return "";
   const ValueWindow& w = *scene.window;
@@ -90,6 +90,26 @@ std::string windowProblem(const Scene& scene, const Volume& shape) {
   else
     return "";
   return b;
+}
+
+// The fast kernels sample the map at kTfTableEntries scalars over where it varies: an opacity
+// peak narrower than two of those steps may show faint or not at all (a 0.0002-wide isovalue
+// spike vanished: found by review). The reference quality evaluates the map exactly.
+std::string narrowPeakProblem(const Scene& scene, const Volume& shape) {
+  if (scene.blend != Blend::Composite || scene.quality.reference) return "";
+  const TransferFunction tf = windowed(scene.tf, colorWindow(scene, shape.mapped_range));
+  const auto [lo, hi] = tf.variedSpan();
+  const double step = (hi - lo) / (kTfTableEntries - 1);
+  const auto& p = tf.points();
+  for (size_t i = 1; i + 1 < p.size(); ++i) {
+    if (!(p[i].a > p[i - 1].a && p[i].a > p[i + 1].a) || p[i + 1].s - p[i - 1].s >= 2 * step) continue;
+    char b[400];
+    std::snprintf(b, sizeof b, "transfer_function: the opacity peak at %.6g of the map is %.3g wide, under two steps "
+                  "(%.3g) of the table the fast kernels sample it at: it may show faint or not at all; widen it, or "
+                  "give quality: reference", p[i].s, p[i + 1].s - p[i - 1].s, 2 * step);
+    return b;
+  }
+  return "";
 }
 
 }  // namespace
@@ -119,6 +139,7 @@ std::vector<std::string> volumeWarnings(const Scene& scene, const Volume& shape)
     out.push_back(where + (raw && raw->has_range ? "volume.range: " : "volume: ") + why);
   }
   if (std::string why = windowProblem(scene, shape); !why.empty()) out.push_back(where + why);
+  if (std::string why = narrowPeakProblem(scene, shape); !why.empty()) out.push_back(where + why);
   // A minimum over a whole volume is, for most rays, the background around the object (a CT's
   // air): the image shows that one value's colour.
   if (scene.blend == Blend::Minimum && scene.crop.whole())

@@ -49,6 +49,17 @@ double TransferFunction::maxAlpha(double lo, double hi) const {
   return m;
 }
 
+std::array<double, 2> TransferFunction::variedSpan() const {
+  const auto& p = points_;
+  if (p.empty()) return {0, 1};
+  auto same = [](const TfPoint& a, const TfPoint& b) { return a.r == b.r && a.g == b.g && a.b == b.b && a.a == b.a; };
+  size_t i = 0, j = p.size() - 1;
+  while (i < j && same(p[i + 1], p.front())) ++i;  // constant up to p[i]
+  while (j > i && same(p[j - 1], p.back())) --j;   // and from p[j] on
+  const double lo = std::max(0.0, p[i].s), hi = std::min(1.0, p[j].s);
+  return hi - lo > 1e-6 ? std::array<double, 2>{lo, hi} : std::array<double, 2>{0, 1};
+}
+
 TransferFunction windowed(const TransferFunction& tf, const ColorWindow& w) {
   if (!std::isfinite(w.center) || !std::isfinite(w.width) || !(w.width > 0))
     throw std::invalid_argument("colour window: center " + std::to_string(w.center) + " and width " +

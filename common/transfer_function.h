@@ -8,6 +8,8 @@
 namespace tessera {
 
 inline constexpr double kL0 = 1.0 / 256.0;
+// The fast kernels sample a map at this many scalars over its varied span (renderer TfTable).
+inline constexpr int kTfTableEntries = 4096;
 
 struct TfPoint {
   double s, r, g, b, a;
@@ -25,6 +27,9 @@ class TransferFunction {
   // Largest alpha over scalars in [lo, hi] (exact: checks the end points and control points inside).
   double maxAlpha(double lo, double hi) const;
   const std::vector<TfPoint>& points() const { return points_; }
+  // Where the map varies: [0, 1], or less where it is constant up to or from an end (below and
+  // above a colour window, say); [0, 1] for a constant map or a step at one scalar.
+  std::array<double, 2> variedSpan() const;
   bool operator==(const TransferFunction&) const = default;
 
  private:

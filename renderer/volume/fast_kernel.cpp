@@ -47,6 +47,7 @@ struct Consts {
   const float* rgba;
   const int32_t* nonzero;
   int first_nz, last_nz;  // TfTable::firstNonzero/lastNonzero
+  float to_table, table_offset;
   bool gather;             // read voxels (and gradients) by gather instructions (cpuGathers)
   // Shading (fast_shade.h); grad == nullptr: unlit.
   const int16_t* grad;
@@ -70,8 +71,6 @@ struct Accum {
 #endif
 };
 
-// Table position of a scalar in quantized units [0, 65535].
-constexpr float kToTable = (float)(TfTable::kEntries - 1) / VolumeAccel::kQuantScale;
 
 #include "renderer/volume/fast_shade.h"
 #include "renderer/volume/fast_packets.h"
@@ -90,6 +89,9 @@ Consts frameConsts(const FastContext& ctx) {
   c.occ = nullptr;  // per ray: only while skipping
   c.rgba = ctx.table->rgba();
   c.nonzero = ctx.table->nonzero();
+  // Table position of a scalar in quantized units [0, 65535]: s * to_table + table_offset.
+  c.to_table = ctx.table->scale() / VolumeAccel::kQuantScale;
+  c.table_offset = ctx.table->offset();
   c.first_nz = ctx.table->firstNonzero();
   c.last_nz = ctx.table->lastNonzero();
   c.gather = cpuGathers() == Gathers::Hardware;

@@ -114,7 +114,7 @@ inline int classifyPacket(const Consts& c, int64_t k0, int lanes, int first_off,
   };
   auto lerp = [](__m256 a, __m256 b2, __m256 t) { return _mm256_fmadd_ps(t, _mm256_sub_ps(b2, a), a); };
   const __m256 s = lerp(lerp(lerpx(g00), lerpx(g10), f[1]), lerp(lerpx(g01), lerpx(g11), f[1]), f[2]);
-  __m256 ft = _mm256_mul_ps(s, _mm256_set1_ps(kToTable));
+  __m256 ft = _mm256_fmadd_ps(s, _mm256_set1_ps(c.to_table), _mm256_set1_ps(c.table_offset));
   ft = _mm256_min_ps(_mm256_max_ps(ft, _mm256_setzero_ps()), _mm256_set1_ps((float)(TfTable::kEntries - 1)));
   const __m256i ti = _mm256_min_epi32(_mm256_cvttps_epi32(ft), _mm256_set1_epi32(TfTable::kEntries - 2));
   const __m256 w = _mm256_sub_ps(ft, _mm256_cvtepi32_ps(ti));
@@ -228,7 +228,7 @@ inline int packet(const Consts& c, int64_t k0, int lanes, float et, Accum& acc, 
     constexpr int oy = VolumeAccel::kEdge, oz = VolumeAccel::kEdge * VolumeAccel::kEdge;
     auto lx = [&](const uint16_t* q) { return lerp((float)q[0], (float)q[1], f[0]); };
     const float s = lerp(lerp(lx(p), lx(p + oy), f[1]), lerp(lx(p + oz), lx(p + oy + oz), f[1]), f[2]);
-    const float ft = std::min(std::max(s * kToTable, 0.0f), (float)(TfTable::kEntries - 1));
+    const float ft = std::min(std::max(std::fma(s, c.to_table, c.table_offset), 0.0f), (float)(TfTable::kEntries - 1));
     const int ti = std::min((int)ft, TfTable::kEntries - 2);
     const float w = ft - (float)ti;
     if (!c.nonzero[ti]) continue;

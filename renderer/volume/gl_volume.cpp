@@ -86,6 +86,7 @@ struct GlVolumeRenderer::Impl {
   int fb_w = 0, fb_h = 0, span_w = 0, span_h = 0;
   double table_step = -1;
   int first_nz = 0, last_nz = -1;
+  float table_scale = TfTable::kEntries - 1, table_offset = 0;
   std::array<int, 3> nb{1, 1, 1};
   mutable std::mutex mu;
   std::unique_ptr<Raycaster> reference;  // CPU double-precision path for quality: reference
@@ -147,6 +148,7 @@ void GlVolumeRenderer::Impl::ensureTable(double step) {
   checkGl("uploading the transfer-function table");
   first_nz = t.firstNonzero();
   last_nz = t.lastNonzero();
+  table_scale = t.scale(), table_offset = t.offset();
   table_step = step;
 }
 
@@ -249,6 +251,8 @@ void GlVolumeRenderer::Impl::castRays(const Quality& q, const Rect& fp, const st
   gl::Uniform1i(uniform("first_nz"), first_nz);
   gl::Uniform1i(uniform("last_nz"), last_nz);
   gl::Uniform1f(uniform("table_max"), (float)(TfTable::kEntries - 1));
+  gl::Uniform1f(uniform("table_scale"), table_scale);
+  gl::Uniform1f(uniform("table_offset"), table_offset);
   const std::pair<GLenum, unsigned> units[] = {{GL_TEXTURE_3D, tex_vol},   {GL_TEXTURE_1D, tex_table},
                                                {GL_TEXTURE_3D, tex_dist},  {GL_TEXTURE_2D, tex_span0},
                                                {GL_TEXTURE_2D, tex_span1}};

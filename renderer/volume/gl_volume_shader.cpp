@@ -37,6 +37,7 @@ uniform int skip;          // empty-space leaps on/off
 uniform int first_nz;      // table entries that can give alpha > 0
 uniform int last_nz;
 uniform float table_max;   // entries - 1
+uniform float table_scale, table_offset;  // scalar s at table position s * scale + offset (TfTable)
 layout(location = 0) out vec4 color;
 layout(location = 1) out vec4 counts;  // taken, leapt over, terminated
 
@@ -94,7 +95,7 @@ void main() {
     }
     vec3 u = fma(vec3(float(k)), du, u0);
     float s = textureLod(vol, (u + 0.5) * inv_n, 0.0).r;
-    float ft = clamp(s * table_max, 0.0, table_max);
+    float ft = clamp(s * table_scale + table_offset, 0.0, table_max);
     int ti = min(int(ft), int(table_max) - 1);
     taken += 1.0;
     ++k;

@@ -9,8 +9,11 @@ namespace tessera::renderer {
 
 TfTable::TfTable(const TransferFunction& tf, double step) : entries_(kEntries), nonzero_(kEntries, 0) {
   if (!(step > 0) || !std::isfinite(step)) throw std::invalid_argument("TfTable: step must be positive and finite");
+  const auto [lo, hi] = tf.variedSpan();
+  scale_ = (float)(kEntries - 1) / (float)(hi - lo);
+  offset_ = lo == 0 ? 0.0f : (float)(-lo * (kEntries - 1) / (hi - lo));
   for (int j = 0; j < kEntries; ++j) {
-    const double s = (double)j / (kEntries - 1);
+    const double s = lo + (hi - lo) * ((double)j / (kEntries - 1));
     const auto c = tf.eval(s);
     const double a = correctOpacity(c[3], step);
     entries_[j] = Entry{{(float)(a * c[0]), (float)(a * c[1]), (float)(a * c[2]), (float)a}};
@@ -22,7 +25,7 @@ TfTable::TfTable(const TransferFunction& tf, double step) : entries_(kEntries), 
 }
 
 void TfTable::lookup(float s, float out[4]) const {
-  const float f = std::clamp(s, 0.0f, 1.0f) * (float)(kEntries - 1);
+  const float f = std::clamp(std::fma(s, scale_, offset_), 0.0f, (float)(kEntries - 1));
   const int i = std::min((int)f, kEntries - 2);
   const float w = f - (float)i;
   for (int c = 0; c < 4; ++c) {

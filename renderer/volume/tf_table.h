@@ -1,5 +1,8 @@
 // Classification lookup table for the fast (float) path: premultiplied, opacity-corrected
 // RGBA for one step length, sampled at kEntries scalars and linearly interpolated.
+// The entries span only where the map varies (TransferFunction::variedSpan; constant outside): a
+// colour window, or a map over part of the range, gets all of them (a window of 1/200 of the
+// range had 20 entries and rendered at 30 dB against the reference: found by review).
 // Immutable after construction; safe to read from many threads.
 #pragma once
 #include <cstdint>
@@ -11,12 +14,16 @@ namespace tessera::renderer {
 
 class TfTable {
  public:
-  static constexpr int kEntries = 4096;
+  static constexpr int kEntries = kTfTableEntries;
 
   TfTable(const TransferFunction& tf, double step);
 
-  // Entry j holds (a*r, a*g, a*b, a) at scalar j/(kEntries-1), a = correctOpacity(alpha, step).
+  // Entry j holds (a*r, a*g, a*b, a) at scalar lo + (hi - lo) j/(kEntries-1), a = correctOpacity(alpha, step).
   const float* rgba() const { return entries_.data()->v; }  // 4 floats per entry, 16-byte aligned
+  // Scalar s in [0, 1] is at table position s * scale() + offset(), clamped to [0, kEntries - 1]
+  // (kEntries - 1 and 0 for a map that varies over all of [0, 1]).
+  float scale() const { return scale_; }
+  float offset() const { return offset_; }
   // nonzero()[j] != 0 iff entry j or j+1 has alpha > 0: interpolating between two
   // zero-alpha entries gives exactly zero, so such samples can be passed over.
   const int32_t* nonzero() const { return nonzero_.data(); }
@@ -40,6 +47,7 @@ class TfTable {
   std::vector<Entry> entries_;
   std::vector<int32_t> nonzero_;
   int first_nonzero_ = kEntries, last_nonzero_ = -1;
+  float scale_ = kEntries - 1, offset_ = 0;
 };
 
 }  // namespace tessera::renderer

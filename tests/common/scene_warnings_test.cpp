@@ -91,6 +91,31 @@ TEST(VolumeWarnings, AWindowBesideEveryValueIsSaid) {
                   "coarse steps; give volume.range closer to the window");
 }
 
+// An opacity peak narrower than two of the fast kernels' table steps may vanish (a 0.0002-wide
+// isovalue spike did, silently: found by review); the reference evaluates the map exactly.
+TEST(VolumeWarnings, AnOpacityPeakTheTableMayMissIsSaid) {
+  Scene s = sceneOf(true, {0, 1000});
+  s.tf = TransferFunction({{0, 0, 0, 0, 0}, {0.4999, 1, 1, 1, 0}, {0.5, 1, 1, 1, 1}, {0.5001, 1, 1, 1, 0}, {1, 0, 0, 0, 0}});
+  const auto w = volumeWarnings(s, shape({32, 32, 32}));
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_EQ(w[0].rfind("data/slice.yaml: transfer_function: the opacity peak at 0.5 of the map is 0.0002 wide, under two "
+                       "steps (0.000488) of the table", 0), 0u) << w[0];
+  s.quality.reference = true;
+  EXPECT_TRUE(volumeWarnings(s, shape({32, 32, 32})).empty()) << "the reference evaluates the map exactly";
+  s.quality.reference = false;
+  // Wide enough: 0.001 spans four steps. A window narrows the steps with the map: no warning.
+  s.tf = TransferFunction({{0, 0, 0, 0, 0}, {0.4995, 1, 1, 1, 0}, {0.5, 1, 1, 1, 1}, {0.5005, 1, 1, 1, 0}, {1, 0, 0, 0, 0}});
+  EXPECT_TRUE(volumeWarnings(s, shape({32, 32, 32})).empty());
+  s.tf = TransferFunction({{0, 0, 0, 0, 0}, {0.4, 1, 1, 1, 0}, {0.5, 1, 1, 1, 1}, {0.6, 1, 1, 1, 0}, {1, 0, 0, 0, 0}});
+  s.window = ValueWindow{500, 5};  // the peak 1 value wide in a map over 0 .. 1000
+  const auto n = volumeWarnings(s, shape({32, 32, 32}));
+  for (const auto& x : n) EXPECT_EQ(x.find("opacity peak"), std::string::npos) << x;
+  // A map constant (colour too) beside the spike gives the table to the spike alone: no warning.
+  s.window.reset();
+  s.tf = TransferFunction({{0, 1, 1, 1, 0}, {0.4999, 1, 1, 1, 0}, {0.5, 1, 1, 1, 1}, {0.5001, 1, 1, 1, 0}, {1, 1, 1, 1, 0}});
+  EXPECT_TRUE(volumeWarnings(s, shape({32, 32, 32})).empty());
+}
+
 // One slice of 256 x 256 is 1/256 of the box thick: at the presets' opacity (0.02 per 1/256)
 // a ray straight across gathers 2%, which the user must hear about; an opaque transfer
 // function shows it, and a volume of 64 slices is no thin volume.

@@ -1,0 +1,77 @@
+// The classification table spans only where the map varies (TfTable, TransferFunction::
+// variedSpan): a narrow colour window gets every entry, and renders as the reference does
+// (a window of 1/200 of the range had 20 entries and 30 dB: found by review).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "common/bricks.h"
+#include "common/image.h"
+#include "renderer/volume/raycaster.h"
+#include "renderer/volume/tf_table.h"
+#include "tests/renderer/render_test_util.h"
+
+namespace tessera::renderer {
+namespace {
+
+TEST(TfTableSpan, AMapOverAllOfTheRangeKeepsTheTableItHad) {
+  // What every shipped scene's map has: the same table, the same positions (bit-identical images).
+  const TfTable t(test::defaultTf(), kL0);
+  EXPECT_EQ(t.scale(), 4095.0f);
+  EXPECT_EQ(t.offset(), 0.0f);
+  EXPECT_EQ(test::defaultTf().variedSpan(), (std::array<double, 2>{0, 1}));
+  const TransferFunction flat({{0, 1, 1, 1, 0.5}, {1, 1, 1, 1, 0.5}});
+  EXPECT_EQ(flat.variedSpan(), (std::array<double, 2>{0, 1}));
+  const TransferFunction step({{0, 0, 0, 0, 0}, {0.5, 0, 0, 0, 0}, {0.5, 1, 1, 1, 1}, {1, 1, 1, 1, 1}});
+  EXPECT_EQ(step.variedSpan(), (std::array<double, 2>{0, 1})) << "a step at one scalar has no span";
+}
+
+TEST(TfTableSpan, ANarrowWindowGetsEveryEntry) {
+  const ColorWindow w{0.4, 0.005};
+  const TransferFunction tf = windowed(test::defaultTf(), w);
+  const auto span = tf.variedSpan();
+  EXPECT_NEAR(span[0], 0.3975, 1e-12);
+  EXPECT_NEAR(span[1], 0.4025, 1e-12);
+  const TfTable t(tf, kL0);
+  // Within the window the lookup errs as the whole map's table does over the whole range
+  // (raycaster_test: TfTable.ErrorAgainstExactClassificationIsSmall, 1.1e-4), plus the float
+  // scalar's own rounding there (a few 1e-8 of 0.4, 1e-5 of the window).
+  double worst = 0;
+  for (int i = -1000; i <= 11000; ++i) {
+    const double s = 0.3975 + 0.005 * i / 10000.0;
+    const auto c = tf.eval((double)(float)s);
+    const double a = correctOpacity(c[3], kL0);
+    float out[4];
+    t.lookup((float)s, out);
+    for (int ch = 0; ch < 3; ++ch) worst = std::max(worst, std::abs(out[ch] - a * c[ch]));
+    worst = std::max(worst, std::abs(out[3] - a));
+  }
+  EXPECT_LT(worst, 1.5e-4);
+}
+
+// A smooth ball whose values fill only 1/200 of the mapped range (a CT's soft tissue in its
+// whole HU range, say), seen through a window on them: before, 20 table entries (30 dB).
+TEST(TfTableSpan, ANarrowWindowRendersAsTheReferenceDoes) {
+  auto ball = std::make_shared<Volume>();
+  constexpr int n = 40;
+  ball->dims = {n, n, n};
+  ball->values.resize((size_t)n * n * n);
+  for (int z = 0; z < n; ++z)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const double r = std::hypot(x - 19.5, y - 19.5, z - 19.5);
+        ball->values[ball->index(x, y, z)] = (float)(0.4 + 0.005 * std::clamp((19.5 - r) / 16, 0.0, 1.0));
+      }
+  const TransferFunction kinked({{0, 0, 0, 0, 0}, {0.4, 0.2, 0.5, 1, 0}, {0.6, 1, 0.8, 0.3, 0.5}, {1, 1, 1, 1, 0.9}});
+  const Raycaster rc(ball, windowed(kinked, ColorWindow{0.4025, 0.005}));
+  const ImageF def = rc.render(test::defaultCamera(), 48, 48, wholeVolume(*ball), test::options("default"));
+  const ImageF ref = rc.render(test::defaultCamera(), 48, 48, wholeVolume(*ball), test::options("reference"));
+  ASSERT_GT(activeRegion(ref).area(), 400);  // the window shows the ball
+  const ImageError e = compare(def, ref);
+  EXPECT_GE(e.psnr, 45.0) << "max_abs " << e.max_abs;
+}
+
+}  // namespace
+}  // namespace tessera::renderer
