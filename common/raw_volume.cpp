@@ -1,7 +1,6 @@
-// Volume samples in a file (x fastest; any of the voxel types, either byte order, after an
-// offset, plain or gzip-compressed): the whole volume or a window of it, read with positioned
-// reads (or a forward stream through compressed data) so a renderer's memory follows its
-// bricks, not the file. Raw files, NIfTI, NRRD and DICOM series (one file a slice) end here.
+// Volume samples in a file (x fastest; any voxel type, either byte order, after an offset, plain
+// or gzip-compressed): the whole volume or a window of it, read with positioned reads (or a forward
+// stream through compressed data) so a renderer's memory follows its bricks, not the file.
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -57,8 +56,7 @@ class RawFile {
                 std::any_of(spec.slices.begin(), spec.slices.end(), [&](const SliceFile& s) { return scaled(s.slope, s.inter); });
     checkGeometry(f, spec.dims, spec.spacing);
     if (spec.has_range && !(spec.range[0] < spec.range[1]))
-      fail(f, "range must satisfy min < max, got [" + std::to_string(spec.range[0]) + ", " +
-                  std::to_string(spec.range[1]) + "]");
+      fail(f, "range must satisfy min < max, got [" + std::to_string(spec.range[0]) + ", " + std::to_string(spec.range[1]) + "]");
     if (!spec.slices.empty()) {  // slice by slice: a DICOM series, a TIFF stack
       if (spec.slices.size() != (size_t)spec.dims[2])
         fail(f, std::to_string(spec.slices.size()) + " slices for dims[2] = " + std::to_string(spec.dims[2]));
@@ -71,11 +69,7 @@ class RawFile {
     const uintmax_t actual = std::filesystem::file_size(spec.samples(), ec);
     if (ec) fail(spec.samples(), "cannot read size: " + ec.message());
     if (!spec.gzip && actual != expected && (spec.format == VolumeFormat::Raw || actual < expected))
-      fail(spec.samples(), "file size is " + std::to_string(actual) + " bytes but dims " + std::to_string(spec.dims[0]) +
-                               " x " + std::to_string(spec.dims[1]) + " x " + std::to_string(spec.dims[2]) + " x " +
-                               std::to_string(ts_) + " bytes/voxel" +
-                               (spec.offset ? " after a header of " + std::to_string(spec.offset) + " bytes" : "") +
-                               " need " + std::to_string(expected) + " bytes");
+      fail(spec.samples(), "file size is " + std::to_string(actual) + " bytes but " + sizeNeeded(spec));
     if (spec.gzip) {
       const int fd = ::open(spec.samples().c_str(), O_RDONLY | O_CLOEXEC);
       if (fd < 0 || ::lseek(fd, (off_t)spec.gzip_start, SEEK_SET) < 0 || !(gz_ = gzdopen(fd, "rb"))) {
@@ -258,15 +252,21 @@ class RawFile {
   void readGzip(uint64_t at, unsigned char* dst, size_t bytes) {
     const uint64_t now = (uint64_t)gztell(gz_);
     bytes_inflated += (at >= now ? at - now : at) + bytes;  // a seek back restarts the stream
-    if (now != at && gzseek(gz_, (z_off_t)at, SEEK_SET) < 0)
-      fail(spec_.samples(), "compressed data ends before byte " + std::to_string(at));
+    if (now != at && gzseek(gz_, (z_off_t)at, SEEK_SET) < 0) fail(spec_.samples(), shortStream(at, at + bytes));
     const int r = gzread(gz_, dst, (unsigned)bytes);
     if (r != (int)bytes) {
       int err = 0;
-      const char* msg = gzerror(gz_, &err);
-      fail(spec_.samples(), err ? std::string("corrupt compressed data: ") + msg
-                                : "compressed data holds fewer samples than dims x type size need");
+      std::string msg = gzerror(gz_, &err);
+      if (msg.rfind("<fd:", 0) == 0 && msg.find(">: ") != std::string::npos) msg.erase(0, msg.find(">: ") + 3);
+      fail(spec_.samples(), err ? "corrupt compressed data: " + msg : shortStream(at + std::max(r, 0), at + bytes));
     }
+  }
+
+  // A stream that ended at byte `ended` where bytes up to `needed` were read (said by review).
+  std::string shortStream(uint64_t ended, uint64_t needed) const {
+    const uint64_t volume = (uint64_t)spec_.dims[0] * spec_.dims[1] * spec_.dims[2] * ts_;
+    const uint64_t step = volume && needed > spec_.offset ? (needed - spec_.offset - 1) / volume : 0;
+    return "the compressed data holds " + std::to_string(ended) + " bytes decompressed but " + sizeNeeded(spec_, step);
   }
 
   static constexpr size_t kPieceBytes = 256u << 10;  // well inside a core's L2

@@ -66,4 +66,12 @@ std::unique_ptr<SliceBytes> sliceBytes(const RawVolumeSpec& spec) {
   return spec.format == VolumeFormat::Tiff ? tiffSliceBytes(spec) : dicomSliceBytes(spec);
 }
 
+std::string sizeNeeded(const RawVolumeSpec& spec, uint64_t step) {
+  const uint64_t ts = voxelTypeSize(spec.type), volume = (uint64_t)spec.dims[0] * spec.dims[1] * spec.dims[2] * ts;
+  return "dims " + std::to_string(spec.dims[0]) + " x " + std::to_string(spec.dims[1]) + " x " +
+         std::to_string(spec.dims[2]) + " x " + std::to_string(ts) + " bytes/voxel" +
+         (spec.offset ? " after a header of " + std::to_string(spec.offset) + " bytes" : "") + " need " +
+         std::to_string(spec.offset + (step + 1) * volume) + " bytes" + (step ? " (time step " + std::to_string(step) + ")" : "");
+}
+
 }  // namespace tessera

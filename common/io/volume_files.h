@@ -51,6 +51,9 @@ class SliceBytes {
   virtual void read(size_t z, size_t in, size_t count, unsigned char* dst) = 0;
   uint64_t decoded_bytes = 0;  // what decoders produced (compressed slices, strips, tiles), parts not asked for included
 };
+// "dims 13 x 11 x 7 x 2 bytes/voxel after a header of 352 bytes need 2354 bytes": what a file
+// (or its decompressed stream) of `spec` holds up to the end of time step `step`.
+std::string sizeNeeded(const RawVolumeSpec& spec, uint64_t step = 0);
 // The reader for spec.format (Dicom or Tiff); spec is kept by reference.
 std::unique_ptr<SliceBytes> sliceBytes(const RawVolumeSpec& spec);
 
