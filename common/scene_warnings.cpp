@@ -122,12 +122,14 @@ std::string rangeSuggestion(const Scene& scene, const ValueHistogram& fine) {
   // A haze is opacity summed along rays; a maximum intensity projection sums none.
   if (!advice && scene.blend == Blend::Composite) advice = backgroundHaze(fine, scene.tf);
   if (!advice) return "";
-  char b[600];
+  // Digits enough to tell the ends apart: a range printed as [1e+09, 1e+09] is refused.
+  const int d = std::max(digitsToTell(fine.lo, fine.hi), digitsToTell(advice->range[0], advice->range[1]));
+  char b[700];
   std::snprintf(b, sizeof b,
-                "%s: volume: %s; with no `range` the transfer function spans the data's whole %.9g .. %.9g: "
-                "`range: [%.9g, %.9g]` (%.3g%% of the voxels) spends it on the rest (values outside clamp to its ends)",
-                scene.path.empty() ? "<default scene>" : scene.path.c_str(), advice->why.c_str(), fine.lo, fine.hi,
-                advice->range[0], advice->range[1], 100 * advice->inside);
+                "%s: volume: %s; with no `range` the transfer function spans the data's whole %.*g .. %.*g: "
+                "`range: [%.*g, %.*g]` (%.3g%% of the voxels) spends it on the rest (values outside clamp to its ends)",
+                scene.path.empty() ? "<default scene>" : scene.path.c_str(), advice->why.c_str(), d, fine.lo, d, fine.hi,
+                d, advice->range[0], d, advice->range[1], 100 * advice->inside);
   return b;
 }
 

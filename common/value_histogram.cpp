@@ -30,9 +30,9 @@ uint64_t ValueHistogram::total() const { return std::accumulate(counts.begin(), 
 
 namespace {
 
-std::string number(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.9g", x);
+std::string number(double x, int digits = 9) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.*g", digits, x);
   return b;
 }
 
@@ -64,6 +64,12 @@ std::optional<std::array<size_t, 2>> apartAtLow(const std::vector<uint64_t>& c, 
 
 }  // namespace
 
+int digitsToTell(double a, double b, int at_least) {
+  int d = at_least;
+  while (d < 17 && a != b && number(a, d) == number(b, d)) ++d;
+  return d;
+}
+
 std::optional<RangeAdvice> suggestedRange(const ValueHistogram& h) {
   const std::vector<uint64_t>& c = h.counts;
   const uint64_t total = h.total();
@@ -83,7 +89,8 @@ std::optional<RangeAdvice> suggestedRange(const ValueHistogram& h) {
     for (size_t i = a; i <= b; ++i) held += c[i];
     apart += held;
     const auto [from, to] = bounds(h, a, b);
-    const std::string at = from == to ? number(from) : number(from) + " .. " + number(to);
+    const int d = std::max(digitsToTell(from, to), digitsToTell(h.lo, h.hi));
+    const std::string at = from == to ? number(from, d) : number(from, d) + " .. " + number(to, d);
     char s[160];
     std::snprintf(s, sizeof s, "%s%.2g%% of the voxels lie apart %s, at %s", why.empty() ? "" : "; ",
                   100.0 * held / total, where, at.c_str());

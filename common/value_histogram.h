@@ -27,6 +27,10 @@ struct ValueHistogram {
   double edge(size_t bin) const { return lo + (hi - lo) * (double)bin / counts.size(); }
 };
 
+// The fewest significant digits (at least `at_least`, at most 17) with which "%.*g" prints a
+// and b differently: 1e9 and 1e9 + 4 need 10 (at 9 both read "1e+09": found by review).
+int digitsToTell(double a, double b, int at_least = 9);
+
 // Whether a file's values are integers: an integer type scaled by an integer slope and
 // intercept (a NIfTI scl_slope of 0.01 makes an int16 file's values decimals; a DICOM
 // series: every slice's).

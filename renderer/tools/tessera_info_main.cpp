@@ -78,9 +78,10 @@ void printRendererMemory(const std::array<int, 3>& dims, bool shaded) {
 void printHistogram(const ValueHistogram& h) {
   const uint64_t peak = *std::max_element(h.counts.begin(), h.counts.end());
   std::printf("# histogram (%zu bins; bars on a log scale):\n", h.counts.size());
+  const int d = digitsToTell(h.edge(0), h.edge(1), 6), w = std::max(12, d + 6);  // edges told apart
   for (size_t b = 0; b < h.counts.size(); ++b) {
     const int bar = h.counts[b] ? (int)std::lround(40 * std::log1p((double)h.counts[b]) / std::log1p((double)peak)) : 0;
-    std::printf("#   %12.6g .. %-12.6g %12llu %s\n", h.edge(b), h.edge(b + 1),
+    std::printf("#   %*.*g .. %-*.*g %12llu %s\n", w, d, h.edge(b), w, d, h.edge(b + 1),
                 (unsigned long long)h.counts[b], std::string(bar, '#').c_str());
   }
 }
@@ -135,8 +136,10 @@ int run(int argc, char** argv) {
   shape.mapped_range = raw && raw->has_range ? raw->range : raw ? shape.data_range : std::array<double, 2>{0, 1};
   std::printf("# volume: %d x %d x %d voxels, %s, spacing %g %g %g\n", shape.dims[0], shape.dims[1], shape.dims[2],
               raw ? voxelTypeName(raw->type) : "generated (float)", shape.spacing[0], shape.spacing[1], shape.spacing[2]);
-  std::printf("# values: %.9g .. %.9g; mapped to the transfer function: %.9g .. %.9g%s\n", shape.data_range[0],
-              shape.data_range[1], shape.mapped_range[0], shape.mapped_range[1],
+  const int dv = digitsToTell(shape.data_range[0], shape.data_range[1]);
+  const int dm = digitsToTell(shape.mapped_range[0], shape.mapped_range[1]);
+  std::printf("# values: %.*g .. %.*g; mapped to the transfer function: %.*g .. %.*g%s\n", dv, shape.data_range[0], dv,
+              shape.data_range[1], dm, shape.mapped_range[0], dm, shape.mapped_range[1],
               raw && !raw->has_range ? " (no range given: the data's own)" : "");
   if (scene.window)
     std::printf("# window: the colour map spans the values %.9g .. %.9g\n", scene.window->lo(), scene.window->hi());

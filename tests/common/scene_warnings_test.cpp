@@ -151,6 +151,20 @@ TEST(VolumeWarnings, ARangeIsSuggestedForCtPaddingUnlessTheSceneGivesOne) {
   EXPECT_EQ(rangeSuggestion(sceneOf(true, {-1000, 1000}), h), "");
 }
 
+// Values far from 0 with a small spread: the advice prints digits enough to tell its ends
+// apart (it suggested `range: [1e+09, 1e+09]`, which the scene parser refuses: found by review).
+TEST(VolumeWarnings, ASuggestedRangeHasTheDigitsItsEndsNeed) {
+  ValueHistogram h(1e9, 1e9 + 1000, 4096, false);
+  for (int k = 0; k <= 20000; ++k) h.add(1e9 + k / 5000.0);  // 1e9 .. 1e9 + 4
+  h.add(1e9 + 1000), h.add(1e9 + 1000);
+  const std::string advice = rangeSuggestion(sceneOf(false), h);
+  EXPECT_NE(advice.find("the transfer function spans the data's whole 1000000000 .. 1000001000: `range: [1000000000, "
+                        "1000000004"), std::string::npos) << "advice: " << advice;
+  EXPECT_EQ(digitsToTell(1e9, 1e9 + 4), 10);
+  EXPECT_EQ(digitsToTell(0.1, 0.2), 9);
+  EXPECT_EQ(digitsToTell(5, 5), 9);
+}
+
 // A microscope's background: most voxels in one peak at the low end (a camera offset of 100
 // and noise of 40), the cell's values spread above it. The default colour map gives the peak
 // enough opacity to be a haze; the advice starts the range past its tail (where it falls to
