@@ -2,6 +2,7 @@
 // triangle indices. Loaders throw std::runtime_error naming the file and the line or element.
 // Plain values; not thread-safe for concurrent writes.
 #pragma once
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -36,6 +37,22 @@ void fitToUnitBox(Mesh& mesh);
 // Throws std::runtime_error "<name>: ..." for: array sizes that disagree, non-finite positions
 // (first vertex named), indices out of range (first triangle named), no triangles.
 void validateMesh(const Mesh& mesh, const std::string& name);
+
+// Positions as a file gives them (doubles) kept as floats relative to its first vertex: a mesh
+// far from the origin (georeferenced or CAD data, 5e6 away) keeps its shape, where floats of
+// the absolute coordinates (steps of 0.5 there) made a sphere of radius 1 a cluster of cubes
+// (found by review). fitToUnitBox then centres it.
+class RelativePositions {
+ public:
+  void add(std::vector<float>& out, const double v[3]) {
+    if (!set_) origin_ = {v[0], v[1], v[2]}, set_ = true;
+    for (int k = 0; k < 3; ++k) out.push_back((float)(v[k] - origin_[k]));
+  }
+
+ private:
+  std::array<double, 3> origin_{};
+  bool set_ = false;
+};
 
 // Loaders. Missing normals are computed, missing colours are kDefaultMeshColor; the result is
 // validated. loadMesh dispatches on the extension (.ply or .obj, case-insensitive).

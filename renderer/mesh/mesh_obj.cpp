@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include <fmt/format.h>
+
 #include "renderer/mesh/mesh.h"
 
 namespace tessera::renderer {
@@ -44,6 +46,7 @@ class ObjParser {
   const std::string& name_;
   int line_no_ = 0;
   std::vector<float> pos_, col_, nrm_;
+  RelativePositions relative_;
   std::vector<Corner> corners_;  // three per triangle
   bool all_normals_ = true;
 };
@@ -81,10 +84,11 @@ std::vector<double> ObjParser::numbers(std::istringstream& ls, int min, int max)
 
 void ObjParser::vertex(std::istringstream& ls) {
   const auto v = numbers(ls, 3, 7);  // x y z [w] or x y z r g b
-  for (int k = 0; k < 3; ++k) {
-    if (!std::isfinite(v[k]) || std::fabs(v[k]) > 3e38) fail("vertex position is not finite");
-    pos_.push_back((float)v[k]);
-  }
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(v[k]) || std::fabs(v[k]) > 3e38)
+      fail(std::isfinite(v[k]) ? fmt::format("vertex position {:g} is beyond a float's range (3e38)", v[k])
+                               : "vertex position is not finite");
+  relative_.add(pos_, v.data());
   const bool has_rgb = v.size() >= 6;
   for (int k = 0; k < 3; ++k) col_.push_back(has_rgb ? (float)std::clamp(v[3 + k], 0.0, 1.0) : kDefaultMeshColor[k]);
 }

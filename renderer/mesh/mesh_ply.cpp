@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include <fmt/format.h>
+
 #include "renderer/mesh/mesh.h"
 
 namespace tessera::renderer {
@@ -264,6 +266,7 @@ class MeshReader {
   bool have_normals_ = false, have_colors_ = false;
   std::vector<double> vals_;    // the current item's scalar properties
   std::vector<uint32_t> poly_;  // the current face's vertex indices
+  RelativePositions relative_;
   Mesh m_;
 };
 
@@ -315,11 +318,13 @@ void MeshReader::readList(const Prop& p, bool indices) {
 }
 
 void MeshReader::addVertex(const Element& e, const Layout& l) {
+  double p[3];
   for (int k = 0; k < 3; ++k) {
-    const double v = vals_[l.slot[k]];
-    if (!std::isfinite(v) || std::fabs(v) > 3e38) body_.fail("position is not finite");
-    m_.positions.push_back((float)v);
+    p[k] = vals_[l.slot[k]];
+    if (!std::isfinite(p[k])) body_.fail("position is not finite");
+    if (std::fabs(p[k]) > 3e38) body_.fail(fmt::format("position {:g} is beyond a float's range (3e38)", p[k]));
   }
+  relative_.add(m_.positions, p);
   if (have_normals_)
     for (int k = 3; k < 6; ++k) m_.normals.push_back((float)vals_[l.slot[k]]);
   if (have_colors_)

@@ -159,7 +159,7 @@ TEST(ObjTest, BadInputsNameTheFileAndLine) {
   expectError([] { parseObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", "a.obj"); }, {"line 4", "index -4"});
   expectError([] { parseObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "a.obj"); }, {"index 0 out of range"});
   expectError([] { parseObj("v 0 nan 0\n", "b.obj"); }, {"b.obj", "line 1", "not finite"});
-  expectError([] { parseObj("v 0 1e39 0\n", "b.obj"); }, {"line 1", "not finite"});
+  expectError([] { parseObj("v 0 1e39 0\n", "b.obj"); }, {"line 1", "vertex position 1e+39 is beyond a float's range"});
   expectError([] { parseObj("v 0 0\n", "b.obj"); }, {"line 1", "expected 3..7 numbers"});
   expectError([] { parseObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", "c.obj"); }, {"line 4", "at least 3"});
   expectError([] { parseObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "c.obj"); }, {"bad face corner 'x'"});

@@ -1,0 +1,38 @@
+// A mesh far from the origin loads as it would at the origin (renderer/mesh/mesh.h,
+// RelativePositions).
+#include <gtest/gtest.h>
+
+#include <string>
+#include <utility>
+
+#include <fmt/format.h>
+
+#include "renderer/mesh/mesh.h"
+
+namespace tessera::renderer {
+namespace {
+
+// Coordinates far from the origin (georeferenced data) keep the mesh's shape: read as floats
+// of the absolute values (steps of 0.5 at 5e6) a unit square lost it (found by review).
+TEST(MeshTest, AMeshFarFromTheOriginFitsAsItWouldAtTheOrigin) {
+  auto square = [](double ox, double oy, const char* fmt) {
+    std::string t;
+    for (auto [x, y] : {std::pair{0.0, 0.0}, {1.0, 0.0}, {1.0, 1.0}, {0.0, 0.3}})
+      t += fmt::format(fmt::runtime(fmt), x + ox, y + oy);
+    return t;
+  };
+  Mesh near = parseObj(square(0, 0, "v {:.17g} {:.17g} 7\n") + "f 1 2 3 4\n", "near.obj");
+  Mesh far = parseObj(square(5e6, -5e6, "v {:.17g} {:.17g} 7\n") + "f 1 2 3 4\n", "far.obj");
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\n"
+                           "property double z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  Mesh ply = parsePly(head + square(5e6, -5e6, "{:.17g} {:.17g} 7\n") + "4 0 1 2 3\n", "far.ply");
+  for (Mesh* m : {&near, &far, &ply}) fitToUnitBox(*m);
+  ASSERT_EQ(far.positions.size(), near.positions.size());
+  for (size_t i = 0; i < near.positions.size(); ++i) {
+    EXPECT_NEAR(far.positions[i], near.positions[i], 1e-6) << i;
+    EXPECT_NEAR(ply.positions[i], near.positions[i], 1e-6) << i;
+  }
+}
+
+}  // namespace
+}  // namespace tessera::renderer
