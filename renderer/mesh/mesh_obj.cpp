@@ -54,12 +54,20 @@ class ObjParser {
 void ObjParser::parse(const std::string& text) {
   std::istringstream in(text);
   std::string line;
-  while (std::getline(in, line)) {
+  for (std::string part; std::getline(in, part);) {
     ++line_no_;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::istringstream ls(line);
+    if (!part.empty() && part.back() == '\r') part.pop_back();
+    // A trailing backslash continues a statement on the next line; '#' starts a comment,
+    // also after a statement ("v 0 0 0 # origin"); both refused before (found by review).
+    if (!part.empty() && part.back() == '\\') {
+      line += part.substr(0, part.size() - 1) + " ";
+      continue;
+    }
+    line += part;
+    if (const size_t hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    std::istringstream ls(std::exchange(line, {}));
     std::string kw;
-    if (!(ls >> kw) || kw[0] == '#') continue;
+    if (!(ls >> kw)) continue;
     if (kw == "v") vertex(ls);
     else if (kw == "vn") normal(ls);
     else if (kw == "f") face(ls);

@@ -148,6 +148,10 @@ TEST(ObjTest, CornerFormsNegativeIndicesAndPolygons) {
   EXPECT_FLOAT_EQ(m.colors[3 * 2 + 0], 1.0f);  // vertex colour given inline
   EXPECT_FLOAT_EQ(m.colors[0], kDefaultMeshColor[0]);
   EXPECT_FLOAT_EQ(m.normals[2], 1.0f);
+  // Comments after a statement and statements continued by a backslash (found by review).
+  const Mesh c = parseObj("v 0 0 0 # origin\nv 1 0 0\nv 0 1 \\\n 0\nf 1 2 3 # one\n", "c.obj");
+  EXPECT_EQ(c.triangleCount(), 1u);
+  EXPECT_EQ(c.vertexCount(), 3u);
   // Without normals on every corner: smooth normals are computed.
   const Mesh n = parseObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "t.obj");
   EXPECT_NEAR(std::fabs(n.normals[2]), 1.0f, 1e-6);
