@@ -18,19 +18,20 @@
 namespace tessera {
 namespace {
 
-TEST(NiftiHeader, ABadHeaderIsSaidByWhatIsWrong) {
-  test::TempDir t("bad-nifti-bytes");
+// The bytes of a 4 x 4 x 4 int16 .nii as nifticlib writes it (zeros), written to `path`.
+std::string nifti4x4x4(const std::string& path) {
   const int64_t dims[8] = {3, 4, 4, 4, 1, 1, 1, 1};
   nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 1);
-  ASSERT_NE(nim, nullptr);
-  ASSERT_EQ(nifti_set_filenames(nim, t.file("good.nii").c_str(), 0, 1), 0);
+  if (!nim || nifti_set_filenames(nim, path.c_str(), 0, 1) != 0) return "";
   nifti_image_write(nim);
   nifti_image_free(nim);
-  std::string good;
-  {
-    std::ifstream in(t.file("good.nii"), std::ios::binary);
-    good.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TEST(NiftiHeader, ABadHeaderIsSaidByWhatIsWrong) {
+  test::TempDir t("bad-nifti-bytes");
+  const std::string good = nifti4x4x4(t.file("good.nii"));
   ASSERT_GT(good.size(), 352u);
   ASSERT_EQ(test::loadError("volume: {file: good.nii}\n", t.path.string()), "<no error>");
   auto write = [&](const std::string& name, std::string bytes) {
@@ -66,14 +67,7 @@ TEST(NiftiHeader, ABadHeaderIsSaidByWhatIsWrong) {
 // cut mid-block names zlib's error without its "<fd:N>" (found by review: neither said a size).
 TEST(NiftiHeader, AShortGzipStreamSaysItsSizes) {
   test::TempDir t("short-gzip");
-  const int64_t dims[8] = {3, 4, 4, 4, 1, 1, 1, 1};
-  nifti_image* nim = nifti_make_new_nim(dims, DT_INT16, 1);
-  ASSERT_NE(nim, nullptr);
-  ASSERT_EQ(nifti_set_filenames(nim, t.file("whole.nii").c_str(), 0, 1), 0);
-  nifti_image_write(nim);
-  nifti_image_free(nim);
-  std::ifstream in(t.file("whole.nii"), std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  std::string bytes = nifti4x4x4(t.file("whole.nii"));
   ASSERT_EQ(bytes.size(), 352u + 128u);
   for (size_t i = 352; i < bytes.size(); ++i) bytes[i] = (char)(i * 2654435761u >> 13);  // incompressible
   gzFile z = gzopen(t.file("short.nii.gz").c_str(), "wb");

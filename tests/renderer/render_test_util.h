@@ -3,6 +3,7 @@
 #pragma once
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -14,6 +15,7 @@
 #include "common/scene.h"
 #include "common/volume.h"
 #include "renderer/volume/raycaster.h"
+#include "renderer/volume/tf_table.h"
 
 namespace tessera::renderer::test {
 
@@ -49,6 +51,22 @@ inline RenderOptions options(const std::string& quality, int threads = 0) {
   o.quality = namedQuality(quality);
   o.threads = threads;
   return o;
+}
+
+// The largest error of tab's lookup against tf evaluated exactly (opacity-corrected for kL0,
+// premultiplied), over n + 1 scalars from lo to hi, each as the float the table is given.
+inline double tableError(const TfTable& tab, const TransferFunction& tf, double lo, double hi, int n) {
+  double worst = 0;
+  for (int i = 0; i <= n; ++i) {
+    const float s = (float)(lo + (hi - lo) * i / n);
+    const auto c = tf.eval(s);
+    const double a = correctOpacity(c[3], kL0);
+    float out[4];
+    tab.lookup(s, out);
+    for (int ch = 0; ch < 3; ++ch) worst = std::max(worst, std::abs(out[ch] - a * c[ch]));
+    worst = std::max(worst, std::abs(out[3] - a));
+  }
+  return worst;
 }
 
 inline bool allFinite(const ImageF& img) {
