@@ -252,13 +252,13 @@ class RawFile {
   void readGzip(uint64_t at, unsigned char* dst, size_t bytes) {
     const uint64_t now = (uint64_t)gztell(gz_);
     bytes_inflated += (at >= now ? at - now : at) + bytes;  // a seek back restarts the stream
-    if (now != at && gzseek(gz_, (z_off_t)at, SEEK_SET) < 0) fail(spec_.samples(), shortStream(at, at + bytes));
-    const int r = gzread(gz_, dst, (unsigned)bytes);
+    // A forward seek past the end succeeds lazily: the stream's end is where gztell stops.
+    const int r = now != at && gzseek(gz_, (z_off_t)at, SEEK_SET) < 0 ? -1 : gzread(gz_, dst, (unsigned)bytes);
     if (r != (int)bytes) {
       int err = 0;
       std::string msg = gzerror(gz_, &err);
       if (msg.rfind("<fd:", 0) == 0 && msg.find(">: ") != std::string::npos) msg.erase(0, msg.find(">: ") + 3);
-      fail(spec_.samples(), err ? "corrupt compressed data: " + msg : shortStream(at + std::max(r, 0), at + bytes));
+      fail(spec_.samples(), err ? "corrupt compressed data: " + msg : shortStream((uint64_t)gztell(gz_), at + bytes));
     }
   }
 

@@ -63,9 +63,9 @@ std::optional<RangeAdvice> backgroundHaze(const ValueHistogram& h, const Transfe
   const auto [a, b] = std::array<double, 2>{h.integral ? std::ceil(h.edge(end)) : h.edge(end), h.hi};
   char why[300];
   std::snprintf(why, sizeof why,
-                "%.0f%% of the voxels lie in one peak at the low end, %.9g .. %.9g (a background?), where the transfer "
+                "%.0f%% of the voxels lie in one peak at the low end, %.*g .. %.*g (a background?), where the transfer "
                 "function's opacity reaches %.2g: seen through the volume it is a haze over the rest",
-                100.0 * held / total, h.lo, a, alpha);
+                100.0 * held / total, digitsToTell(h.lo, a), h.lo, digitsToTell(h.lo, a), a, alpha);
   return RangeAdvice{{a, b}, 1.0 - (double)held / total, why};
 }
 
@@ -102,11 +102,13 @@ std::string narrowPeakProblem(const Scene& scene, const Volume& shape) {
   const double step = (hi - lo) / (kTfTableEntries - 1);
   const auto& p = tf.points();
   for (size_t i = 1; i + 1 < p.size(); ++i) {
-    if (!(p[i].a > p[i - 1].a && p[i].a > p[i + 1].a) || p[i + 1].s - p[i - 1].s >= 2 * step) continue;
+    size_t j = i;  // a peak: points i..j of one opacity (a plateau, or one point), lower on both sides
+    while (j + 1 < p.size() && p[j + 1].a == p[i].a) ++j;
+    if (j + 1 >= p.size() || !(p[i].a > p[i - 1].a && p[j].a > p[j + 1].a) || p[j + 1].s - p[i - 1].s >= 2 * step) continue;
     char b[400];
     std::snprintf(b, sizeof b, "transfer_function: the opacity peak at %.6g of the map is %.3g wide, under two steps "
                   "(%.3g) of the table the fast kernels sample it at: it may show faint or not at all; widen it, or "
-                  "give quality: reference", p[i].s, p[i + 1].s - p[i - 1].s, 2 * step);
+                  "give quality: reference", p[i].s, p[j + 1].s - p[i - 1].s, 2 * step);
     return b;
   }
   return "";

@@ -56,8 +56,15 @@ std::array<double, 2> TransferFunction::variedSpan() const {
   size_t i = 0, j = p.size() - 1;
   while (i < j && same(p[i + 1], p.front())) ++i;  // constant up to p[i]
   while (j > i && same(p[j - 1], p.back())) --j;   // and from p[j] on
-  const double lo = std::max(0.0, p[i].s), hi = std::min(1.0, p[j].s);
-  return hi - lo > 1e-6 ? std::array<double, 2>{lo, hi} : std::array<double, 2>{0, 1};
+  double lo = p[i].s, hi = p[j].s;
+  if (!(hi - lo > 1e-6)) return {0, 1};
+  // A step at the low end: eval gives its right-hand value there, so the span starts one table
+  // entry below it (the values under the step went to entry 0 with the value above: found by review).
+  if (p[i + 1].s == p[i].s) lo -= (hi - lo) / (kTfTableEntries - 2);
+  // No finer than 16 steps of the 16-bit voxels, which resolve no more: a table position of a
+  // far narrower span runs out of float digits (the GL shader's unfused multiply-add).
+  if (constexpr double kFinest = 16.0 / 65535; hi - lo < kFinest) lo = (lo + hi - kFinest) / 2, hi = lo + kFinest;
+  return {std::max(0.0, lo), std::min(1.0, hi)};
 }
 
 TransferFunction windowed(const TransferFunction& tf, const ColorWindow& w) {

@@ -28,7 +28,8 @@ class TransferFunction {
   double maxAlpha(double lo, double hi) const;
   const std::vector<TfPoint>& points() const { return points_; }
   // Where the map varies: [0, 1], or less where it is constant up to or from an end (below and
-  // above a colour window, say); [0, 1] for a constant map or a step at one scalar.
+  // above a colour window, say), starting a table entry below a step at its low end and at
+  // least 16/65535 wide; [0, 1] for a constant map or a step at one scalar.
   std::array<double, 2> variedSpan() const;
   bool operator==(const TransferFunction&) const = default;
 

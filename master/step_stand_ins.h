@@ -1,8 +1,9 @@
 // Steps some renderers could not read while others could (a NaN in one brick, a gzip stream
 // cut short past the first bricks). Each renderer shows its own last good step in place of a
 // bad one, so such a frame mixed two steps. Once a frame shows that, the whole farm is asked
-// for the step those renderers showed, whenever the bad one comes round: no later frame mixes.
-// A step every renderer failed is still asked for as it is (its file may yet appear, as in a
+// for the step those renderers showed, whenever the bad one comes round, for the rest of the
+// run: no frame issued after the master hears of it mixes (those already in flight may). A
+// step every renderer failed is still asked for as it is (its file may yet appear, as in a
 // live acquisition), since every renderer then shows the same step.
 #pragma once
 #include <cstdint>

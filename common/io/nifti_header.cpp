@@ -67,9 +67,9 @@ std::string headerProblem(const std::string& path) {
            std::to_string(version) + " header";
   const int64_t dim0 = version == 1 ? i16(40, swap) : i64(16, swap);
   if (dim0 < 1 || dim0 > 7) return "dim[0] = " + std::to_string(dim0) + ", must be in 1..7";
-  for (int d = 1; d <= dim0; ++d) {
+  for (int d = 1; d <= dim0; ++d) {  // a time or vector dim of 0 is read as 1, as nifticlib does
     const int64_t v = version == 1 ? i16(40 + 2 * d, swap) : i64(16 + 8 * d, swap);
-    if (v < 1) return "dim[" + std::to_string(d) + "] = " + std::to_string(v) + ", must be at least 1";
+    if (v < (d <= 3 ? 1 : 0)) return "dim[" + std::to_string(d) + "] = " + std::to_string(v) + ", must be at least " + (d <= 3 ? "1" : "0");
   }
   const int datatype = version == 1 ? i16(70, swap) : i16(12, swap);
   if (!nifti_is_valid_datatype(datatype)) return "datatype " + std::to_string(datatype) + " is not a NIfTI type code";

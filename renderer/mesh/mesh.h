@@ -3,6 +3,7 @@
 // Plain values; not thread-safe for concurrent writes.
 #pragma once
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -44,9 +45,13 @@ void validateMesh(const Mesh& mesh, const std::string& name);
 // (found by review). fitToUnitBox then centres it.
 class RelativePositions {
  public:
-  void add(std::vector<float>& out, const double v[3]) {
+  // False, adding nothing, for a vertex beyond a float's range (3e38) of the first one.
+  bool add(std::vector<float>& out, const double v[3]) {
     if (!set_) origin_ = {v[0], v[1], v[2]}, set_ = true;
+    for (int k = 0; k < 3; ++k)
+      if (!(std::fabs(v[k] - origin_[k]) <= 3e38)) return false;
     for (int k = 0; k < 3; ++k) out.push_back((float)(v[k] - origin_[k]));
+    return true;
   }
 
  private:

@@ -96,7 +96,7 @@ void ObjParser::vertex(std::istringstream& ls) {
     if (!std::isfinite(v[k]) || std::fabs(v[k]) > 3e38)
       fail(std::isfinite(v[k]) ? fmt::format("vertex position {:g} is beyond a float's range (3e38)", v[k])
                                : "vertex position is not finite");
-  relative_.add(pos_, v.data());
+  if (!relative_.add(pos_, v.data())) fail("vertex position lies beyond a float's range (3e38) of the first vertex");
   const bool has_rgb = v.size() >= 6;
   for (int k = 0; k < 3; ++k) col_.push_back(has_rgb ? (float)std::clamp(v[3 + k], 0.0, 1.0) : kDefaultMeshColor[k]);
 }

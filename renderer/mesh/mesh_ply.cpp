@@ -324,7 +324,7 @@ void MeshReader::addVertex(const Element& e, const Layout& l) {
     if (!std::isfinite(p[k])) body_.fail("position is not finite");
     if (std::fabs(p[k]) > 3e38) body_.fail(fmt::format("position {:g} is beyond a float's range (3e38)", p[k]));
   }
-  relative_.add(m_.positions, p);
+  if (!relative_.add(m_.positions, p)) body_.fail("position lies beyond a float's range (3e38) of the first vertex");
   if (have_normals_)
     for (int k = 3; k < 6; ++k) m_.normals.push_back((float)vals_[l.slot[k]]);
   if (have_colors_)

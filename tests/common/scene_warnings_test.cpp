@@ -100,6 +100,11 @@ TEST(VolumeWarnings, AnOpacityPeakTheTableMayMissIsSaid) {
   ASSERT_EQ(w.size(), 1u);
   EXPECT_EQ(w[0].rfind("data/slice.yaml: transfer_function: the opacity peak at 0.5 of the map is 0.0002 wide, under two "
                        "steps (0.000488) of the table", 0), 0u) << w[0];
+  s.tf = TransferFunction({{0, 0, 0, 0, 0}, {0.4999, 1, 1, 1, 0}, {0.5, 1, 1, 1, 1}, {0.5001, 1, 1, 1, 1}, {0.5002, 1, 1, 1, 0},
+                           {1, 0, 0, 0, 0}});  // a plateau
+  const auto plateau = volumeWarnings(s, shape({32, 32, 32}));
+  ASSERT_EQ(plateau.size(), 1u);
+  EXPECT_NE(plateau[0].find("the opacity peak at 0.5 of the map is 0.0003 wide"), std::string::npos) << plateau[0];
   s.quality.reference = true;
   EXPECT_TRUE(volumeWarnings(s, shape({32, 32, 32})).empty()) << "the reference evaluates the map exactly";
   s.quality.reference = false;

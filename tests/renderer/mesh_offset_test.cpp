@@ -2,6 +2,7 @@
 // RelativePositions).
 #include <gtest/gtest.h>
 
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -31,6 +32,14 @@ TEST(MeshTest, AMeshFarFromTheOriginFitsAsItWouldAtTheOrigin) {
   for (size_t i = 0; i < near.positions.size(); ++i) {
     EXPECT_NEAR(far.positions[i], near.positions[i], 1e-6) << i;
     EXPECT_NEAR(ply.positions[i], near.positions[i], 1e-6) << i;
+  }
+  // Vertices further apart than a float holds are refused by name, not as "not finite".
+  try {
+    parseObj("v 3e38 0 0\nv -3e38 0 0\nv 0 1 0\nf 1 2 3\n", "wide.obj");
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("wide.obj: line 2: vertex position lies beyond a float's range (3e38) of the first"),
+              std::string::npos) << e.what();
   }
 }
 

@@ -41,6 +41,29 @@ TEST(TfTableSpan, ANarrowWindowGetsEveryEntry) {
   EXPECT_LT(worst, 1.5e-4);
 }
 
+// A step at the low end of where the map varies (transparent below 0.5, then a ramp): the
+// values below the step keep the value below it (they took the one above, air turned opaque
+// red: found by review), with and without empty-space skipping.
+TEST(TfTableSpan, AStepAtTheSpansLowEndKeepsTheValueBelowIt) {
+  const TransferFunction tf({{0, 0, 0, 0, 0}, {0.5, 0, 0, 0, 0}, {0.5, 1, 0.2, 0.2, 0.05}, {1, 1, 1, 0.2, 0.1}});
+  EXPECT_LT(tf.variedSpan()[0], 0.5);
+  const TfTable t(tf, kL0);
+  for (float s : {0.0f, 0.3f, 0.4998f}) {
+    float out[4];
+    t.lookup(s, out);
+    EXPECT_EQ(out[3], 0.0f) << s;
+  }
+  auto vol = test::generated("marschner-lobb", 40);
+  const Raycaster rc(vol, tf);
+  const ImageF ref = rc.render(test::defaultCamera(), 48, 48, wholeVolume(*vol), test::options("reference"));
+  for (bool skip : {true, false}) {
+    RenderOptions o = test::options("default");
+    o.quality.skip_empty = skip;
+    const ImageError e = compare(rc.render(test::defaultCamera(), 48, 48, wholeVolume(*vol), o), ref);
+    EXPECT_GE(e.psnr, 40.0) << "skip " << skip << " max_abs " << e.max_abs;
+  }
+}
+
 // A smooth ball whose values fill only 1/200 of the mapped range (a CT's soft tissue in its
 // whole HU range, say), seen through a window on them: before, 20 table entries (30 dB).
 TEST(TfTableSpan, ANarrowWindowRendersAsTheReferenceDoes) {
