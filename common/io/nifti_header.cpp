@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -26,9 +27,11 @@ bool startsWithGzipMagic(const std::string& path) {
   return in.read(reinterpret_cast<char*>(m), 2) && m[0] == 0x1f && m[1] == 0x8b;
 }
 
-// Why nifticlib refused `path`, from the header's first bytes (gzread reads a plain file as it
-// is): nifticlib only says "bad header" on stderr. Empty when the bytes show nothing wrong.
-std::string headerProblem(const std::string& path) {
+// What is wrong with `path`'s header, from its bytes as stored (gzread reads a plain file as it
+// is): why nifticlib refused it (it says only "bad header" on stderr), or what it would repair
+// without a word. Empty when the bytes show nothing wrong; then `given` (if asked for) says which
+// spacings pixdim[1..3] the header gives (nifticlib turns 0 and NaN into 1 when it reads).
+std::string headerProblem(const std::string& path, std::array<bool, 3>* given = nullptr) {
   unsigned char h[540] = {};
   gzFile f = gzopen(path.c_str(), "rb");
   if (!f) return "";
@@ -76,30 +79,20 @@ std::string headerProblem(const std::string& path) {
   // A single file's voxels follow its header and 4 extension bytes; nifticlib reads a smaller
   // vox_offset (0, negative) as the header's end, 4 bytes early: every voxel shifted.
   const bool single = std::memcmp(version == 1 ? h + 344 : h + 4, version == 1 ? "n+1" : "n+2", 4) == 0;
-  uint32_t bits = (uint32_t)i32(108, swap);
-  float offset1 = 0;
-  std::memcpy(&offset1, &bits, 4);
-  const double offset = version == 1 ? (double)offset1 : (double)i64(168, swap);
+  // A float (NIfTI-1) or double (NIfTI-2) field.
+  auto real = [&](int at1, int at2) {
+    if (version == 2) return std::bit_cast<double>(i64(at2, swap));
+    return (double)std::bit_cast<float>(i32(at1, swap));
+  };
+  const double offset = version == 1 ? (double)std::bit_cast<float>(i32(108, swap)) : (double)i64(168, swap);
   if (single && !(offset >= size + 4))
     return "vox_offset = " + fmt::format("{}", offset) + ": the voxels of a single-file NIfTI-" + std::to_string(version) +
            " start at byte " + std::to_string(size + 4) + " or later";
-  return "";
-}
-
-// Which of the header's spacings (pixdim[1..3]) are given: nifticlib turns 0 and NaN into 1
-// when it reads, so the header is read once more as stored.
-std::array<bool, 3> spacingsGiven(const std::string& path) {
-  std::array<bool, 3> given{true, true, true};
-  std::unique_ptr<char, void (*)(void*)> hdr(nifti_findhdrname(path.c_str()), std::free);
-  int version = 0;
-  std::unique_ptr<void, void (*)(void*)> h(nifti_read_header(hdr ? hdr.get() : path.c_str(), &version, 0), std::free);
-  if (!h) return given;
-  for (int a = 0; a < 3; ++a) {
-    const double p = version == 2 ? static_cast<nifti_2_header*>(h.get())->pixdim[a + 1]
-                                  : static_cast<nifti_1_header*>(h.get())->pixdim[a + 1];
-    given[a] = p != 0 && std::isfinite(p);
+  for (int a = 0; given && a < 3; ++a) {
+    const double p = real(76 + 4 * (a + 1), 104 + 8 * (a + 1));
+    (*given)[a] = p != 0 && std::isfinite(p);
   }
-  return given;
+  return "";
 }
 
 }  // namespace
@@ -111,9 +104,10 @@ RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps) {
   // nifticlib also repairs what it reads: a dim of 0 or below becomes 1 (the rest of the file
   // ignored), a .nii's vox_offset below 352 the header's end. Either renders the wrong voxels
   // without a word, so the header's own bytes are checked too (found by review).
+  std::array<bool, 3> given{true, true, true};
   if (nim) {
     std::unique_ptr<char, void (*)(void*)> hdr(nifti_findhdrname(path.c_str()), std::free);
-    if (std::string why = headerProblem(hdr ? hdr.get() : path); !why.empty())
+    if (std::string why = headerProblem(hdr ? hdr.get() : path, &given); !why.empty())
       return fail("not a readable NIfTI file: " + why);
   }
   if (!nim) {
@@ -167,7 +161,6 @@ RawVolumeSpec readNiftiHeader(const std::string& path, int* time_steps) {
            ") is not a scalar type Tessera renders (uint8, int8, uint16, int16, uint32, int32, float32, float64)");
   }
   const double d[3] = {used(1) ? nim->dx : 1, used(2) ? nim->dy : 1, used(3) ? nim->dz : 1};
-  const std::array<bool, 3> given = spacingsGiven(path);
   for (int a = 0; a < 3; ++a) {
     // A spacing of 0 (or NaN) is common in hand-made headers: 1, and a warning says so (as a
     // TIFF's missing one). pixdim's sign belongs to orientation. Checked by the scene parser,

@@ -141,9 +141,10 @@ int run(int argc, char** argv) {
   std::printf("# values: %.*g .. %.*g; mapped to the transfer function: %.*g .. %.*g%s\n", dv, shape.data_range[0], dv,
               shape.data_range[1], dm, shape.mapped_range[0], dm, shape.mapped_range[1],
               raw && !raw->has_range ? " (no range given: the data's own)" : "");
-  if (scene.window)
-    std::printf("# window: the colour map spans the values %.*g .. %.*g\n", digitsToTell(scene.window->lo(), scene.window->hi()),
-                scene.window->lo(), digitsToTell(scene.window->lo(), scene.window->hi()), scene.window->hi());
+  if (scene.window) {
+    const int dw = digitsToTell(scene.window->lo(), scene.window->hi());
+    std::printf("# window: the colour map spans the values %.*g .. %.*g\n", dw, scene.window->lo(), dw, scene.window->hi());
+  }
   if (!scene.crop.whole()) {
     const VoxelBox c = cropBox(scene.crop, shape.dims);
     std::printf("# crop: voxels [%d, %d) x [%d, %d) x [%d, %d) are rendered, %d x %d x %d of them\n", c.lo[0], c.hi[0],
